@@ -1,0 +1,299 @@
+"""Numba kernels of the fractal stage: cell traversal of segments, polygons, and box counting.
+
+All kernels take plain C-contiguous arrays of one dtype (float64 coordinates, int64 indices and
+counts, uint8 masks), write into arrays the caller allocated and do no checks. They live in one file
+because numba's on-disk cache does not see edits to jitted helpers in other files.
+
+The cell rule (shared by rasterisation and exact vector counting)
+-----------------------------------------------------------------
+Coordinates are in *box units*: box (i, j) is the half-open square [i, i+1) x [j, j+1). A segment is
+split at every grid line it crosses; each piece of positive length (longer than ``_PIECE_EPS`` box
+units) marks the box that contains the piece's midpoint, ``(floor(mx), floor(my))``. So a segment marks
+exactly the boxes it passes through; a pass through a box corner marks nothing extra (diagonals and
+anti-diagonals are treated alike); a piece running along a grid line is given to the box above / to
+the right. A coordinate equal to the far edge of the grid is given to the last box. With
+``strict=True`` pieces lying on a grid line mark nothing: that is the rule for polygon *boundaries*,
+whose interior cells are found from cell centres instead.
+"""
+
+import numpy as np
+from numba import njit
+
+_PIECE_EPS = 1e-9  # pieces shorter than this (box units) are corner touches, not crossings
+
+
+@njit(cache=True)
+def _segment_cells(x0, y0, x1, y1, nbx, nby, strict, ids):
+    """Write the ids ``j * nbx + i`` of the cells crossed by one segment (box units) into ``ids``.
+
+    Returns the number written; consecutive pieces lie in distinct cells, so there are no repeats
+    within one segment. No checks: endpoints in [0, nbx] x [0, nby], and ``ids`` holds at least
+    ``_cell_bound`` entries.
+    """
+    dx = x1 - x0
+    dy = y1 - y0
+    length = np.sqrt(dx * dx + dy * dy)
+    if length <= 0.0:
+        return 0
+    if dx > 0.0:
+        tx = (np.floor(x0) + 1.0 - x0) / dx
+        dtx = 1.0 / dx
+    elif dx < 0.0:
+        tx = (np.ceil(x0) - 1.0 - x0) / dx
+        dtx = -1.0 / dx
+    else:
+        tx = np.inf
+        dtx = np.inf
+    if dy > 0.0:
+        ty = (np.floor(y0) + 1.0 - y0) / dy
+        dty = 1.0 / dy
+    elif dy < 0.0:
+        ty = (np.ceil(y0) - 1.0 - y0) / dy
+        dty = -1.0 / dy
+    else:
+        ty = np.inf
+        dty = np.inf
+    n = 0
+    t = 0.0
+    while t < 1.0:
+        tn = min(tx, ty, 1.0)
+        if (tn - t) * length > _PIECE_EPS:
+            tm = 0.5 * (t + tn)
+            mx = x0 + tm * dx
+            my = y0 + tm * dy
+            fx = np.floor(mx)
+            fy = np.floor(my)
+            if not (strict and (mx == fx or my == fy)):
+                i = min(max(int(fx), 0), nbx - 1)
+                j = min(max(int(fy), 0), nby - 1)
+                ids[n] = j * nbx + i
+                n += 1
+        if tn == tx:
+            tx += dtx
+        if tn == ty:
+            ty += dty
+        t = tn
+    return n
+
+
+@njit(cache=True)
+def _cell_bound(seg, scale):
+    """Upper bound on the cells one segment of ``seg`` (n, 4) crosses at 1/scale box size."""
+    bound = 0
+    for k in range(seg.shape[0]):
+        b = int(np.ceil(abs(seg[k, 2] - seg[k, 0]) * scale) + np.ceil(abs(seg[k, 3] - seg[k, 1]) * scale)) + 3
+        bound = max(bound, b)
+    return bound
+
+
+@njit(cache=True)
+def _mark_segment(x0, y0, x1, y1, nbx, nby, marks, strict, scratch):
+    """Mark the cells crossed by one segment in ``marks`` (nby, nbx) uint8; return cells newly marked."""
+    n = _segment_cells(x0, y0, x1, y1, nbx, nby, strict, scratch)
+    flat = marks.reshape(-1)
+    new = 0
+    for m in range(n):
+        if flat[scratch[m]] == 0:
+            flat[scratch[m]] = 1
+            new += 1
+    return new
+
+
+@njit(cache=True)
+def _mark_bresenham(x0, y0, x1, y1, nbx, nby, marks):
+    """Mark an 8-connected Bresenham line between the cells holding the two endpoints."""
+    i0 = min(max(int(np.floor(x0)), 0), nbx - 1)
+    j0 = min(max(int(np.floor(y0)), 0), nby - 1)
+    i1 = min(max(int(np.floor(x1)), 0), nbx - 1)
+    j1 = min(max(int(np.floor(y1)), 0), nby - 1)
+    di = abs(i1 - i0)
+    dj = -abs(j1 - j0)
+    si = 1 if i0 < i1 else -1
+    sj = 1 if j0 < j1 else -1
+    err = di + dj
+    new = 0
+    while True:
+        if marks[j0, i0] == 0:
+            marks[j0, i0] = 1
+            new += 1
+        if i0 == i1 and j0 == j1:
+            break
+        e2 = 2 * err
+        if e2 >= dj:
+            err += dj
+            i0 += si
+        if e2 <= di:
+            err += di
+            j0 += sj
+    return new
+
+
+@njit(cache=True)
+def rasterize_segments(seg, nbx, nby, marks, bresenham):
+    """Mark the cells of all segments ``seg`` (n, 4) float64 in box units; return cells marked."""
+    scratch = np.empty(_cell_bound(seg, 1.0), dtype=np.int64)
+    total = 0
+    for k in range(seg.shape[0]):
+        if bresenham:
+            total += _mark_bresenham(seg[k, 0], seg[k, 1], seg[k, 2], seg[k, 3], nbx, nby, marks)
+        else:
+            total += _mark_segment(seg[k, 0], seg[k, 1], seg[k, 2], seg[k, 3], nbx, nby, marks,
+                                   False, scratch)
+    return total
+
+
+@njit(cache=True)
+def _point_in_ring(px, py, ring):
+    """Even-odd rule: is (px, py) inside the closed ring (k, 2) (first vertex not repeated)?"""
+    inside = False
+    k = ring.shape[0]
+    j = k - 1
+    for i in range(k):
+        xi = ring[i, 0]
+        yi = ring[i, 1]
+        xj = ring[j, 0]
+        yj = ring[j, 1]
+        if (yi > py) != (yj > py):
+            xc = xi + (py - yi) * (xj - xi) / (yj - yi)
+            if px < xc:
+                inside = not inside
+        j = i
+    return inside
+
+
+@njit(cache=True)
+def mark_polygon_cells(ring, nbx, nby, marks):
+    """Mark the cells whose interior meets the polygon ``ring`` (k, 2) float64, box units.
+
+    A cell meets the polygon's interior iff its centre is inside, or the boundary passes through the
+    cell's open interior (``strict`` traversal of every edge). Returns the number of cells marked.
+    """
+    k = ring.shape[0]
+    xmin = ring[0, 0]
+    xmax = ring[0, 0]
+    ymin = ring[0, 1]
+    ymax = ring[0, 1]
+    for i in range(k):
+        xmin = min(xmin, ring[i, 0])
+        xmax = max(xmax, ring[i, 0])
+        ymin = min(ymin, ring[i, 1])
+        ymax = max(ymax, ring[i, 1])
+    edges = np.empty((k, 4), dtype=np.float64)
+    for i in range(k):
+        j = (i + 1) % k
+        edges[i, 0] = ring[i, 0]
+        edges[i, 1] = ring[i, 1]
+        edges[i, 2] = ring[j, 0]
+        edges[i, 3] = ring[j, 1]
+    scratch = np.empty(_cell_bound(edges, 1.0), dtype=np.int64)
+    total = 0
+    for i in range(k):
+        total += _mark_segment(edges[i, 0], edges[i, 1], edges[i, 2], edges[i, 3], nbx, nby, marks,
+                               True, scratch)
+    j0 = max(int(np.floor(ymin)), 0)
+    j1 = min(int(np.ceil(ymax)), nby)
+    i0 = max(int(np.floor(xmin)), 0)
+    i1 = min(int(np.ceil(xmax)), nbx)
+    for j in range(j0, j1):
+        for i in range(i0, i1):
+            if marks[j, i] == 0 and _point_in_ring(i + 0.5, j + 0.5, ring):
+                marks[j, i] = 1
+                total += 1
+    return total
+
+
+@njit(cache=True)
+def count_occupied_boxes(mask, sizes, off_r, off_c, counts):
+    """Count occupied boxes of a square uint8 ``mask`` (n, n) for every size and grid offset.
+
+    sizes : (n_sizes,) int64 box sides in pixels; off_r, off_c : (n_sizes, n_offsets) int64 shifts of
+    the box grid in pixels (0 <= off < size), so box (a, b) covers rows [a*s - off_r, (a+1)*s - off_r)
+    clipped to the mask. counts : (n_sizes, n_offsets) int64, written. A summed-area table makes
+    each box an O(1) test, so the cost is independent of the number of trace pixels.
+    No checks: sizes >= 1, offsets in range.
+    """
+    n = mask.shape[0]
+    sat = np.zeros((n + 1, n + 1), dtype=np.int64)
+    for r in range(n):
+        row_sum = 0
+        for c in range(n):
+            row_sum += mask[r, c] != 0
+            sat[r + 1, c + 1] = sat[r, c + 1] + row_sum
+    for a in range(sizes.shape[0]):
+        s = sizes[a]
+        for b in range(off_r.shape[1]):
+            orow = off_r[a, b]
+            ocol = off_c[a, b]
+            if s == 1:
+                counts[a, b] = sat[n, n]
+                continue
+            nbr = (n + orow + s - 1) // s
+            nbc = (n + ocol + s - 1) // s
+            total = 0
+            for i in range(nbr):
+                r0 = max(i * s - orow, 0)
+                r1 = min((i + 1) * s - orow, n)
+                for j in range(nbc):
+                    c0 = max(j * s - ocol, 0)
+                    c1 = min((j + 1) * s - ocol, n)
+                    if sat[r1, c1] - sat[r0, c1] - sat[r1, c0] + sat[r0, c0] > 0:
+                        total += 1
+            counts[a, b] = total
+    return counts
+
+
+@njit(cache=True)
+def count_crossed_boxes(seg, side, sizes, offsets, max_mark_cells, counts, n_boxes):
+    """Exact vector box counting: boxes of side ``sizes[a]`` crossed by the segments.
+
+    seg : (n, 4) float64 segments relative to the frame origin (frame units, e.g. metres), inside
+    [0, side]^2. offsets : (n_offsets, 2) float64 grid shifts as fractions of a box, in [0, 1).
+    counts, n_boxes : (n_sizes, n_offsets) int64, written: boxes crossed, and boxes in the covering
+    grid. Grids of at most ``max_mark_cells`` boxes use a mark array; larger ones collect the box ids
+    of every piece and count distinct ids after a sort, so any box size works.
+    No checks: sizes > 0, segments inside the frame.
+    """
+    for a in range(sizes.shape[0]):
+        d = sizes[a]
+        scratch = np.empty(_cell_bound(seg, 1.0 / d), dtype=np.int64)
+        for b in range(offsets.shape[0]):
+            ox = offsets[b, 0] * d
+            oy = offsets[b, 1] * d
+            nbx = max(int(np.ceil((side + ox) / d - 1e-12)), 1)
+            nby = max(int(np.ceil((side + oy) / d - 1e-12)), 1)
+            n_boxes[a, b] = nbx * nby
+            if nbx * nby <= max_mark_cells:
+                marks = np.zeros((nby, nbx), dtype=np.uint8)
+                total = 0
+                for k in range(seg.shape[0]):
+                    total += _mark_segment((seg[k, 0] + ox) / d, (seg[k, 1] + oy) / d,
+                                           (seg[k, 2] + ox) / d, (seg[k, 3] + oy) / d,
+                                           nbx, nby, marks, False, scratch)
+                counts[a, b] = total
+            else:
+                counts[a, b] = _count_distinct_cells(seg, d, ox, oy, nbx, nby, scratch)
+    return counts
+
+
+@njit(cache=True)
+def _count_distinct_cells(seg, d, ox, oy, nbx, nby, scratch):
+    """Distinct boxes crossed on a grid too large for a mark array (ids collected, then sorted)."""
+    total_bound = 0
+    for k in range(seg.shape[0]):
+        total_bound += int(np.ceil(abs(seg[k, 2] - seg[k, 0]) / d)
+                           + np.ceil(abs(seg[k, 3] - seg[k, 1]) / d)) + 3
+    ids = np.empty(total_bound, dtype=np.int64)
+    n = 0
+    for k in range(seg.shape[0]):
+        m = _segment_cells((seg[k, 0] + ox) / d, (seg[k, 1] + oy) / d,
+                           (seg[k, 2] + ox) / d, (seg[k, 3] + oy) / d, nbx, nby, False, scratch)
+        ids[n:n + m] = scratch[:m]
+        n += m
+    if n == 0:
+        return 0
+    s = np.sort(ids[:n])
+    distinct = 1
+    for m in range(1, n):
+        if s[m] != s[m - 1]:
+            distinct += 1
+    return distinct

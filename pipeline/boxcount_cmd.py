@@ -1,0 +1,191 @@
+"""``rockmass boxcount FILE``: box-counting dimension of a trace map or a binary image.
+
+Reads traces (GeoJSON, CSV) or a binary image (PNG, TIFF, JPEG, BMP), counts boxes with
+:func:`rockmass.fractal.box_count`, and writes ``boxcount.json``, ``boxcount.png`` and
+``manifest.json`` under ``--out DIR`` (all three or none: each is rendered to a temporary file
+first and renamed into place only when every one is ready). ``--json`` prints the same result to
+stdout. Settings come from ``--config`` (its ``[fractal]`` section), then the flags.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+__all__ = ["add_parser", "run", "TRACE_SUFFIXES", "IMAGE_SUFFIXES"]
+
+TRACE_SUFFIXES = (".geojson", ".json", ".csv")
+IMAGE_SUFFIXES = (".png", ".tif", ".tiff", ".jpg", ".jpeg", ".bmp")
+# kept literal so that building the parser imports nothing heavy; a test checks them against
+# rockmass.fractal.METHODS / LINE_RULES and the config model
+METHOD_CHOICES = ("raster", "vector")
+LINE_RULE_CHOICES = ("supercover", "bresenham")
+SKELETONIZE_CHOICES = ("auto", "always", "never")
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    """Register the ``boxcount`` subcommand."""
+    p = subparsers.add_parser(
+        "boxcount", help="box-counting fractal dimension of traces or a binary image",
+        description="Box-counting fractal dimension D of a trace network (GeoJSON / CSV) or a "
+                    "binary image, with R², standard error, 95%% interval, local slopes and the "
+                    "spread over grid offsets.")
+    p.add_argument("file", help="traces (.geojson, .json, .csv) or a binary image "
+                                "(.png, .tif, .jpg, .bmp)")
+    p.add_argument("--grid", type=int, help="raster grid side N in pixels (default 360)")
+    p.add_argument("--method", choices=METHOD_CHOICES, help="raster (default) or exact vector counting")
+    p.add_argument("--range", nargs=2, type=float, metavar=("MIN", "MAX"), dest="range_px",
+                   help="fit range of box sizes in grid pixels (default: 1 to grid/4)")
+    p.add_argument("--offsets", type=int, dest="n_offsets",
+                   help="number of shifted box grids for the spread of D (default 8)")
+    p.add_argument("--line-rule", choices=LINE_RULE_CHOICES, dest="line_rule",
+                   help="rasterisation rule (default supercover)")
+    p.add_argument("--window", nargs=4, type=float, metavar=("XMIN", "YMIN", "XMAX", "YMAX"),
+                   help="count on this window (metres) instead of the traces' bounding square")
+    p.add_argument("--mask", default="auto",
+                   help="face outline: 'auto' (the trace map's own window polygon, if any), "
+                        "'none', a GeoJSON file with a polygon, or for an image input a mask image "
+                        "(non-zero = face)")
+    p.add_argument("--threshold", type=float, help="for grey images: pixels above it are traces")
+    p.add_argument("--invert", action="store_true", default=None,
+                   help="dark lines on a light background")
+    p.add_argument("--skeletonize", choices=SKELETONIZE_CHOICES,
+                   help="thin lines to 1 pixel: auto (default), always, never")
+    p.add_argument("--config", help="TOML file; its [fractal] section sets the defaults")
+    p.add_argument("--out", help="write boxcount.json, boxcount.png and manifest.json here")
+    p.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
+    p.set_defaults(handler=run)
+    return p
+
+
+def _resolve_settings(args):
+    """The FractalConfig from ``--config`` (or defaults), overridden by the flags given."""
+    from .config import FractalConfig, load_config
+
+    base = FractalConfig()
+    if args.config:
+        loaded = load_config(args.config)
+        base = loaded.fractal or base
+    overrides = {k: getattr(args, k) for k in
+                 ("grid", "method", "range_px", "n_offsets", "line_rule", "threshold", "invert",
+                  "skeletonize") if getattr(args, k) is not None}
+    if "range_px" in overrides:
+        overrides["range_px"] = tuple(overrides["range_px"])
+    try:
+        return FractalConfig.model_validate({**base.model_dump(), **overrides})
+    except Exception as exc:  # pydantic ValidationError: report as a flag problem (exit 2)
+        raise ValueError(f"invalid option: {exc}") from None
+
+
+def _load_input(path: Path):
+    """('traces', TraceMap) or ('image', ndarray), by suffix."""
+    suffix = path.suffix.lower()
+    if suffix in TRACE_SUFFIXES:
+        from .dfn import read_traces
+
+        return "traces", read_traces(path)
+    if suffix in IMAGE_SUFFIXES:
+        from .fractal import read_image
+
+        return "image", read_image(path)
+    raise ValueError(f"{path}: unknown file type {suffix or '(none)'}; expected traces "
+                     f"({', '.join(TRACE_SUFFIXES)}) or an image ({', '.join(IMAGE_SUFFIXES)})")
+
+
+def _load_mask(spec: str, kind: str):
+    if spec == "auto":
+        return "auto"
+    if spec == "none":
+        return None
+    path = Path(spec)
+    if kind == "image":
+        from .fractal import read_image
+
+        return read_image(path)
+    from .dfn import read_traces
+
+    window = read_traces(path).window_xy_m
+    if window is None:
+        raise ValueError(f"{path}: --mask file holds no polygon (a GeoJSON Polygon feature is expected)")
+    return window
+
+
+def compute(args) -> tuple[dict, object, dict]:
+    """Read, count and fit; return the JSON document, the BoxCount and the settings used."""
+    from .fractal import box_count
+
+    settings = _resolve_settings(args)
+    path = Path(args.file)
+    t0 = time.perf_counter()
+    kind, data = _load_input(path)
+    mask = _load_mask(args.mask, kind)
+    t1 = time.perf_counter()
+    if kind == "image" and args.grid is not None:
+        raise ValueError("--grid applies to traces; an image is counted on its own pixel grid")
+    if kind == "image" and args.window is not None:
+        raise ValueError("--window applies to traces, not to an image")
+    result = box_count(data, grid=settings.grid, method=settings.method,
+                       fit_range_px=settings.range_px, window=args.window, mask=mask,
+                       n_offsets=settings.n_offsets, line_rule=settings.line_rule,
+                       threshold=settings.threshold, invert=settings.invert,
+                       skeletonize=settings.skeletonize)
+    t2 = time.perf_counter()
+    info = {"path": str(path), "kind": kind}
+    if kind == "traces":
+        info.update(n_traces=int(data.n_traces), frame=data.frame)
+    else:
+        info.update(shape=list(data.shape), dtype=str(data.dtype))
+    document = {"input": info, "settings": settings.model_dump(mode="json"), **result.to_dict()}
+    timings = {"read_s": t1 - t0, "count_and_fit_s": t2 - t1}
+    return document, result, {"settings": settings, "timings": timings}
+
+
+def summary_line(result) -> str:
+    """One human-readable line: D, interval, R², range, offsets and P21."""
+    lo, hi = result.ci95
+    text = (f"D = {result.dimension:.4f}  (95% CI {lo:.4f}–{hi:.4f}, R² = {result.r2:.4f}), "
+            f"fit {result.fit_range_px[0]:g}–{result.fit_range_px[1]:g} px "
+            f"({int(result.in_fit.sum())} sizes, {result.method} on {result.grid}²); "
+            f"over {result.offset_dimensions.size} grid offsets {result.offset_range[0]:.4f}–"
+            f"{result.offset_range[1]:.4f} (mean {result.offset_mean:.4f})")
+    if result.p21_per_m is not None:
+        text += f"; P21 = {result.p21_per_m:.4g} m/m²"
+    return text
+
+
+def run(args) -> int:
+    """Handler of ``rockmass boxcount``."""
+    from contextlib import ExitStack
+
+    document, result, extra = compute(args)
+    if args.out:
+        from .atomic import atomic_path, atomic_write_json
+        from .fractal.plot import plot_box_count
+        from .manifest import build_manifest
+
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        t0 = time.perf_counter()
+        with ExitStack() as stack:  # every file is renamed into place only if all were written
+            png = stack.enter_context(atomic_path(out / "boxcount.png"))
+            js = stack.enter_context(atomic_path(out / "boxcount.json"))
+            plot_box_count(result, png, title=f"{Path(args.file).name}: box counting")
+            atomic_write_json(js, document)
+            timings = {**extra["timings"], "write_s": time.perf_counter() - t0}
+            manifest = build_manifest(command=["rockmass", *sys.argv[1:]] if sys.argv else "rockmass",
+                                      config={"fractal": extra["settings"].model_dump(mode="json")},
+                                      inputs=[args.file], timings_s=timings,
+                                      extra={"dimension": result.dimension})
+            mf = stack.enter_context(atomic_path(out / "manifest.json"))
+            atomic_write_json(mf, manifest)
+    if args.json:
+        json.dump(document, sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        print(summary_line(result))
+        for note in result.notes:
+            print(f"  note: {note}", file=sys.stderr)
+    return 0

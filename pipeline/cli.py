@@ -1,0 +1,65 @@
+"""The ``rockmass`` command line: subcommands, exit codes and error reporting.
+
+Exit codes (DESIGN.md §4): 0 success; 2 bad input or configuration (the message names the file, the
+field and what was expected); 1 failure while running. Heavy modules (numpy, numba, matplotlib,
+OpenCV, scikit-image) are imported inside each subcommand's handler, never at start-up, so
+``rockmass --help`` is instant and a typo costs nothing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .errors import EXIT_BAD_INPUT, EXIT_FAILURE
+
+__all__ = ["build_parser", "main"]
+
+# The module of every subcommand; each has ``add_parser(subparsers)``, which registers ``run(args)
+# -> int`` as the handler. They are imported when the parser is built: keep them light at import.
+_SUBCOMMANDS = ("boxcount_cmd",)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every subcommand registered."""
+    from importlib import import_module
+
+    from . import __version__
+
+    parser = argparse.ArgumentParser(
+        prog="rockmass",
+        description="Jointed rock masses from face photographs and scanlines: traces, fractal "
+                    "dimension, DFN, block models and a distinct element solver.")
+    parser.add_argument("--version", action="version", version=f"rockmass {__version__}")
+    parser.add_argument("--debug", action="store_true",
+                        help="show the full traceback of a failure")
+    sub = parser.add_subparsers(dest="command", metavar="SUBCOMMAND", required=True)
+    for module_name in _SUBCOMMANDS:
+        import_module(f".{module_name}", __package__).add_parser(sub)
+    return parser
+
+
+def _error(command: str, kind: str, exc: BaseException) -> None:
+    print(f"rockmass {command}: {kind}: {exc}", file=sys.stderr)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the CLI; return the exit code (the console script passes it to ``sys.exit``)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)  # usage errors exit with code 2 by argparse's own rule
+    try:
+        return int(args.handler(args) or 0)
+    except (ValueError, TypeError, OSError) as exc:  # includes InputError and ConfigError
+        if args.debug:
+            raise
+        _error(args.command, "error", exc)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        _error(args.command, "interrupted", "stopped by the user; no partial output was written")
+        return 130
+    except Exception as exc:  # noqa: BLE001 - the CLI's last line of defence maps to exit 1
+        if args.debug:
+            raise
+        _error(args.command, "failed", f"{type(exc).__name__}: {exc} (run with --debug for the "
+                                       "traceback)")
+        return EXIT_FAILURE

@@ -1,0 +1,198 @@
+"""Box counting: counts against independent oracles, the fit, offsets, masks and images."""
+
+import numpy as np
+import pytest
+
+from rockmass.fractal import box_count, divisors, fit_loglog, grid_offsets, rasterize_traces
+from tests.fractal._fixtures import (naive_occupied_boxes, naive_offset_boxes, random_network,
+                                     shapely_crossed_boxes)
+
+
+def test_360_has_24_divisors():
+    assert divisors(360).tolist() == [1, 2, 3, 4, 5, 6, 8, 9, 10, 12, 15, 18, 20, 24, 30, 36, 40,
+                                      45, 60, 72, 90, 120, 180, 360]
+
+
+def test_raster_counts_match_numpy_reshape_oracle():
+    image = rasterize_traces(random_network(80, seed=1), grid=360)
+    result = box_count(image, n_offsets=1)
+    expected = [naive_occupied_boxes(image, int(s)) for s in result.sizes_px]
+    assert result.counts.tolist() == expected
+
+
+def test_offset_counts_match_padded_reshape_oracle():
+    from rockmass.fractal.boxcount import _count_raster_mask
+
+    image = rasterize_traces(random_network(40, seed=2), grid=120)
+    sizes = divisors(120)
+    offsets = grid_offsets(5)
+    counts = _count_raster_mask(image, sizes, offsets)
+    for a, s in enumerate(sizes):
+        for b, (fc, fr) in enumerate(offsets):
+            expected = naive_offset_boxes(image, int(s), int(np.floor(fr * s)), int(np.floor(fc * s)))
+            assert counts[a, b] == expected
+
+
+def test_vector_count_matches_shapely_box_intersection():
+    seg = random_network(25, seed=3, extent=1.0)
+    result = box_count(seg, method="vector", grid=12, sizes_px=[1, 2, 3], fit_range_px=(1, 3),
+                       n_offsets=1)
+    frame = result.frame
+    for size_px, count in zip(result.sizes_px, result.counts):
+        box = frame["side_m"] * size_px / 12
+        expected = shapely_crossed_boxes(seg, frame["x0_m"], frame["y0_m"], box, int(12 / size_px))
+        assert count == expected
+
+
+@pytest.mark.parametrize("seed", [4, 5, 6])
+def test_vector_and_supercover_raster_agree_exactly_at_zero_offset(seed):
+    seg = random_network(200, seed=seed)
+    raster = box_count(seg, method="raster", n_offsets=1)
+    vector = box_count(seg, method="vector", n_offsets=1)
+    assert np.array_equal(raster.counts, vector.counts)
+    assert raster.dimension == vector.dimension
+
+
+def test_bresenham_rule_counts_fewer_or_equal_boxes_at_one_pixel():
+    seg = random_network(200, seed=7)
+    sc = box_count(seg, line_rule="supercover", n_offsets=1)
+    br = box_count(seg, line_rule="bresenham", n_offsets=1)
+    assert br.counts[0] < sc.counts[0]  # 8-connected lines skip the pixels a line only clips
+    assert abs(br.dimension - sc.dimension) < 0.1
+
+
+@pytest.mark.parametrize("shift, scale", [((1000.25, -37.5), 1.0), ((0.0, 0.0), 7.3),
+                                          ((-5e4, 2e4), 0.013)])
+def test_vector_count_is_invariant_to_translation_and_scale(shift, scale):
+    seg = random_network(150, seed=8)
+    moved = seg * scale + np.tile(shift, 2)
+    a = box_count(seg, method="vector", n_offsets=3)
+    b = box_count(moved, method="vector", n_offsets=3)
+    assert np.array_equal(a.counts, b.counts)
+    assert b.dimension == pytest.approx(a.dimension, abs=1e-12)
+    assert b.p21_per_m == pytest.approx(a.p21_per_m / scale, rel=1e-9)
+
+
+def test_vector_counting_works_at_sizes_too_fine_for_a_mark_array():
+    seg = np.array([[0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 1.0, 1.0]])
+    result = box_count(seg, method="vector", grid=360, sizes_px=[0.01, 0.02, 0.04],
+                       fit_range_px=(0.01, 0.04), n_offsets=1)  # 36,000^2 boxes at the smallest
+    assert result.counts.tolist() == [2 * 36000 - 1, 2 * 18000 - 1, 2 * 9000 - 1]
+
+
+def test_fit_matches_numpy_polyfit_and_textbook_stderr():
+    rng = np.random.default_rng(9)
+    sizes = np.array([1, 2, 3, 4, 6, 8, 12, 16], dtype=float)
+    counts = 500 * sizes**-1.4 * np.exp(rng.normal(0, 0.05, sizes.size))
+    fit = fit_loglog(sizes, counts)
+    x, y = -np.log(sizes), np.log(counts)
+    slope, intercept = np.polyfit(x, y, 1)
+    resid = y - (slope * x + intercept)
+    stderr = np.sqrt(resid @ resid / (x.size - 2) / np.sum((x - x.mean()) ** 2))
+    assert fit.dimension == pytest.approx(slope, rel=1e-12)
+    assert fit.stderr == pytest.approx(stderr, rel=1e-10)
+    assert fit.ci95[0] < fit.dimension < fit.ci95[1]
+    assert fit.ci95[1] - fit.dimension == pytest.approx(2.4469 * stderr, rel=1e-4)  # t(0.975, 6)
+
+
+def test_default_fit_range_stops_at_a_quarter_of_the_grid():
+    result = box_count(random_network(100, seed=10), n_offsets=1)
+    assert result.fit_range_px == (1.0, 90.0)
+    assert result.sizes_px[result.in_fit].max() == 90
+    assert result.local_slopes.size == result.sizes_px.size - 1
+
+
+def test_offset_spread_is_reported_and_first_offset_is_zero():
+    result = box_count(random_network(100, seed=11), n_offsets=6)
+    assert result.offset_dimensions.size == 6
+    assert result.offset_dimensions[0] == result.dimension
+    assert result.offset_spread > 0
+    assert result.offset_range[0] <= result.dimension <= result.offset_range[1]
+
+
+def test_face_completely_covered_has_dimension_2_whatever_its_outline():
+    yy, xx = np.mgrid[0:360, 0:360]
+    disc = ((yy - 180.0) ** 2 + (xx - 170.0) ** 2 < 150.0**2).astype(np.uint8)
+    raw = box_count(disc, n_offsets=1, mask=None)
+    corrected = box_count(disc, n_offsets=1, mask=disc)
+    assert raw.dimension < 1.99  # empty corners flatten the curve
+    assert corrected.dimension == pytest.approx(2.0, abs=1e-12)
+
+
+def test_vector_and_raster_face_counts_agree_with_a_polygon_mask():
+    seg = random_network(150, seed=12)
+    mask = np.array([[1.0, 1.0], [9.0, 2.0], [8.0, 9.5], [2.5, 7.0]])
+    raster = box_count(seg, method="raster", mask=mask, n_offsets=1)
+    vector = box_count(seg, method="vector", mask=mask, n_offsets=1)
+    assert np.array_equal(raster.face_counts, vector.face_counts)
+    assert np.array_equal(raster.counts, vector.counts)
+
+
+def test_traces_outside_the_mask_do_not_count():
+    inside = np.array([[1.0, 1.0, 3.0, 3.0]])
+    outside = np.array([[6.0, 6.0, 9.0, 8.0]])
+    mask = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0]])
+    a = box_count(inside, mask=mask, n_offsets=1)
+    b = box_count(np.vstack([inside, outside]), mask=mask, n_offsets=1)
+    assert np.array_equal(a.counts, b.counts)
+
+
+def test_p21_is_length_over_window_area():
+    seg = np.array([[0.0, 0.5, 2.0, 0.5], [1.0, 0.0, 1.0, 2.0]])
+    result = box_count(seg, window=(0, 0, 2, 2), n_offsets=1)
+    assert result.area_m2 == pytest.approx(4.0)
+    assert result.p21_per_m == pytest.approx(4.0 / 4.0)
+
+
+def test_thick_lines_are_skeletonised_and_reported():
+    import cv2
+
+    seg = random_network(30, seed=13, extent=350.0) + 5.0
+    thin = np.zeros((360, 360), np.uint8)
+    thick = np.zeros((360, 360), np.uint8)
+    for x0, y0, x1, y1 in seg.round().astype(int):
+        cv2.line(thin, (x0, y0), (x1, y1), 1, 1)
+        cv2.line(thick, (x0, y0), (x1, y1), 1, 5)
+    r_thin = box_count(thin, n_offsets=1)
+    r_thick = box_count(thick, n_offsets=1)
+    r_never = box_count(thick, n_offsets=1, skeletonize="never")
+    assert not r_thin.skeletonized and r_thick.skeletonized
+    assert any("skeletonised" in n for n in r_thick.notes)
+    assert abs(r_thick.dimension - r_thin.dimension) < 0.05
+    assert r_never.dimension > r_thin.dimension + 0.05  # 5-px lines bias D high (REFERENCE §1)
+
+
+def test_grey_image_with_threshold_and_invert():
+    img = np.full((120, 120), 200, dtype=np.uint8)
+    img[60, :] = 10  # a dark horizontal line on a light background
+    result = box_count(img, threshold=100, invert=True, n_offsets=1)
+    assert result.dimension == pytest.approx(1.0, abs=1e-12)
+
+
+def test_non_square_image_is_padded_and_says_so():
+    img = np.zeros((100, 250), dtype=np.uint8)
+    img[50, :] = 1
+    result = box_count(img, n_offsets=1)
+    assert result.grid % 250 == 0 or result.grid > 250
+    assert any("padded" in n for n in result.notes)
+
+
+def test_inputs_are_not_modified():
+    seg = random_network(50, seed=14)
+    img = rasterize_traces(seg, grid=90)
+    seg_copy, img_copy = seg.copy(), img.copy()
+    box_count(seg, method="vector")
+    box_count(img, grid=90)
+    assert np.array_equal(seg, seg_copy) and np.array_equal(img, img_copy)
+
+
+def test_object_with_segments_method_is_accepted():
+    seg = random_network(50, seed=15)
+
+    class Traces:
+        window_xy_m = None
+
+        def segments(self):
+            return seg
+
+    assert box_count(Traces()).dimension == box_count(seg).dimension
