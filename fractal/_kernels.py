@@ -203,14 +203,41 @@ def mark_polygon_cells(ring, nbx, nby, marks):
 
 
 @njit(cache=True)
+def fold_and_count(marks, nbx, nby):
+    """Fold a shifted grid onto the torus and count marked boxes.
+
+    ``marks`` (rows, cols) uint8 holds the boxes of a grid shifted against the frame; when it has
+    one row (column) more than ``nby`` (``nbx``), that last partial row is the other part of the
+    partial first row, so it is OR-ed into row 0 (column 0). Returns the marked boxes of the
+    ``nby x nbx`` torus grid. Modifies ``marks``.
+    """
+    if marks.shape[0] > nby:
+        for i in range(marks.shape[1]):
+            if marks[nby, i]:
+                marks[0, i] = 1
+    if marks.shape[1] > nbx:
+        for j in range(marks.shape[0]):
+            if marks[j, nbx]:
+                marks[j, 0] = 1
+    total = 0
+    for j in range(nby):
+        for i in range(nbx):
+            if marks[j, i]:
+                total += 1
+    return total
+
+
+@njit(cache=True)
 def count_occupied_boxes(mask, sizes, off_r, off_c, counts):
     """Count occupied boxes of a square uint8 ``mask`` (n, n) for every size and grid offset.
 
-    sizes : (n_sizes,) int64 box sides in pixels; off_r, off_c : (n_sizes, n_offsets) int64 shifts of
-    the box grid in pixels (0 <= off < size), so box (a, b) covers rows [a*s - off_r, (a+1)*s - off_r)
-    clipped to the mask. counts : (n_sizes, n_offsets) int64, written. A summed-area table makes
-    each box an O(1) test, so the cost is independent of the number of trace pixels.
-    No checks: sizes >= 1, offsets in range.
+    sizes : (n_sizes,) int64 box sides in pixels, each dividing n; off_r, off_c : (n_sizes,
+    n_offsets) int64 shifts of the box grid in pixels (0 <= off < size). A shifted grid is applied
+    cyclically (the frame is a torus): box (a, b) covers rows [a*s - off_r, (a+1)*s - off_r) modulo
+    n, so every grid has exactly (n/s)^2 whole boxes and no ring of partial boxes at the frame's
+    edge. counts : (n_sizes, n_offsets) int64, written. A summed-area table makes each box an O(1)
+    test, so the cost does not depend on the number of trace pixels.
+    No checks: sizes divide n, offsets in range.
     """
     n = mask.shape[0]
     sat = np.zeros((n + 1, n + 1), dtype=np.int64)
@@ -221,6 +248,7 @@ def count_occupied_boxes(mask, sizes, off_r, off_c, counts):
             sat[r + 1, c + 1] = sat[r, c + 1] + row_sum
     for a in range(sizes.shape[0]):
         s = sizes[a]
+        m = n // s
         for b in range(off_r.shape[1]):
             orow = off_r[a, b]
             ocol = off_c[a, b]
@@ -229,7 +257,7 @@ def count_occupied_boxes(mask, sizes, off_r, off_c, counts):
                 continue
             nbr = (n + orow + s - 1) // s
             nbc = (n + ocol + s - 1) // s
-            total = 0
+            occ = np.zeros((nbr, nbc), dtype=np.uint8)
             for i in range(nbr):
                 r0 = max(i * s - orow, 0)
                 r1 = min((i + 1) * s - orow, n)
@@ -237,8 +265,8 @@ def count_occupied_boxes(mask, sizes, off_r, off_c, counts):
                     c0 = max(j * s - ocol, 0)
                     c1 = min((j + 1) * s - ocol, n)
                     if sat[r1, c1] - sat[r0, c1] - sat[r1, c0] + sat[r0, c0] > 0:
-                        total += 1
-            counts[a, b] = total
+                        occ[i, j] = 1
+            counts[a, b] = fold_and_count(occ, m, m)
     return counts
 
 
@@ -249,35 +277,44 @@ def count_crossed_boxes(seg, side, sizes, offsets, max_mark_cells, counts, n_box
     seg : (n, 4) float64 segments relative to the frame origin (frame units, e.g. metres), inside
     [0, side]^2. offsets : (n_offsets, 2) float64 grid shifts as fractions of a box, in [0, 1).
     counts, n_boxes : (n_sizes, n_offsets) int64, written: boxes crossed, and boxes in the covering
-    grid. Grids of at most ``max_mark_cells`` boxes use a mark array; larger ones collect the box ids
-    of every piece and count distinct ids after a sort, so any box size works.
+    grid. When the size divides the side (to 1e-9) a shifted grid is applied cyclically, as in
+    ``count_occupied_boxes``; otherwise the grid covers the frame with partial boxes at the far
+    edges. Grids of at most ``max_mark_cells`` boxes use a mark array; larger ones collect the box
+    ids of every piece and count distinct ids after a sort, so any box size works.
     No checks: sizes > 0, segments inside the frame.
     """
     for a in range(sizes.shape[0]):
         d = sizes[a]
         scratch = np.empty(_cell_bound(seg, 1.0 / d), dtype=np.int64)
+        whole = side / d
+        cyclic = abs(whole - np.round(whole)) <= 1e-9 * whole
         for b in range(offsets.shape[0]):
             ox = offsets[b, 0] * d
             oy = offsets[b, 1] * d
-            nbx = max(int(np.ceil((side + ox) / d - 1e-12)), 1)
-            nby = max(int(np.ceil((side + oy) / d - 1e-12)), 1)
-            n_boxes[a, b] = nbx * nby
+            nbx = max(int(np.ceil((side + ox) / d - 1e-9)), 1)
+            nby = max(int(np.ceil((side + oy) / d - 1e-9)), 1)
+            nbx_eff = min(nbx, int(np.round(whole))) if cyclic else nbx
+            nby_eff = min(nby, int(np.round(whole))) if cyclic else nby
+            n_boxes[a, b] = nbx_eff * nby_eff
             if nbx * nby <= max_mark_cells:
                 marks = np.zeros((nby, nbx), dtype=np.uint8)
-                total = 0
                 for k in range(seg.shape[0]):
-                    total += _mark_segment((seg[k, 0] + ox) / d, (seg[k, 1] + oy) / d,
-                                           (seg[k, 2] + ox) / d, (seg[k, 3] + oy) / d,
-                                           nbx, nby, marks, False, scratch)
-                counts[a, b] = total
+                    _mark_segment((seg[k, 0] + ox) / d, (seg[k, 1] + oy) / d,
+                                  (seg[k, 2] + ox) / d, (seg[k, 3] + oy) / d,
+                                  nbx, nby, marks, False, scratch)
+                counts[a, b] = fold_and_count(marks, nbx_eff, nby_eff)
             else:
-                counts[a, b] = _count_distinct_cells(seg, d, ox, oy, nbx, nby, scratch)
+                counts[a, b] = _count_distinct_cells(seg, d, ox, oy, nbx, nby, nbx_eff, nby_eff,
+                                                     scratch)
     return counts
 
 
 @njit(cache=True)
-def _count_distinct_cells(seg, d, ox, oy, nbx, nby, scratch):
-    """Distinct boxes crossed on a grid too large for a mark array (ids collected, then sorted)."""
+def _count_distinct_cells(seg, d, ox, oy, nbx, nby, nbx_eff, nby_eff, scratch):
+    """Distinct boxes crossed on a grid too large for a mark array (ids collected, then sorted).
+
+    Boxes in column ``nbx_eff`` (row ``nby_eff``) of a cyclic grid fold onto column (row) 0.
+    """
     total_bound = 0
     for k in range(seg.shape[0]):
         total_bound += int(np.ceil(abs(seg[k, 2] - seg[k, 0]) / d)
@@ -287,8 +324,15 @@ def _count_distinct_cells(seg, d, ox, oy, nbx, nby, scratch):
     for k in range(seg.shape[0]):
         m = _segment_cells((seg[k, 0] + ox) / d, (seg[k, 1] + oy) / d,
                            (seg[k, 2] + ox) / d, (seg[k, 3] + oy) / d, nbx, nby, False, scratch)
-        ids[n:n + m] = scratch[:m]
-        n += m
+        for q in range(m):
+            i = scratch[q] % nbx
+            j = scratch[q] // nbx
+            if i >= nbx_eff:
+                i = 0
+            if j >= nby_eff:
+                j = 0
+            ids[n] = j * nbx_eff + i
+            n += 1
     if n == 0:
         return 0
     s = np.sort(ids[:n])

@@ -12,7 +12,11 @@ Two methods, one result type:
 D is the slope of log N(delta) against log(1/delta) over the fit range (default: boxes up to a
 quarter of the side), reported with R^2, the standard error and 95 % interval of the slope, the local
 slopes, and the spread of D over shifted box grids (REFERENCE.md §1: report the spread; never take the
-minimum over offsets, which inflates D when large boxes are few).
+minimum over offsets, which inflates D when large boxes are few). Shifted grids are applied
+cyclically — the frame is treated as a torus, the partial boxes at one edge joining those at the
+other — so every grid has the same (N/s)^2 whole boxes. A plain shift would add a ring of partial
+boxes that inflates the counts at large sizes and biases every shifted D low (measured on the
+bundled sample: zero offset 1.545, plain shifts 1.447-1.545, cyclic shifts spread on both sides).
 
 Face masks. With a mask polygon (or a non-square window) only boxes that meet the face count. The
 count of occupied boxes is rescaled to the whole frame, ``N = N_occupied * N_all / N_face``, so a
@@ -219,25 +223,28 @@ def _count_raster_mask(mask: np.ndarray, sizes: np.ndarray, offsets: np.ndarray)
 
 
 def _raster_box_totals(grid: int, sizes: np.ndarray, offsets: np.ndarray) -> np.ndarray:
-    """Number of boxes (whole or partial) covering the grid, per size and offset."""
-    off = np.floor(offsets[None, :, :] * sizes[:, None, None]).astype(np.int64)
-    nb = (grid + off + sizes[:, None, None] - 1) // sizes[:, None, None]
-    return nb[:, :, 0] * nb[:, :, 1]
+    """Boxes in the grid per size and offset: (grid/s)^2, shifted grids being cyclic."""
+    return np.repeat(((grid // sizes) ** 2)[:, None], offsets.shape[0], axis=1)
 
 
 def _vector_face_counts(ring_m, frame: Frame, sizes_m, offsets) -> np.ndarray:
-    """Boxes meeting the face polygon, per size and offset (box grid anchored at the frame)."""
+    """Boxes meeting the face polygon, per size and offset, on the same (cyclic) grids as the count."""
     from . import _kernels
 
     out = np.zeros((sizes_m.size, offsets.shape[0]), dtype=np.int64)
     rel = ring_m - np.array([frame.x0_m, frame.y0_m])
     for a, d in enumerate(sizes_m):
+        whole = frame.side_m / d
+        cyclic = abs(whole - round(whole)) <= 1e-9 * whole
         for b, (fx, fy) in enumerate(offsets):
-            nbx = max(math.ceil((frame.side_m + fx * d) / d - 1e-12), 1)
-            nby = max(math.ceil((frame.side_m + fy * d) / d - 1e-12), 1)
+            nbx = max(math.ceil((frame.side_m + fx * d) / d - 1e-9), 1)
+            nby = max(math.ceil((frame.side_m + fy * d) / d - 1e-9), 1)
             ring = np.ascontiguousarray((rel + np.array([fx * d, fy * d])) / d)
             marks = np.zeros((nby, nbx), dtype=np.uint8)
-            out[a, b] = _kernels.mark_polygon_cells(ring, nbx, nby, marks)
+            _kernels.mark_polygon_cells(ring, nbx, nby, marks)
+            nbx_eff = min(nbx, round(whole)) if cyclic else nbx
+            nby_eff = min(nby, round(whole)) if cyclic else nby
+            out[a, b] = _kernels.fold_and_count(marks, nbx_eff, nby_eff)
     return out
 
 

@@ -120,7 +120,7 @@ def local_slopes(sizes, counts) -> np.ndarray:
 
     Examples
     --------
-    >>> local_slopes([1, 2, 4], [16, 8, 2]).tolist()
+    >>> local_slopes([1, 2, 4], [16, 8, 2]).round(12).tolist()
     [1.0, 2.0]
     """
     s = np.log(np.asarray(sizes, dtype=np.float64))

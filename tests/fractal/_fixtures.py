@@ -21,13 +21,8 @@ def naive_occupied_boxes(mask: np.ndarray, size: int) -> int:
 
 
 def naive_offset_boxes(mask: np.ndarray, size: int, off_r: int, off_c: int) -> int:
-    """Occupied boxes when the box grid is shifted by (off_r, off_c) pixels: pad, then reshape."""
-    n = mask.shape[0]
-    rows = -(-(n + off_r) // size) * size
-    cols = -(-(n + off_c) // size) * size
-    padded = np.zeros((rows, cols), dtype=bool)
-    padded[off_r:off_r + n, off_c:off_c + n] = mask != 0
-    return int(padded.reshape(rows // size, size, cols // size, size).any(axis=(1, 3)).sum())
+    """Occupied boxes of the box grid shifted cyclically by (off_r, off_c) pixels: roll, then reshape."""
+    return naive_occupied_boxes(np.roll(mask, (off_r, off_c), axis=(0, 1)), size)
 
 
 def shapely_crossed_boxes(segments: np.ndarray, x0: float, y0: float, box: float, n_boxes: int) -> int:

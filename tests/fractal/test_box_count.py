@@ -20,7 +20,7 @@ def test_raster_counts_match_numpy_reshape_oracle():
     assert result.counts.tolist() == expected
 
 
-def test_offset_counts_match_padded_reshape_oracle():
+def test_offset_counts_match_rolled_image_oracle():
     from rockmass.fractal.boxcount import _count_raster_mask
 
     image = rasterize_traces(random_network(40, seed=2), grid=120)
@@ -46,6 +46,7 @@ def test_vector_count_matches_shapely_box_intersection():
 
 @pytest.mark.parametrize("seed", [4, 5, 6])
 def test_vector_and_supercover_raster_agree_exactly_at_zero_offset(seed):
+    """Two independent counters (pixel marks + summed-area table, and per-size traversal)."""
     seg = random_network(200, seed=seed)
     raster = box_count(seg, method="raster", n_offsets=1)
     vector = box_count(seg, method="vector", n_offsets=1)
@@ -100,6 +101,48 @@ def test_default_fit_range_stops_at_a_quarter_of_the_grid():
     assert result.fit_range_px == (1.0, 90.0)
     assert result.sizes_px[result.in_fit].max() == 90
     assert result.local_slopes.size == result.sizes_px.size - 1
+
+
+@pytest.mark.parametrize("method", ["raster", "vector"])
+def test_shifted_grids_keep_exact_answers_of_frame_filling_sets(method):
+    """Cyclic shifts add no partial boxes: a filled square stays 2 and a full-width line 1."""
+    from rockmass.fractal import reference
+
+    square = box_count(reference.filled_square(360), n_offsets=8)
+    assert np.allclose(square.offset_dimensions, 2.0, atol=1e-12)
+    line = box_count(np.array([[0.0, 3.3, 10.0, 3.3]]), method=method, n_offsets=8)
+    assert np.allclose(line.offset_dimensions, 1.0, atol=1e-12)
+
+
+def test_vector_offset_counts_match_raster_offsets_on_a_divisor_grid():
+    """Raster shifts are whole pixels: give the vector counter the same pixel shifts."""
+    from rockmass.fractal import _kernels
+    from rockmass.fractal.boxcount import _count_raster_mask
+
+    seg = random_network(60, seed=16, extent=1.0)
+    image = rasterize_traces(seg, grid=60)
+    sizes = divisors(60)[1:-1]
+    shift_px = np.array([[2.0, 5.0]])
+    raster = np.zeros((sizes.size, 1), dtype=np.int64)
+    for a, s in enumerate(sizes):  # whole-pixel shift (column 2, row 5 from the top) per size
+        off = np.array([[(2 % s + 1e-9) / s, (5 % s + 1e-9) / s]])
+        raster[a] = _count_raster_mask(image, np.array([s]), off)[0]
+    x0, y0 = seg[:, 0::2].min(), seg[:, 1::2].min()
+    side = max(np.ptp(seg[:, 0::2]), np.ptp(seg[:, 1::2]))
+    rel = seg.copy()
+    rel[:, 0::2] -= x0 - 0.5 * (side - np.ptp(seg[:, 0::2]))
+    rel[:, 1::2] -= y0 - 0.5 * (side - np.ptp(seg[:, 1::2]))
+    vector = np.zeros((sizes.size, 1), dtype=np.int64)
+    totals = np.zeros_like(vector)
+    for a, s in enumerate(sizes):
+        d = side * s / 60
+        # image rows run down: a row shift of 5 px from the top is a shift of -5 px (mod s) in v
+        off = np.array([[shift_px[0, 0] / s % 1.0, (-shift_px[0, 1] / s) % 1.0]])
+        c = np.zeros((1, 1), dtype=np.int64)
+        t = np.zeros((1, 1), dtype=np.int64)
+        _kernels.count_crossed_boxes(rel, side, np.array([d]), off, 1 << 24, c, t)
+        vector[a] = c[0, 0]
+    assert np.array_equal(raster, vector)
 
 
 def test_offset_spread_is_reported_and_first_offset_is_zero():
