@@ -130,6 +130,16 @@ class BoxCount:
     notes: tuple[str, ...] = field(default_factory=tuple)
 
     @property
+    def sizes(self) -> np.ndarray:
+        """Box sizes in grid pixels (same as ``sizes_px``)."""
+        return self.sizes_px
+
+    @property
+    def fit_range(self) -> tuple[float, float]:
+        """Smallest and largest box size (grid pixels) in the fit (same as ``fit_range_px``)."""
+        return self.fit_range_px
+
+    @property
     def offset_spread(self) -> float:
         """Standard deviation of D over the shifted grids (0 with a single offset)."""
         d = self.offset_dimensions

@@ -14,6 +14,7 @@ sierpinski_carpet      3**level    no digit pair (1, 1)     log 8 / log 3
 cantor_dust            3**level    no base-3 digit 1        log 4 / log 3
 vicsek                 3**level    digit pairs in a cross   log 5 / log 3
 koch_curve             polyline    4 pieces of 1/3          log 4 / log 3
+straight_line          segment     one segment              1 (exact at 0/45/90°)
 filled_square          any         all pixels               2
 =====================  ==========  =======================  ====================
 """
@@ -25,7 +26,8 @@ import math
 import numpy as np
 
 __all__ = ["EXACT_DIMENSIONS", "sierpinski_triangle", "sierpinski_carpet", "cantor_dust",
-           "vicsek", "koch_curve", "filled_square", "polyline_segments", "embed"]
+           "vicsek", "koch_curve", "straight_line", "filled_square", "polyline_segments",
+           "embed"]
 
 EXACT_DIMENSIONS = {
     "sierpinski_triangle": math.log(3) / math.log(2),
@@ -126,6 +128,25 @@ def koch_curve(level: int) -> np.ndarray:
         new[-1] = pts[-1]
         pts = new
     return pts
+
+
+def straight_line(angle_deg: float = 0.0, length_m: float = 1.0) -> np.ndarray:
+    """One straight segment through the origin at ``angle_deg`` (counter-clockwise from +x).
+
+    Returns ``(1, 4) float64`` (x0, y0, x1, y1). Its box count is exactly N/s boxes at every
+    divisor size s of the grid, hence D = 1 to machine precision, when the angle is a multiple of
+    45°; at other angles the segment also crosses box rows, and D is 1 only as the boxes shrink.
+
+    Examples
+    --------
+    >>> straight_line(90.0, 2.0).round(12).tolist()
+    [[-0.0, -1.0, 0.0, 1.0]]
+    """
+    if not (np.isfinite(angle_deg) and np.isfinite(length_m) and length_m > 0):
+        raise ValueError(f"angle_deg must be finite and length_m > 0, got {angle_deg}, {length_m}")
+    a = math.radians(angle_deg)
+    half = 0.5 * length_m * np.array([math.cos(a), math.sin(a)])
+    return np.concatenate([-half, half])[None, :]
 
 
 def filled_square(n: int = 360) -> np.ndarray:
