@@ -240,7 +240,7 @@ def count_occupied_boxes(mask, sizes, off_r, off_c, counts):
     No checks: sizes divide n, offsets in range.
     """
     n = mask.shape[0]
-    sat = np.zeros((n + 1, n + 1), dtype=np.int64)
+    sat = np.zeros((n + 1, n + 1), dtype=np.int32)  # n <= 16384: at most 2.7e8 pixels
     for r in range(n):
         row_sum = 0
         for c in range(n):

@@ -25,6 +25,7 @@ from .framing import Frame, as_segments, frame_for
 __all__ = ["LINE_RULES", "rasterize_traces", "rasterize_segments_in_frame", "rasterize_polygon"]
 
 LINE_RULES = ("supercover", "bresenham")
+MAX_GRID = 16384  # a 16384² mask and its int32 summed-area table take about 1.3 GB
 
 
 def check_line_rule(line_rule: str) -> str:
@@ -35,11 +36,12 @@ def check_line_rule(line_rule: str) -> str:
 
 
 def check_grid(grid) -> int:
-    """Return the grid side as int if it is an integer >= 4, else raise naming ``grid``."""
+    """Return the grid side as int if it is an integer in [4, MAX_GRID], else raise naming ``grid``."""
     if isinstance(grid, bool) or not isinstance(grid, (int, np.integer)):
         raise TypeError(f"grid must be an integer number of pixels, got {grid!r}")
-    if not 4 <= grid <= 65536:
-        raise ValueError(f"grid must be between 4 and 65536 pixels, got {grid}")
+    if not 4 <= grid <= MAX_GRID:
+        raise ValueError(f"grid must be between 4 and {MAX_GRID} pixels, got {grid} (for finer "
+                         "boxes use method='vector', which has no grid limit)")
     return int(grid)
 
 
