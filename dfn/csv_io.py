@@ -40,13 +40,12 @@ import os
 import re
 import warnings
 from collections.abc import Iterator
-from pathlib import Path
 from typing import IO
 
 import numpy as np
 
-from ._atomic import atomic_text_writer
-from .tracemap import TraceMap, _describe_traces, _plural, _require_trace_map
+from ._atomic import atomic_open
+from .tracemap import TraceMap, _describe_traces, _plural, _require_trace_map, _resolve_frame
 
 __all__ = ["read_csv", "write_csv"]
 
@@ -150,15 +149,9 @@ class _Parser:
             polylines, columns = self._segments(header, lower, records)
         else:
             polylines, columns = self._polylines(header, lower, records)
-        file_frame = self.metadata.get("frame")
-        if frame is not None and file_frame is not None and frame != file_frame:
-            raise ValueError(
-                f"{self.name}: frame: the file's frame is {file_frame!r} but frame={frame!r} was asked for"
-            )
+        frame = _resolve_frame(self.metadata.get("frame"), frame, self.name)
         try:
-            return TraceMap.from_polylines(
-                polylines, columns, frame=file_frame or frame or "face", crs=self.metadata.get("crs") or None
-            )
+            return TraceMap.from_polylines(polylines, columns, frame=frame, crs=self.metadata.get("crs") or None)
         except ValueError as exc:
             raise ValueError(f"{self.name}: {exc}") from exc
 
@@ -366,7 +359,7 @@ def write_csv(trace_map: TraceMap, path: str | os.PathLike[str], *, layout: str 
         )
     id_text = _format_column(ids)
     attribute_text = [_format_column(trace_map.attributes[key]) for key in extra]
-    with atomic_text_writer(Path(path), newline="") as handle:
+    with atomic_open(path, newline="") as handle:
         # CRLF line ends (RFC 4180): the csv module then quotes any field holding a \r or \n
         handle.write(f"# frame: {trace_map.frame}\r\n")
         if trace_map.crs is not None:

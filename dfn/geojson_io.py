@@ -47,14 +47,13 @@ from __future__ import annotations
 
 import json
 import os
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import shapely
 
-from ._atomic import atomic_text_writer
-from .tracemap import _MAX_LISTED, TraceMap, _as_window, _describe_traces, _require_trace_map
+from ._atomic import atomic_open
+from .tracemap import _MAX_LISTED, TraceMap, _as_window, _describe_traces, _require_trace_map, _resolve_frame
 
 __all__ = ["read_geojson", "write_geojson"]
 
@@ -106,7 +105,7 @@ def read_geojson(path: str | os.PathLike[str], *, frame: str | None = None) -> T
     doc = _load_json(path, name)
     features = _feature_list(doc, name)
     crs = _read_crs(doc.get("crs"), name)
-    frame = _resolve_frame(doc.get("frame"), frame, name)
+    frame = _resolve_frame(_read_frame(doc.get("frame"), name), frame, name)
     polylines: list[np.ndarray] = []
     records: list[dict[str, Any]] = []
     window, window_index, split_any = None, None, False
@@ -198,12 +197,11 @@ def _read_crs(crs: Any, name: str) -> str | None:
     )
 
 
-def _resolve_frame(file_frame: Any, frame: str | None, name: str) -> str:
+def _read_frame(file_frame: Any, name: str) -> str | None:
+    """The top-level ``frame`` member: absent (None) or a non-empty string."""
     if file_frame is not None and (not isinstance(file_frame, str) or not file_frame.strip()):
         raise ValueError(f"{name}: frame: expected a non-empty string naming the frame, got {file_frame!r}")
-    if frame is not None and file_frame is not None and frame != file_frame:
-        raise ValueError(f"{name}: frame: the file's frame is {file_frame!r} but frame={frame!r} was asked for")
-    return file_frame or frame or "face"
+    return file_frame
 
 
 def _where(name: str, index: int, feature: Any) -> str:
@@ -409,7 +407,7 @@ def write_geojson(trace_map: TraceMap, path: str | os.PathLike[str]) -> None:
     if trace_map.crs is not None:
         head["crs"] = {"type": "name", "properties": {"name": trace_map.crs}}
     xy, offsets = trace_map.xy_m, trace_map.offsets
-    with atomic_text_writer(Path(path)) as handle:
+    with atomic_open(path) as handle:
         handle.write(json.dumps(head, ensure_ascii=False)[:-1] + ', "features": [')
         separator = "\n"
         for i in range(trace_map.n_traces):

@@ -15,7 +15,11 @@ JSON output is strict: NaN and ±Infinity are not JSON, so :func:`atomic_write_j
 a message that names the key path (``result.local_slopes[3] is NaN; JSON has no NaN``) unless the
 caller says that "undefined" is legitimate there (``nan_as_null=True``, which writes ``null``).
 
-This module imports nothing heavy: numpy values are recognised only if numpy is already imported.
+The file mechanics (temporary name, fsync, permissions, rename, clean-up, folder fsync) are
+implemented once, in :mod:`rockmass.dfn._atomic`, which the stages' writers use too; this module adds
+what the pipeline needs on top: creating the target's folder, bytes/text/JSON entry points and the
+JSON conversion. It imports nothing heavy: numpy values are recognised only if numpy is already
+imported.
 """
 
 from __future__ import annotations
@@ -27,11 +31,12 @@ import enum
 import json
 import math
 import os
-import secrets
 import sys
 from collections.abc import Iterator, Mapping
 from pathlib import Path, PurePath
 from typing import Any
+
+from .dfn import _atomic
 
 __all__ = [
     "atomic_write_bytes",
@@ -41,13 +46,6 @@ __all__ = [
     "to_jsonable",
 ]
 
-_TMP_PREFIX = ".tmp-"
-
-
-def _tmp_name(target: Path) -> Path:
-    """A fresh temporary name beside ``target`` that ends with the target's full name."""
-    return target.with_name(f"{_TMP_PREFIX}{secrets.token_hex(8)}-{target.name}")
-
 
 def _prepare(path: str | os.PathLike) -> Path:
     target = Path(path)
@@ -55,27 +53,6 @@ def _prepare(path: str | os.PathLike) -> Path:
         raise ValueError(f"path must name a file, got {os.fspath(path)!r}")
     target.parent.mkdir(parents=True, exist_ok=True)
     return target
-
-
-def _fsync_dir(directory: Path) -> None:
-    """Make the rename itself durable (POSIX only; best effort elsewhere)."""
-    if os.name != "posix":
-        return
-    try:
-        fd = os.open(directory, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
-
-
-def _remove_quietly(path: Path) -> None:
-    with contextlib.suppress(OSError):
-        os.unlink(path)
 
 
 def atomic_write_bytes(path: str | os.PathLike, data: bytes | bytearray | memoryview) -> Path:
@@ -105,7 +82,7 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes | bytearray | memory
     -----
     The temporary file is created with ``O_EXCL`` and mode ``0o666`` filtered by the umask, so the
     final file gets the same permissions a plain ``open(path, "wb")`` would give (``tempfile.mkstemp``
-    would give ``0o600``).
+    would give ``0o600``): a new file gets the umask's mode and a replaced file keeps its own.
 
     Examples
     --------
@@ -115,24 +92,8 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes | bytearray | memory
     b'abc'
     """
     target = _prepare(path)
-    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0)
-    while True:
-        tmp = _tmp_name(target)
-        try:
-            fd = os.open(tmp, flags, 0o666)
-        except FileExistsError:  # 64 random bits collided: draw again
-            continue
-        break
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, target)
-    except BaseException:
-        _remove_quietly(tmp)
-        raise
-    _fsync_dir(target.parent)
+    with _atomic.atomic_open(target, "wb") as handle:
+        handle.write(data)
     return target
 
 
@@ -230,7 +191,8 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     Notes
     -----
     If the block raises, the temporary file is deleted and the exception propagates; an existing file
-    at ``path`` is left untouched. On success the temporary file is fsynced before the rename.
+    at ``path`` is left untouched. On success the temporary file is fsynced before the rename, and a
+    replaced file lends it its permission bits.
 
     Examples
     --------
@@ -243,26 +205,8 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     >>> sorted(p.name for p in d.iterdir())
     ['plot.png']
     """
-    target = _prepare(path)
-    tmp = _tmp_name(target)
-    try:
+    with _atomic.atomic_path(_prepare(path)) as tmp:
         yield tmp
-        if not os.path.lexists(tmp):
-            raise FileNotFoundError(
-                f"nothing was written for {target}: the block did not create the temporary file {tmp}"
-            )
-        if tmp.is_file():
-            fd = os.open(tmp, os.O_RDONLY)
-            try:
-                with contextlib.suppress(OSError):  # fsync on a read-only handle fails on Windows
-                    os.fsync(fd)
-            finally:
-                os.close(fd)
-        os.replace(tmp, target)
-    except BaseException:
-        _remove_quietly(tmp)
-        raise
-    _fsync_dir(target.parent)
 
 
 # --------------------------------------------------------------------------------------- JSON values

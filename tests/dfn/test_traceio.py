@@ -322,6 +322,10 @@ def test_frame_argument_conflicting_with_the_file_is_rejected(tmp_path):
     path = _write(tmp_path, "f.geojson", '{"type": "FeatureCollection", "frame": "face", "features": []}')
     with pytest.raises(ValueError, match=r"frame: the file's frame is 'face' but frame='utm' was asked for"):
         read_traces(path, frame="utm")
+    named = _write(tmp_path, "n.csv", "# frame: face\nx0,y0,x1,y1\n0,0,1,1\n")
+    with pytest.raises(ValueError, match=r"n\.csv: frame: the file's frame is 'face' but frame='utm' was asked for"):
+        read_traces(named, frame="utm")
+    assert read_traces(named, frame="face").frame == "face"
     unnamed = _write(tmp_path, "u.csv", "x0,y0,x1,y1\n0,0,1,1\n")
     assert read_traces(unnamed, frame="utm").frame == "utm"
 

@@ -15,6 +15,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import rockmass.dfn
+import rockmass.dfn._atomic
+import rockmass.dfn.traceio
+import rockmass.dfn.tracemap
 from rockmass.dfn import TraceMap
 
 from ._fixtures import CATALOGUE, N_GON, assert_same_map, naive_segments
@@ -338,11 +341,12 @@ def test_docstring_examples_run():
         assert doctest.testmod(module).failed == 0, module.__name__
 
 
-def test_importing_dfn_loads_neither_the_pipeline_nor_heavy_modules():
+def test_importing_dfn_or_its_atomic_writes_loads_neither_the_pipeline_nor_heavy_modules():
+    # public names load lazily, so the pipeline's rockmass.atomic can build on rockmass.dfn._atomic
     code = (
-        "import sys, rockmass.dfn; "
+        "import sys, rockmass.dfn, rockmass.dfn._atomic; "
         "print(sorted(m for m in sys.modules if m.split('.')[0] in "
-        "('numba', 'matplotlib', 'cv2', 'skimage', 'scipy') or "
+        "('numpy', 'shapely', 'numba', 'matplotlib', 'cv2', 'skimage', 'scipy') or "
         "(m.startswith('rockmass.') and not m.startswith('rockmass.dfn'))))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
@@ -353,3 +357,11 @@ def test_all_lists_the_public_api():
     assert set(rockmass.dfn.__all__) == {
         "TraceMap", "read_traces", "write_traces", "read_geojson", "write_geojson", "read_csv", "write_csv",
     }
+
+
+def test_every_public_name_resolves_and_an_unknown_name_raises_attribute_error():
+    for name in rockmass.dfn.__all__:
+        assert getattr(rockmass.dfn, name).__name__ == name
+        assert name in dir(rockmass.dfn)
+    with pytest.raises(AttributeError, match="has no attribute 'read_shapefile'"):
+        rockmass.dfn.read_shapefile  # noqa: B018

@@ -73,6 +73,18 @@ def test_written_file_has_same_permissions_as_plain_open(tmp_path):
     assert target.stat().st_mode == plain.stat().st_mode
 
 
+@pytest.mark.skipif(os.name != "posix", reason="permission bits are POSIX")
+def test_replaced_file_keeps_its_permissions_as_plain_open_would(tmp_path):
+    target = tmp_path / "private.json"
+    target.write_text("{}")
+    os.chmod(target, 0o600)
+    atomic_write_json(target, {"v": 2})
+    with atomic_path(target) as tmp:
+        tmp.write_text('{"v": 3}')
+    assert json.loads(target.read_text()) == {"v": 3}
+    assert target.stat().st_mode & 0o777 == 0o600
+
+
 # ---------------------------------------------------------------------------------- failure paths
 
 
