@@ -23,6 +23,20 @@ _PIECE_EPS = 1e-9  # pieces shorter than this (box units) are corner touches, no
 
 
 @njit(cache=True)
+def _first_crossing(p0, dp):
+    """Parameter t of the first grid line crossed along one axis, and the step between lines.
+
+    The segment is p0 + t * dp, t in [0, 1]; grid lines are at the integers. Returns (inf, inf)
+    when the segment runs parallel to the lines.
+    """
+    if dp > 0.0:
+        return (np.floor(p0) + 1.0 - p0) / dp, 1.0 / dp
+    if dp < 0.0:
+        return (np.ceil(p0) - 1.0 - p0) / dp, -1.0 / dp
+    return np.inf, np.inf
+
+
+@njit(cache=True)
 def _segment_cells(x0, y0, x1, y1, nbx, nby, strict, ids):
     """Write the ids ``j * nbx + i`` of the cells crossed by one segment (box units) into ``ids``.
 
@@ -35,24 +49,8 @@ def _segment_cells(x0, y0, x1, y1, nbx, nby, strict, ids):
     length = np.sqrt(dx * dx + dy * dy)
     if length <= 0.0:
         return 0
-    if dx > 0.0:
-        tx = (np.floor(x0) + 1.0 - x0) / dx
-        dtx = 1.0 / dx
-    elif dx < 0.0:
-        tx = (np.ceil(x0) - 1.0 - x0) / dx
-        dtx = -1.0 / dx
-    else:
-        tx = np.inf
-        dtx = np.inf
-    if dy > 0.0:
-        ty = (np.floor(y0) + 1.0 - y0) / dy
-        dty = 1.0 / dy
-    elif dy < 0.0:
-        ty = (np.ceil(y0) - 1.0 - y0) / dy
-        dty = -1.0 / dy
-    else:
-        ty = np.inf
-        dty = np.inf
+    tx, dtx = _first_crossing(x0, dx)
+    ty, dty = _first_crossing(y0, dy)
     n = 0
     t = 0.0
     while t < 1.0:
@@ -225,6 +223,39 @@ def fold_and_count(marks, nbx, nby):
             if marks[j, i]:
                 total += 1
     return total
+
+
+@njit(cache=True)
+def line_statistics(mask):
+    """One pass over a (h, w) uint8 mask: (trace pixels, pixels in a full 2x2 block, interior pixels).
+
+    A pixel is interior when its four edge neighbours are all traces (pixels outside the image
+    count as background). Used to tell 1-pixel lines from thick lines and filled areas.
+    """
+    h, w = mask.shape
+    n = 0
+    in_block = 0
+    interior = 0
+    for r in range(h):
+        for c in range(w):
+            if mask[r, c] == 0:
+                continue
+            n += 1
+            if (0 < r < h - 1 and 0 < c < w - 1 and mask[r - 1, c] and mask[r + 1, c]
+                    and mask[r, c - 1] and mask[r, c + 1]):
+                interior += 1
+            for dr in (-1, 0):
+                for dc in (-1, 0):
+                    r0 = r + dr
+                    c0 = c + dc
+                    if (r0 >= 0 and c0 >= 0 and r0 + 1 < h and c0 + 1 < w and mask[r0, c0]
+                            and mask[r0 + 1, c0] and mask[r0, c0 + 1] and mask[r0 + 1, c0 + 1]):
+                        in_block += 1
+                        break
+                else:
+                    continue
+                break
+    return n, in_block, interior
 
 
 @njit(cache=True)

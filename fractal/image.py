@@ -97,26 +97,18 @@ def read_image(path) -> np.ndarray:
     return img
 
 
-def _thick_fraction(mask: np.ndarray) -> float:
-    """Fraction of trace pixels that belong to a fully occupied 2 x 2 block."""
-    m = mask.astype(bool)
-    full = m[:-1, :-1] & m[1:, :-1] & m[:-1, 1:] & m[1:, 1:]
-    in_full = np.zeros_like(m)
-    in_full[:-1, :-1] |= full
-    in_full[1:, :-1] |= full
-    in_full[:-1, 1:] |= full
-    in_full[1:, 1:] |= full
-    n = m.sum()
-    return float(in_full.sum() / n) if n else 0.0
+def _line_statistics(mask: np.ndarray) -> tuple[float, float]:
+    """(fraction of trace pixels in a fully occupied 2 x 2 block, mean line width in pixels).
 
+    The mean width is 2 * area / boundary pixels (a band of width w and length L has w L pixels and
+    about 2 L boundary pixels); it is large for filled areas and about 2 for 1-pixel lines.
+    """
+    from ._kernels import line_statistics
 
-def _mean_width(mask: np.ndarray, n_trace: int) -> float:
-    """Mean line width in pixels, 2 * area / boundary pixels (a band of width w and length L has
-    w L pixels and about 2 L boundary pixels); large for filled areas."""
-    m = np.pad(mask.astype(bool), 1)
-    interior = m[1:-1, 1:-1] & m[:-2, 1:-1] & m[2:, 1:-1] & m[1:-1, :-2] & m[1:-1, 2:]
-    boundary = n_trace - int(interior.sum())
-    return 2.0 * n_trace / max(boundary, 1)
+    n, in_block, interior = line_statistics(np.ascontiguousarray(mask, dtype=np.uint8))
+    if n == 0:
+        return 0.0, 0.0
+    return in_block / n, 2.0 * n / max(n - interior, 1)
 
 
 def prepare_binary_image(image, *, threshold: float | None = None, invert: bool = False,
@@ -182,8 +174,7 @@ def prepare_binary_image(image, *, threshold: float | None = None, invert: bool 
         notes.append(f"warning: {100 * n_trace / mask.size:.0f}% of pixels are traces; "
                      "if the lines are dark on a light background, invert the image")
     skeletonized = False
-    frac = _thick_fraction(mask)
-    width = _mean_width(mask, n_trace)
+    frac, width = _line_statistics(mask)
     if skeletonize == "always" or (skeletonize == "auto" and frac > THICK_FRACTION
                                    and width <= MAX_LINE_WIDTH_PX):
         from skimage.morphology import skeletonize as _skeletonize

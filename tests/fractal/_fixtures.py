@@ -44,3 +44,17 @@ def shapely_crossed_boxes(segments: np.ndarray, x0: float, y0: float, box: float
             if shapely.length(shapely.difference(inner, cell.exterior)) > 1e-9 * box:
                 count += 1
     return count
+
+
+def naive_line_statistics(mask: np.ndarray) -> tuple[int, int, int]:
+    """(trace pixels, pixels in a full 2x2 block, interior pixels) with whole-array numpy logic."""
+    m = mask.astype(bool)
+    full = m[:-1, :-1] & m[1:, :-1] & m[:-1, 1:] & m[1:, 1:]
+    in_full = np.zeros_like(m)
+    in_full[:-1, :-1] |= full
+    in_full[1:, :-1] |= full
+    in_full[:-1, 1:] |= full
+    in_full[1:, 1:] |= full
+    p = np.pad(m, 1)
+    interior = p[1:-1, 1:-1] & p[:-2, 1:-1] & p[2:, 1:-1] & p[1:-1, :-2] & p[1:-1, 2:]
+    return int(m.sum()), int(in_full.sum()), int(interior.sum())

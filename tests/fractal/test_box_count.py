@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from rockmass.fractal import box_count, divisors, fit_loglog, grid_offsets, rasterize_traces
-from tests.fractal._fixtures import (naive_occupied_boxes, naive_offset_boxes, random_network,
-                                     shapely_crossed_boxes)
+from tests.fractal._fixtures import (naive_line_statistics, naive_occupied_boxes,
+                                     naive_offset_boxes, random_network, shapely_crossed_boxes)
 
 
 def test_360_has_24_divisors():
@@ -203,6 +203,15 @@ def test_thick_lines_are_skeletonised_and_reported():
     assert any("skeletonised" in n for n in r_thick.notes)
     assert abs(r_thick.dimension - r_thin.dimension) < 0.05
     assert r_never.dimension > r_thin.dimension + 0.05  # 5-px lines bias D high (REFERENCE §1)
+
+
+@pytest.mark.parametrize("density", [0.05, 0.3, 0.7])
+def test_line_statistics_kernel_matches_numpy_oracle(density):
+    from rockmass.fractal import _kernels
+
+    rng = np.random.default_rng(int(density * 100))
+    mask = (rng.random((37, 53)) < density).astype(np.uint8)
+    assert _kernels.line_statistics(mask) == naive_line_statistics(mask)
 
 
 def test_grey_image_with_threshold_and_invert():
