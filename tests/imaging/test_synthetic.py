@@ -1,0 +1,88 @@
+"""Synthetic faces: reproducible, faithful to the requested sets, and harder at harder levels."""
+
+import numpy as np
+import pytest
+
+from rockmass.dfn import read_traces
+from rockmass.imaging import DIFFICULTIES, JointSetSpec, save_synthetic_face, synthetic_face
+from rockmass.imaging.frame import uv_to_rc
+
+SMALL = dict(shape_px=(300, 450), m_per_px=0.02)
+
+
+def test_same_seed_gives_the_same_face():
+    a = synthetic_face("moderate", seed=5, **SMALL)
+    b = synthetic_face("moderate", seed=5, **SMALL)
+    assert np.array_equal(a.image, b.image)
+    assert np.array_equal(a.truth.xy_m, b.truth.xy_m)
+    c = synthetic_face("moderate", seed=6, **SMALL)
+    assert not np.array_equal(a.image, c.image)
+
+
+def test_truth_lies_inside_the_image():
+    face = synthetic_face("easy", seed=1, **SMALL)
+    h, w = face.image.shape
+    xy = face.truth.xy_m
+    assert xy.min() >= -1e-9
+    assert xy[:, 0].max() <= w * face.m_per_px + 1e-9
+    assert xy[:, 1].max() <= h * face.m_per_px + 1e-9
+
+
+def test_set_mean_angles_match_the_specification():
+    # two tight sets: the length-weighted axial mean of each set's traces is within 3 degrees
+    sets = (JointSetSpec(30.0, 200.0, 1.5, 0.3, 4.0), JointSetSpec(120.0, 200.0, 1.5, 0.3, 4.0))
+    face = synthetic_face("easy", seed=2, sets=sets, shape_px=(500, 500), m_per_px=0.02)
+    seg = face.truth.segments()
+    index = face.truth.segment_trace_index()
+    set_of_segment = face.truth.attributes["set"][index]
+    angle = np.arctan2(seg[:, 3] - seg[:, 1], seg[:, 2] - seg[:, 0])
+    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
+    for set_id, spec in enumerate(sets, start=1):
+        sel = set_of_segment == set_id
+        assert sel.sum() > 20
+        doubled = np.sum(length[sel] * np.exp(2j * angle[sel]))
+        mean = np.degrees(np.angle(doubled) / 2) % 180
+        assert abs((mean - spec.angle_deg + 90) % 180 - 90) < 3.0
+
+
+def _contrast_to_noise(face) -> float:
+    """(rock median - median on wide trace centre lines) / robust sd of the rock."""
+    image = face.image.astype(float)
+    h, _ = image.shape
+    wide = face.truth.attributes["width_px"] >= 3
+    on_line = []
+    for i in np.flatnonzero(wide):
+        poly = face.truth.polyline(i)
+        t = np.linspace(0, 1, 50)[:, None]
+        pts = poly[0] + t * (poly[-1] - poly[0]) if poly.shape[0] == 2 else poly
+        rc = np.round(uv_to_rc(pts, h, face.m_per_px)).astype(int)
+        ok = (rc[:, 0] >= 0) & (rc[:, 0] < h) & (rc[:, 1] >= 0) & (rc[:, 1] < image.shape[1])
+        on_line.extend(image[rc[ok, 0], rc[ok, 1]])
+    rock = np.median(image)
+    spread = 1.4826 * np.median(np.abs(image - rock))
+    return (rock - np.median(on_line)) / spread
+
+
+def test_traces_are_darker_than_the_rock_and_harder_levels_hide_them_more():
+    cnr = [_contrast_to_noise(synthetic_face(level, seed=3, **SMALL)) for level in DIFFICULTIES]
+    assert cnr[0] > 2.0  # easy: traces stand well clear of the rock
+    assert cnr[0] > cnr[1] > cnr[2] > 0.0
+
+
+def test_saved_face_reads_back(tmp_path):
+    import cv2
+
+    face = synthetic_face("hard", seed=4, **SMALL)
+    paths = save_synthetic_face(face, tmp_path)
+    assert np.array_equal(cv2.imread(str(paths["image"]), cv2.IMREAD_GRAYSCALE), face.image)
+    truth = read_traces(paths["truth"])
+    assert np.array_equal(truth.xy_m, face.truth.xy_m)
+    assert np.array_equal(truth.attributes["set"], face.truth.attributes["set"])
+
+
+@pytest.mark.parametrize("kwargs, field", [({"difficulty": "insane"}, "difficulty"),
+                                           ({"m_per_px": 0.0}, "m_per_px"),
+                                           ({"shape_px": (8, 8)}, "shape_px")])
+def test_bad_arguments_name_the_field(kwargs, field):
+    with pytest.raises(ValueError, match=field):
+        synthetic_face(**{"difficulty": "easy", **kwargs})
