@@ -1,0 +1,137 @@
+"""Numba kernel behind :func:`rockmass.imaging.skeleton_graph.build_graph`: walk skeleton branches.
+
+Kept apart from its wrapper (STYLE.md: kernels take plain arrays, write into caller-allocated
+outputs and return the counts written; the wrapper validates and slices).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+_DR = np.array([-1, -1, -1, 0, 0, 1, 1, 1], dtype=np.int64)
+_DC = np.array([-1, 0, 1, -1, 1, -1, 0, 1], dtype=np.int64)
+
+
+@numba.njit(cache=True)
+def _walk_branches(skel, node_id, visited, out_rc, out_offsets, out_src, out_dst):
+    """Trace every branch of a one-pixel skeleton between nodes; return (n_branches, n_vertices).
+
+    ``skel`` (H, W) uint8 is zero-padded by one pixel on every side; ``node_id`` (H, W) int64 is the
+    node of each node pixel (ends and junction clusters) and -1 elsewhere; ``visited`` (H, W) uint8
+    starts at zero. Branch i's pixels (node pixel, interior pixels, node pixel), as padded (row, col),
+    go to ``out_rc[out_offsets[i]:out_offsets[i + 1]]`` with end nodes ``out_src[i]``, ``out_dst[i]``.
+    Interior pixels have exactly two skeleton neighbours (else they would be nodes), so each walk is
+    forced. Cycles without a node get ``src = dst = -1`` (the wrapper makes a node for them).
+
+    No checks: the caller guarantees the padding, the shapes, and output arrays of at least
+    3 * (number of skeleton pixels) + 2 rows (vertices) and 8 * (skeleton pixels) + 1 (branches).
+    """
+    h, w = skel.shape
+    n_b = 0
+    n_v = 0
+    out_offsets[0] = 0
+    for r in range(1, h - 1):
+        for c in range(1, w - 1):
+            a = node_id[r, c]
+            if a < 0:
+                continue
+            for k in range(8):
+                r1 = r + _DR[k]
+                c1 = c + _DC[k]
+                if skel[r1, c1] == 0:
+                    continue
+                b = node_id[r1, c1]
+                if b >= 0:
+                    # node pixel next to a node pixel of another node: a one-step branch, once
+                    if b != a and (r1 * w + c1) > (r * w + c):
+                        out_rc[n_v, 0] = r
+                        out_rc[n_v, 1] = c
+                        out_rc[n_v + 1, 0] = r1
+                        out_rc[n_v + 1, 1] = c1
+                        n_v += 2
+                        out_src[n_b] = a
+                        out_dst[n_b] = b
+                        n_b += 1
+                        out_offsets[n_b] = n_v
+                    continue
+                if visited[r1, c1]:
+                    continue
+                out_rc[n_v, 0] = r
+                out_rc[n_v, 1] = c
+                n_v += 1
+                pr, pc = r, c
+                cr, cc = r1, c1
+                end = -1
+                while True:
+                    visited[cr, cc] = 1
+                    out_rc[n_v, 0] = cr
+                    out_rc[n_v, 1] = cc
+                    n_v += 1
+                    nr, nc = -1, -1
+                    for j in range(8):
+                        qr = cr + _DR[j]
+                        qc = cc + _DC[j]
+                        if skel[qr, qc] == 0 or (qr == pr and qc == pc):
+                            continue
+                        if node_id[qr, qc] >= 0:
+                            if nr < 0 or node_id[nr, nc] < 0:
+                                # a node ends the branch, unless it is the start pixel's cluster
+                                # seen right after leaving it
+                                if not (node_id[qr, qc] == a and pr == r and pc == c):
+                                    nr, nc = qr, qc
+                            continue
+                        if visited[qr, qc] == 0:
+                            nr, nc = qr, qc
+                    if nr < 0:
+                        break
+                    if node_id[nr, nc] >= 0:
+                        out_rc[n_v, 0] = nr
+                        out_rc[n_v, 1] = nc
+                        n_v += 1
+                        end = node_id[nr, nc]
+                        break
+                    pr, pc = cr, cc
+                    cr, cc = nr, nc
+                if end < 0:
+                    end = a  # an interior chain that returns to its start cluster
+                    out_rc[n_v, 0] = r
+                    out_rc[n_v, 1] = c
+                    n_v += 1
+                out_src[n_b] = a
+                out_dst[n_b] = end
+                n_b += 1
+                out_offsets[n_b] = n_v
+    # closed loops with no node at all
+    for r in range(1, h - 1):
+        for c in range(1, w - 1):
+            if skel[r, c] == 0 or node_id[r, c] >= 0 or visited[r, c]:
+                continue
+            sr, sc = r, c
+            pr, pc = -10, -10
+            cr, cc = r, c
+            while True:
+                visited[cr, cc] = 1
+                out_rc[n_v, 0] = cr
+                out_rc[n_v, 1] = cc
+                n_v += 1
+                nr, nc = -1, -1
+                for j in range(8):
+                    qr = cr + _DR[j]
+                    qc = cc + _DC[j]
+                    if skel[qr, qc] == 0 or (qr == pr and qc == pc) or visited[qr, qc]:
+                        continue
+                    nr, nc = qr, qc
+                    break
+                if nr < 0:
+                    break
+                pr, pc = cr, cc
+                cr, cc = nr, nc
+            out_rc[n_v, 0] = sr
+            out_rc[n_v, 1] = sc
+            n_v += 1
+            out_src[n_b] = -1
+            out_dst[n_b] = -1
+            n_b += 1
+            out_offsets[n_b] = n_v
+    return n_b, n_v

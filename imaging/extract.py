@@ -1,0 +1,480 @@
+"""Photo -> traces: the whole extraction chain behind one function, :func:`extract`.
+
+Chain (REFERENCE.md §2), each step in its own module:
+
+===================  ================================================  ===========================
+step                 what                                              module
+===================  ================================================  ===========================
+read, grey           Pillow + EXIF orientation; RGB(A), 8/16 bit        :mod:`.enhance`
+down-sample          to at most ``max_megapixels`` (area averaging)     here
+flatten              grey closing + wide Gaussian, divide              :mod:`.enhance`
+ridges               Sato tubeness, σ from the joint width             :mod:`.ridges`
+segment              hysteresis (median + k MAD), ROI, small objects   :mod:`.segment`
+skeleton, graph      Zhang–Suen, skan pixel graph                      :mod:`.skeleton_graph`
+prune, X, bridge     spurs, X crossings, gaps (distance and angle)     :mod:`.skeleton_graph`
+chain, vectorise     straight-through chaining, Douglas–Peucker, m     :mod:`.vectorize`
+===================  ================================================  ===========================
+
+Pixel-valued parameters in :class:`ExtractParams` are in pixels of the *working* image (the image
+after down-sampling; the input itself when it is small enough), because that is the grid the chain
+runs on: so the defaults behave the same at any input size. ``joint_width_px`` is in input pixels
+and is scaled to the working grid.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+from .frame import check_scale, rc_to_uv
+from .vectorize import image_window_uv_m
+
+__all__ = ["ExtractParams", "ScaleInfo", "Extraction", "extract", "scale_from_control_points"]
+
+#: Smallest image side the chain accepts, pixels.
+MIN_SIDE_PX = 16
+
+
+@dataclass(frozen=True)
+class ExtractParams:
+    """Every setting of the extraction chain, with the default it was tuned to.
+
+    Defaults were tuned on synthetic faces of :func:`rockmass.imaging.synthetic_face` (seeds 100 and
+    up, all three difficulties; tests use other seeds): see ``benchmarks/bench_imaging_extract.py``.
+    Pixel values are on the working grid (see the module notes).
+
+    Attributes
+    ----------
+    max_megapixels : float, default 4.0
+        Larger images are down-sampled (area averaging) to this many pixels before anything else;
+        24 MP then runs in a few seconds and < 1 GB. ``inf`` processes at full resolution.
+    flatten_method : {"divide", "subtract", "none"}, default "divide"
+        Illumination flattening (:func:`rockmass.imaging.enhance.flatten_illumination`).
+    background_sigma_px : float, default 40.0
+        Scale of the illumination removed, pixels.
+    clahe : bool, default False
+        Contrast-limited adaptive histogram equalisation after flattening.
+    clahe_clip_limit : float, default 0.01
+    n_scales : int, default 3
+        Ridge filter scales (:func:`rockmass.imaging.ridges.ridge_sigmas`).
+    scale_spread : float, default 2.0
+        Largest / smallest scale.
+    min_sigma_px : float, default 1.0
+        Smallest filter scale, pixels.
+    low_k, high_k : float, default 1.5, 4.0
+        Hysteresis thresholds in robust standard deviations (1.4826 MAD) above the median response.
+        Tuned: (2, 5) loses faint stretches (moderate recall 0.93, P21 -11 %); (1, 4) lets texture
+        in (moderate precision 0.965, hard P20 +54 %).
+    min_object_px : int, default 40
+        Smallest connected piece of the binary mask kept, pixels.
+    spur_length_px : float, default 10.0
+        End branches at junctions shorter than this are pruned (iteratively).
+    crossing_link_px : float, default 10.0
+        Two Y nodes joined by a branch up to this long are merged into an X when their branches
+        pair into two straight lines.
+    max_turn_deg : float, default 35.0
+        A trace continues through a junction along a pair of branches turning by at most this.
+    bridge_distance_px : float, default 25.0
+        Longest gap between two line ends that is bridged.
+    bridge_angle_deg : float, default 20.0
+        Both end tangents must lie within this angle of the gap direction.
+    tangent_skip_px, tangent_reach_px : float, default 2.0, 12.0
+        Branch directions are measured between these arc lengths from the branch end.
+    min_trace_length_px : float, default 20.0
+        Traces shorter than this are dropped.
+    simplify_tolerance_px : float, default 1.0
+        Douglas–Peucker tolerance.
+    """
+
+    max_megapixels: float = 4.0
+    flatten_method: str = "divide"
+    background_sigma_px: float = 40.0
+    clahe: bool = False
+    clahe_clip_limit: float = 0.01
+    n_scales: int = 3
+    scale_spread: float = 2.0
+    min_sigma_px: float = 1.0
+    low_k: float = 1.5
+    high_k: float = 4.0
+    min_object_px: int = 40
+    spur_length_px: float = 10.0
+    crossing_link_px: float = 10.0
+    max_turn_deg: float = 35.0
+    bridge_distance_px: float = 25.0
+    bridge_angle_deg: float = 20.0
+    tangent_skip_px: float = 2.0
+    tangent_reach_px: float = 12.0
+    min_trace_length_px: float = 20.0
+    simplify_tolerance_px: float = 1.0
+
+    def __post_init__(self) -> None:
+        positive = ("max_megapixels", "background_sigma_px", "scale_spread", "min_sigma_px",
+                    "tangent_reach_px", "clahe_clip_limit")
+        non_negative = ("low_k", "high_k", "spur_length_px", "crossing_link_px", "bridge_distance_px",
+                        "tangent_skip_px", "min_trace_length_px", "simplify_tolerance_px")
+        for name in positive:
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and value > 0 and not np.isnan(value)):
+                raise ValueError(f"params.{name} must be a number > 0, got {value!r}")
+        for name in non_negative:
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and np.isfinite(value) and value >= 0):
+                raise ValueError(f"params.{name} must be a finite number >= 0, got {value!r}")
+        for name in ("max_turn_deg", "bridge_angle_deg"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and 0 <= value <= 90):
+                raise ValueError(f"params.{name} must be an angle in 0-90 degrees, got {value!r}")
+        if self.low_k > self.high_k:
+            raise ValueError(f"params.low_k ({self.low_k}) must not exceed params.high_k ({self.high_k})")
+        if not (isinstance(self.n_scales, int) and self.n_scales >= 1):
+            raise ValueError(f"params.n_scales must be an integer >= 1, got {self.n_scales!r}")
+        if not (isinstance(self.min_object_px, int) and self.min_object_px >= 0):
+            raise ValueError(f"params.min_object_px must be an integer >= 0, got {self.min_object_px!r}")
+        from .enhance import FLATTEN_METHODS
+
+        if self.flatten_method not in FLATTEN_METHODS:
+            raise ValueError(f"params.flatten_method must be one of {', '.join(FLATTEN_METHODS)}, "
+                             f"got {self.flatten_method!r}")
+
+
+@dataclass(frozen=True)
+class ScaleInfo:
+    """How the result is scaled.
+
+    Attributes
+    ----------
+    m_per_px : float
+        Metres per *input* pixel (1.0 when running in pixels).
+    units : {"m", "px"}
+        Unit of every coordinate and length in the result.
+    source : {"m_per_px", "control_points", "none"}
+        Where the scale came from.
+    work_factor : float
+        Working grid / input grid (1.0 = full resolution; 0.41 = down-sampled to 41 % per side).
+    work_shape_px : (rows, cols)
+        Shape of the grid the chain ran on.
+    processing : str
+        The processing mode in words ("full resolution" or "down-sampled ...").
+    """
+
+    m_per_px: float
+    units: str
+    source: str
+    work_factor: float
+    work_shape_px: tuple[int, int]
+    processing: str
+
+
+@dataclass(frozen=True, eq=False)
+class Extraction:
+    """Result of :func:`extract`.
+
+    Attributes
+    ----------
+    traces : TraceMap
+        Traces in the face frame (u right, v up, origin at the image's bottom-left corner), in
+        ``scale.units``, with attributes ``id``, ``length_m`` and ``angle_deg`` (0–180° counter-
+        clockwise from +u) and the window (image rectangle, or the ROI clipped to it).
+    scale : ScaleInfo
+    params : ExtractParams
+        The settings used.
+    joint_width_px : float
+        Expected joint width, input pixels.
+    face_orientation : (dip_deg, dip_direction_deg) or None
+        The face plane, for placing the traces in 3D later.
+    timings_s : mapping of str to float
+        Wall time per step, seconds, in chain order.
+    warnings : tuple of str
+    debug : mapping of str to ndarray
+        With ``debug=True``: ``flattened``, ``ridge_response``, ``binary``, ``skeleton`` and
+        ``pruned`` on the working grid; else empty.
+    """
+
+    traces: Any
+    scale: ScaleInfo
+    params: ExtractParams
+    joint_width_px: float
+    face_orientation: tuple[float, float] | None
+    timings_s: Mapping[str, float]
+    warnings: tuple[str, ...]
+    debug: Mapping[str, np.ndarray] = field(default_factory=dict)
+
+    def summary(self) -> dict:
+        """A JSON-ready dict of the scale, parameters, timings and warnings (no arrays)."""
+        return {"n_traces": self.traces.n_traces, "units": self.scale.units,
+                "scale": asdict(self.scale), "params": asdict(self.params),
+                "joint_width_px": self.joint_width_px, "face_orientation": self.face_orientation,
+                "timings_s": dict(self.timings_s), "warnings": list(self.warnings)}
+
+
+def scale_from_control_points(control_points) -> float:
+    """Metres per pixel from two pixel positions and the real distance between them.
+
+    Parameters
+    ----------
+    control_points : mapping or sequence
+        ``{"rc_px": [(r1, c1), (r2, c2)], "distance_m": d}`` or ``((r1, c1), (r2, c2), d)``: two
+        points in input-image pixels (row, col) and their distance on the face in metres.
+
+    Returns
+    -------
+    float
+        :math:`d / \\lVert p_2 - p_1 \\rVert`.
+
+    Raises
+    ------
+    ValueError
+        Zero, negative or non-finite distance, coincident or non-finite points, or a malformed
+        argument (the message names the field, e.g. ``control_points.distance_m``).
+
+    Examples
+    --------
+    >>> scale_from_control_points({"rc_px": [(0, 0), (30, 40)], "distance_m": 1.0})
+    0.02
+    """
+    if isinstance(control_points, Mapping):
+        unknown = set(control_points) - {"rc_px", "distance_m"}
+        if unknown or "rc_px" not in control_points or "distance_m" not in control_points:
+            raise ValueError("control_points must have the keys 'rc_px' (two (row, col) pixel "
+                             f"positions) and 'distance_m', got {sorted(map(str, control_points))}")
+        points, distance = control_points["rc_px"], control_points["distance_m"]
+    else:
+        try:
+            p1, p2, distance = control_points
+        except (TypeError, ValueError) as exc:
+            raise ValueError("control_points must be ((r1, c1), (r2, c2), distance_m) or a mapping "
+                             "with 'rc_px' and 'distance_m'") from exc
+        points = (p1, p2)
+    try:
+        rc = np.asarray(points, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError("control_points.rc_px must be two (row, col) pixel positions") from exc
+    if rc.shape != (2, 2):
+        raise ValueError(f"control_points.rc_px must be two (row, col) pixel positions, got shape {rc.shape}")
+    if not np.isfinite(rc).all():
+        raise ValueError("control_points.rc_px has non-finite coordinates")
+    try:
+        d = float(distance)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"control_points.distance_m must be a number, got {distance!r}") from exc
+    if not (np.isfinite(d) and d > 0):
+        raise ValueError(f"control_points.distance_m must be a finite distance > 0 (metres), got {distance!r}")
+    pixels = float(np.hypot(*(rc[1] - rc[0])))
+    if pixels == 0:
+        raise ValueError("control_points.rc_px: the two points coincide; pick two points apart")
+    return d / pixels
+
+
+def _check_orientation(dip, dip_direction):
+    if dip is None and dip_direction is None:
+        return None
+    if dip is None or dip_direction is None:
+        raise ValueError("face_dip_deg and face_dip_direction_deg must be given together")
+    dip, dip_direction = float(dip), float(dip_direction)
+    if not (np.isfinite(dip) and 0 <= dip <= 90):
+        raise ValueError(f"face_dip_deg must be in 0-90 degrees, got {dip!r}")
+    if not (np.isfinite(dip_direction) and 0 <= dip_direction <= 360):
+        raise ValueError(f"face_dip_direction_deg must be in 0-360 degrees, got {dip_direction!r}")
+    return (dip, dip_direction % 360.0)
+
+
+class _Clock:
+    def __init__(self):
+        self.timings: dict[str, float] = {}
+        self._t = time.perf_counter()
+
+    def lap(self, name: str) -> None:
+        now = time.perf_counter()
+        self.timings[name] = self.timings.get(name, 0.0) + now - self._t
+        self._t = now
+
+
+def _render(graph, shape) -> np.ndarray:
+    """Binary image of a skeleton graph's branch pixels (for the debug output)."""
+    out = np.zeros(shape, dtype=bool)
+    rc = np.round(graph.branch_rc_px).astype(np.int64)
+    if rc.size:
+        out[rc[:, 0], rc[:, 1]] = True
+    return out
+
+
+def extract(image_or_path, *, m_per_px: float | None = None, control_points=None,
+            joint_width_px: float = 3.0, roi=None, face_dip_deg: float | None = None,
+            face_dip_direction_deg: float | None = None, params: ExtractParams | None = None,
+            debug: bool = False) -> Extraction:
+    """Joint traces from a face photograph.
+
+    Parameters
+    ----------
+    image_or_path : str, path-like, or (H, W), (H, W, 3), (H, W, 4) array_like
+        A JPEG / PNG / TIFF file (EXIF orientation honoured) or an image array (grey or RGB(A),
+        uint8, uint16 or float in [0, 1]); never modified.
+    m_per_px : float, optional
+        Scale, metres per input pixel, finite and > 0.
+    control_points : mapping or sequence, optional
+        Instead of ``m_per_px``: two pixel positions and their distance in metres (see
+        :func:`scale_from_control_points`). With neither, the result is in pixels, with a warning.
+    joint_width_px : float, default 3.0
+        Expected joint width in input pixels, > 0; sets the ridge filter scales (σ ≈ w / 2).
+    roi : (k, 2) array_like or mapping, optional
+        Region of interest polygon (see :func:`rockmass.imaging.segment.roi_mask`): a bare array or
+        ``{"rc_px": ...}`` in input pixels (row, col), ``{"uv_m": ...}`` in metres on the face frame.
+        Traces are found only inside; it becomes the sampling window.
+    face_dip_deg, face_dip_direction_deg : float, optional
+        Orientation of the face plane (0–90°, 0–360°), recorded for placing traces in 3D.
+    params : ExtractParams, optional
+        Chain settings; default ``ExtractParams()``.
+    debug : bool, default False
+        Keep the intermediate images in ``Extraction.debug``.
+
+    Returns
+    -------
+    Extraction
+
+    Raises
+    ------
+    FileNotFoundError, OSError
+        Missing, empty, truncated or unreadable image file.
+    ValueError
+        An image smaller than 16 x 16 pixels, a blank image (all one grey level, e.g. all black or
+        all white), a bad scale or control points, a ROI outside the image, both ``m_per_px`` and
+        ``control_points``, or a bad parameter (each message names the field).
+    TypeError
+        ``params`` of the wrong type, or a non-numeric image.
+
+    Examples
+    --------
+    >>> from rockmass.imaging import synthetic_face
+    >>> face = synthetic_face("easy", seed=7, shape_px=(300, 450), m_per_px=0.02)
+    >>> result = extract(face.image, m_per_px=0.02)
+    >>> result.scale.units, result.traces.n_traces > 0
+    ('m', True)
+    """
+    import cv2
+
+    from . import enhance, ridges, segment, skeleton_graph, vectorize
+
+    params = ExtractParams() if params is None else params
+    if not isinstance(params, ExtractParams):
+        raise TypeError(f"params must be an ExtractParams, got {type(params).__name__}")
+    if not (np.isfinite(joint_width_px) and joint_width_px > 0):
+        raise ValueError(f"joint_width_px must be a finite width > 0 (pixels), got {joint_width_px!r}")
+    orientation = _check_orientation(face_dip_deg, face_dip_direction_deg)
+    notes: list[str] = []
+    if m_per_px is not None and control_points is not None:
+        raise ValueError("give either m_per_px or control_points, not both")
+    if m_per_px is not None:
+        scale, units, source = check_scale(m_per_px), "m", "m_per_px"
+    elif control_points is not None:
+        scale, units, source = scale_from_control_points(control_points), "m", "control_points"
+    else:
+        scale, units, source = 1.0, "px", "none"
+        notes.append("no scale given (m_per_px or control_points): coordinates and lengths are in "
+                     "pixels, labelled 'px'; set m_per_px or give two control points for metres")
+
+    clock = _Clock()
+    if isinstance(image_or_path, (str, Path)):
+        raw = enhance.read_photo(image_or_path)
+        name = str(image_or_path)
+    else:
+        raw = image_or_path
+        name = "image"
+    clock.lap("read")
+    grey = enhance.to_grey(raw, name=name)
+    h, w = grey.shape
+    if h < MIN_SIDE_PX or w < MIN_SIDE_PX:
+        raise ValueError(f"{name} is {h} x {w} pixels; at least {MIN_SIDE_PX} x {MIN_SIDE_PX} are "
+                         "needed to find joints")
+    lo, hi = float(grey.min()), float(grey.max())
+    if hi - lo < 0.5 / 255:
+        raise ValueError(f"{name} is blank: every pixel has grey level {lo:.3f} (all black or all "
+                         "white?); there are no joints to find")
+    clock.lap("grey")
+
+    megapixels = h * w / 1e6
+    if megapixels > params.max_megapixels:
+        factor = float(np.sqrt(params.max_megapixels / megapixels))
+        work_shape = (max(int(round(h * factor)), MIN_SIDE_PX), max(int(round(w * factor)), MIN_SIDE_PX))
+        grey = cv2.resize(grey, (work_shape[1], work_shape[0]), interpolation=cv2.INTER_AREA)
+        processing = (f"down-sampled from {h} x {w} ({megapixels:.1f} MP) to {work_shape[0]} x "
+                      f"{work_shape[1]} ({work_shape[0] * work_shape[1] / 1e6:.1f} MP, factor "
+                      f"{factor:.3f}; max_megapixels = {params.max_megapixels:g})")
+        notes.append(processing)
+    else:
+        work_shape, processing = (h, w), "full resolution"
+    row_factor, col_factor = work_shape[0] / h, work_shape[1] / w
+    factor = float(np.sqrt(row_factor * col_factor))
+    width_work = joint_width_px * factor
+    clock.lap("downsample")
+
+    mask = None
+    window = image_window_uv_m((h, w), scale)
+    if roi is not None:
+        import shapely
+
+        rc_in = segment.roi_vertices_rc(roi, (h, w), m_per_px=scale if units == "m" else None)
+        rc_work = np.column_stack([(rc_in[:, 0] + 0.5) * row_factor - 0.5,
+                                   (rc_in[:, 1] + 0.5) * col_factor - 0.5])
+        mask = segment.roi_mask({"rc_px": rc_work}, work_shape)
+        area = shapely.Polygon(rc_to_uv(rc_in, h, scale)).intersection(shapely.Polygon(window))
+        if area.geom_type != "Polygon":
+            area = max(shapely.get_parts(area), key=lambda g: g.area)
+        window = np.asarray(area.exterior.coords)
+    clock.lap("roi")
+
+    flat = enhance.flatten_illumination(
+        grey, line_width_px=max(2.0 * width_work, 2.0), sigma_px=params.background_sigma_px,
+        method=params.flatten_method, clahe=params.clahe, clahe_clip_limit=params.clahe_clip_limit)
+    del grey
+    clock.lap("flatten")
+    sigmas = ridges.ridge_sigmas(width_work, params.n_scales, spread=params.scale_spread,
+                                 min_sigma_px=params.min_sigma_px)
+    response = ridges.ridge_response(flat, sigmas, black_ridges=True)
+    clock.lap("ridges")
+    binary = segment.segment_ridges(response, low_k=params.low_k, high_k=params.high_k,
+                                    min_size_px=params.min_object_px, mask=mask)
+    clock.lap("segment")
+    skeleton = skeleton_graph.skeletonize(binary)
+    clock.lap("skeleton")
+    graph = skeleton_graph.build_graph(skeleton)
+    clock.lap("graph")
+    tangent = dict(skip_px=params.tangent_skip_px, reach_px=params.tangent_reach_px)
+    pruned = skeleton_graph.prune_spurs(graph, params.spur_length_px)
+    clock.lap("prune")
+    repaired = skeleton_graph.repair_crossings(pruned, max_link_px=params.crossing_link_px,
+                                               max_turn_deg=params.max_turn_deg, **tangent)
+    clock.lap("crossings")
+    bridged = skeleton_graph.bridge_gaps(repaired, max_distance_px=params.bridge_distance_px,
+                                         max_angle_deg=params.bridge_angle_deg, **tangent)
+    clock.lap("bridge")
+    chains = skeleton_graph.chain_traces(bridged, max_turn_deg=params.max_turn_deg,
+                                         min_length_px=params.min_trace_length_px, **tangent)
+    clock.lap("chain")
+    chains_in = [np.column_stack([(c[:, 0] + 0.5) / row_factor - 0.5,
+                                  (c[:, 1] + 0.5) / col_factor - 0.5]) for c in chains]
+    traces = vectorize.to_trace_map(chains_in, height_px=h, m_per_px=scale, window_uv_m=window,
+                                    tolerance_px=params.simplify_tolerance_px / factor,
+                                    frame="face")
+    clock.lap("vectorize")
+
+    debug_images = {}
+    if debug:
+        debug_images = {"flattened": flat, "ridge_response": response, "binary": binary,
+                        "skeleton": skeleton, "pruned": _render(pruned, work_shape)}
+    for note in notes:
+        if note.startswith("no scale"):
+            warnings.warn(note, UserWarning, stacklevel=2)
+    return Extraction(
+        traces=traces,
+        scale=ScaleInfo(m_per_px=scale, units=units, source=source, work_factor=factor,
+                        work_shape_px=tuple(int(v) for v in work_shape), processing=processing),
+        params=params, joint_width_px=float(joint_width_px), face_orientation=orientation,
+        timings_s=MappingProxyType(dict(clock.timings)), warnings=tuple(notes),
+        debug=MappingProxyType(debug_images))
