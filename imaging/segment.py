@@ -19,7 +19,7 @@ __all__ = ["robust_thresholds", "roi_mask", "segment_ridges", "remove_small_obje
 
 #: MAD of a normal distribution times this is its standard deviation.
 MAD_TO_SIGMA = 1.482602218505602
-#: Share of the positive responses always above the high threshold (see robust_thresholds).
+#: Share of the positive responses that seed lines when no response reaches the high threshold.
 SEED_FRACTION = 0.005
 
 
@@ -45,10 +45,10 @@ def robust_thresholds(response, *, low_k: float, high_k: float, mask=None) -> tu
     -----
     Sato's response is clipped at 0, and on a face about half the pixels (the convex side of the
     texture) are exactly 0; the statistics are taken over the positive pixels, which are the
-    texture's ridge-like half and the joints. The high threshold is capped at the
-    (1 - SEED_FRACTION) quantile of those responses (and the low one scaled with it), so an image
-    whose lines are no rare tail — wide mortar joints, dense fracturing — still seeds its strongest
-    0.5 % of pixels instead of finding nothing.
+    texture's ridge-like half and the joints. When the high threshold would exceed every
+    response — lines that are no rare tail: wide mortar joints, dense fracturing — it is lowered to
+    the (1 - SEED_FRACTION) quantile (and the low one scaled with it), so the strongest 0.5 % of
+    pixels still seed lines instead of nothing being found.
 
     Examples
     --------
@@ -72,8 +72,8 @@ def robust_thresholds(response, *, low_k: float, high_k: float, mask=None) -> tu
     low, high = median + low_k * scale, median + high_k * scale
     # where lines fill much of the image (wide mortar, dense joints) the tail is not a tail and
     # high can exceed every response: let at least the top SEED_FRACTION of pixels seed lines
-    ceiling = float(np.quantile(values, 1.0 - SEED_FRACTION))
-    if high > ceiling:
+    if high >= float(values.max()):
+        ceiling = float(np.quantile(values, 1.0 - SEED_FRACTION))
         low, high = low * ceiling / high, ceiling
     return low, high
 
@@ -188,11 +188,17 @@ def segment_ridges(response, *, low_k: float = 2.0, high_k: float = 6.0, min_siz
     .. [1] Canny, J. (1986). A computational approach to edge detection. IEEE Transactions on
        Pattern Analysis and Machine Intelligence 8(6), 679-698 (hysteresis thresholding).
     """
-    from skimage.filters import apply_hysteresis_threshold
+    import cv2
 
     values = np.asarray(response, dtype=np.float32)
     low, high = robust_thresholds(values, low_k=low_k, high_k=high_k, mask=mask)
+    candidate = (values >= low) & (values > 0)
     if mask is not None:
-        values = np.where(np.asarray(mask, dtype=bool), values, np.float32(0))
-    binary = apply_hysteresis_threshold(values, low, high)
-    return remove_small_objects(binary, int(min_size_px))
+        candidate &= np.asarray(mask, dtype=bool)
+    # hysteresis: keep the 8-connected pieces of {R >= low} that hold a pixel with R >= high
+    # (inclusive, so a line of constant response on a flat image, where MAD = 0, is kept)
+    n, labels = cv2.connectedComponents(candidate.view(np.uint8), connectivity=8, ltype=cv2.CV_32S)
+    seeded = np.zeros(n, dtype=bool)
+    seeded[np.unique(labels[candidate & (values >= high)])] = True
+    seeded[0] = False
+    return remove_small_objects(seeded[labels], int(min_size_px))

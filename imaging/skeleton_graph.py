@@ -297,14 +297,14 @@ def prune_spurs(graph: SkeletonGraph, min_length_px: float) -> SkeletonGraph:
                 spurs.append(b)
         if not spurs:
             break
-        # at a node that would lose all its branches but one... keep the longest spur of each node
-        # whose every other branch is a spur too (a short isolated "+" stays a line)
+        # where all branches of a node but one (or all) are spurs, the node is a forked line end
+        # (or a small isolated star): keep its longest spur, which continues the line
         by_node: dict[int, list[int]] = {}
         for b in spurs:
             node = work.src[b] if degree[work.src[b]] >= 3 else work.dst[b]
             by_node.setdefault(node, []).append(b)
         for node, bs in by_node.items():
-            if degree[node] - len(bs) < 1:
+            if degree[node] - len(bs) <= 1:
                 bs = sorted(bs, key=work.length)[:-1]
             for b in bs:
                 work.alive[b] = False

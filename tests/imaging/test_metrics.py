@@ -1,0 +1,63 @@
+"""Accuracy metrics against hand-checkable maps: identity, offsets beyond the buffer, nodes, sets."""
+
+import numpy as np
+import pytest
+
+from rockmass.dfn import TraceMap
+from rockmass.imaging.metrics import buffered_match, count_nodes, set_mean_angles, trace_accuracy
+
+WINDOW = [[0, 0], [10, 0], [10, 10], [0, 10]]
+
+
+def _grid():
+    """Three horizontal and three vertical 8 m traces in a 10 m window: 9 crossings, 12 I ends."""
+    segs = [[1, y, 9, y] for y in (2, 5, 8)] + [[x, 1, x, 9] for x in (2, 5, 8)]
+    return TraceMap.from_segments(segs, {"set": [1, 1, 1, 2, 2, 2]}, window=WINDOW)
+
+
+def test_identical_maps_score_perfectly():
+    truth = _grid()
+    acc = trace_accuracy(truth, truth, m_per_px=0.05)
+    assert acc.f1 == pytest.approx(1.0) and acc.p21_rel_error == 0 and acc.p20_rel_error == 0
+    assert acc.max_set_angle_error_deg == pytest.approx(0.0, abs=1e-9)
+    assert acc.d_box_error == 0 and acc.node_count_error == 0
+
+
+def test_offset_beyond_the_buffer_is_unmatched_and_within_is_matched():
+    truth = TraceMap.from_segments([[1, 5, 9, 5]], window=WINDOW)
+    near = TraceMap.from_segments([[1, 5.1, 9, 5.1]], window=WINDOW)  # 2 px at 0.05 m/px
+    far = TraceMap.from_segments([[1, 5.25, 9, 5.25]], window=WINDOW)  # 5 px
+    assert buffered_match(near, truth, m_per_px=0.05)[2] == pytest.approx(1.0)
+    assert buffered_match(far, truth, m_per_px=0.05)[2] == pytest.approx(0.0)
+
+
+def test_half_extracted_trace_has_recall_one_half_and_precision_one():
+    truth = TraceMap.from_segments([[1, 5, 9, 5]], window=WINDOW)
+    half = TraceMap.from_segments([[1, 5, 5, 5]], window=WINDOW)
+    precision, recall, _ = buffered_match(half, truth, m_per_px=0.05)
+    assert precision == pytest.approx(1.0)
+    assert recall == pytest.approx(0.5 + 3 * 0.05 / 8, abs=0.01)  # the buffer reaches 3 px on
+
+
+def test_node_counts_of_a_grid_a_t_and_window_edges():
+    assert count_nodes(_grid(), snap_m=0.01) == {"I": 12, "Y": 0, "X": 9, "E": 0}
+    t = TraceMap.from_segments([[0, 5, 10, 5], [5, 5, 5, 9]], window=WINDOW)
+    assert count_nodes(t, snap_m=0.01) == {"I": 1, "Y": 1, "X": 0, "E": 2}
+
+
+def test_set_means_of_two_tight_sets_by_doubled_angle_kmeans():
+    rng = np.random.default_rng(8)  # seed 8: angles 20 +- 2 and 170 +- 2 degrees (wrap at 180)
+    angles = np.concatenate([rng.normal(20, 2, 40), rng.normal(170, 2, 40)])
+    d = np.column_stack([np.cos(np.radians(angles)), np.sin(np.radians(angles))])
+    segs = np.hstack([np.full((80, 2), 5.0), 5.0 + d])
+    means = set_mean_angles(TraceMap.from_segments(segs), 2)
+    assert abs(means[0] - 20) < 1.5 and abs(means[1] - 170) < 1.5
+
+
+def test_p21_error_is_relative_length_error():
+    truth = _grid()
+    shorter = TraceMap.from_segments(truth.segments() * [1, 1, 1, 1], window=WINDOW)
+    longer = TraceMap.from_polylines([np.vstack([p[:1], p[1:] + (p[1:] - p[:1]) * 0.1])
+                                      for p in (truth.polyline(i) for i in range(6))], window=WINDOW)
+    assert trace_accuracy(shorter, truth, m_per_px=0.05).p21_rel_error == pytest.approx(0.0)
+    assert trace_accuracy(longer, truth, m_per_px=0.05).p21_rel_error == pytest.approx(0.1)
