@@ -1,7 +1,7 @@
 """The fracture data model and its files: trace maps, readers and writers.
 
-Public names
-------------
+Public names (each module's docstring gives the formulas and sources)
+---------------------------------------------------------------------
 :class:`TraceMap`
     Joint traces as polylines in metres in a named frame, with per-trace attributes and the sampling
     window polygon (:mod:`rockmass.dfn.tracemap`).
@@ -9,6 +9,15 @@ Public names
     GeoJSON or CSV by suffix (:mod:`rockmass.dfn.traceio`).
 :func:`read_geojson`, :func:`write_geojson`, :func:`read_csv`, :func:`write_csv`
     The explicit readers and writers (:mod:`rockmass.dfn.geojson_io`, :mod:`rockmass.dfn.csv_io`).
+Trace-map statistics
+    2D joint sets (:mod:`~rockmass.dfn.sets2d`), P20 / P21 / scanline spacing
+    (:mod:`~rockmass.dfn.intensity`), Mauldon circular windows (:mod:`~rockmass.dfn.mauldon`),
+    I-Y-X-E topology (:mod:`~rockmass.dfn.topology`) and the fractopo-named summary
+    (:func:`trace_map_statistics`, :mod:`~rockmass.dfn.trace_stats`).
+3D orientation and DFN primitives
+    dip / dip direction, strike, trend / plunge conversions (:mod:`~rockmass.dfn.orientation`),
+    Fisher sampling and fitting (:mod:`~rockmass.dfn.fisher`), stereology C13 / C23 and the P32
+    solve (:mod:`~rockmass.dfn.stereology`), size distributions (:mod:`~rockmass.dfn.sizes`).
 
 ``rockmass.dfn`` depends on numpy and shapely only: it never imports the pipeline package
 (``rockmass`` top-level modules) nor numba, matplotlib, OpenCV or scikit-image at import time.
@@ -27,6 +36,15 @@ if TYPE_CHECKING:
     from .geojson_io import read_geojson, write_geojson
     from .traceio import read_traces, write_traces
     from .tracemap import TraceMap
+    from .sets2d import trace_angles_deg, fit_sets_2d, fit_axial_mixture, JointSets2D
+    from .intensity import sampling_window, SamplingWindow, clipped_lengths_m, trace_intensity, TraceIntensity, scanline_survey, ScanlineSurvey
+    from .mauldon import mauldon_from_counts, mauldon_circle, MauldonEstimate, circle_window, CircleWindow
+    from .topology import trace_topology, TraceTopology
+    from .trace_stats import trace_map_statistics
+    from .orientation import angle_between, dip_from_normal, dip_from_pole_trend_plunge, dip_from_strike, normal_from_dip, pole_from_dip, pole_trend_plunge, strike_from_dip, to_lower_hemisphere, trend_plunge_from_vector, vector_from_trend_plunge
+    from .fisher import FisherFit, confidence_cone, fisher_angle_cdf, fisher_angle_pdf, fisher_density, fit_fisher, orientation_tensor, sample_fisher, variability_cone
+    from .stereology import C13_ISOTROPIC, C23_ISOTROPIC, P32Solution, c13, c13_from_angle, c23, c23_from_angle, p10_from_p32, p21_from_p32, p32_from_p10, p32_from_p21, solve_p32, terzaghi_weights
+    from .sizes import ConstantSize, ExponentialSize, LognormalSize, PowerLawSize, SizeDistribution, mean_trace_length, p20_from_p30, p30_from_p32, p32_from_p30, radius_exponent_from_trace, trace_exponent_from_radius
 
 #: Public name -> the module that defines it.
 _SOURCES = {
@@ -37,6 +55,69 @@ _SOURCES = {
     "write_geojson": "geojson_io",
     "read_csv": "csv_io",
     "write_csv": "csv_io",
+    "trace_angles_deg": "sets2d",
+    "fit_sets_2d": "sets2d",
+    "fit_axial_mixture": "sets2d",
+    "JointSets2D": "sets2d",
+    "sampling_window": "intensity",
+    "SamplingWindow": "intensity",
+    "clipped_lengths_m": "intensity",
+    "trace_intensity": "intensity",
+    "TraceIntensity": "intensity",
+    "scanline_survey": "intensity",
+    "ScanlineSurvey": "intensity",
+    "mauldon_from_counts": "mauldon",
+    "mauldon_circle": "mauldon",
+    "MauldonEstimate": "mauldon",
+    "circle_window": "mauldon",
+    "CircleWindow": "mauldon",
+    "trace_topology": "topology",
+    "TraceTopology": "topology",
+    "trace_map_statistics": "trace_stats",
+    "angle_between": "orientation",
+    "dip_from_normal": "orientation",
+    "dip_from_pole_trend_plunge": "orientation",
+    "dip_from_strike": "orientation",
+    "normal_from_dip": "orientation",
+    "pole_from_dip": "orientation",
+    "pole_trend_plunge": "orientation",
+    "strike_from_dip": "orientation",
+    "to_lower_hemisphere": "orientation",
+    "trend_plunge_from_vector": "orientation",
+    "vector_from_trend_plunge": "orientation",
+    "FisherFit": "fisher",
+    "confidence_cone": "fisher",
+    "fisher_angle_cdf": "fisher",
+    "fisher_angle_pdf": "fisher",
+    "fisher_density": "fisher",
+    "fit_fisher": "fisher",
+    "orientation_tensor": "fisher",
+    "sample_fisher": "fisher",
+    "variability_cone": "fisher",
+    "C13_ISOTROPIC": "stereology",
+    "C23_ISOTROPIC": "stereology",
+    "P32Solution": "stereology",
+    "c13": "stereology",
+    "c13_from_angle": "stereology",
+    "c23": "stereology",
+    "c23_from_angle": "stereology",
+    "p10_from_p32": "stereology",
+    "p21_from_p32": "stereology",
+    "p32_from_p10": "stereology",
+    "p32_from_p21": "stereology",
+    "solve_p32": "stereology",
+    "terzaghi_weights": "stereology",
+    "ConstantSize": "sizes",
+    "ExponentialSize": "sizes",
+    "LognormalSize": "sizes",
+    "PowerLawSize": "sizes",
+    "SizeDistribution": "sizes",
+    "mean_trace_length": "sizes",
+    "p20_from_p30": "sizes",
+    "p30_from_p32": "sizes",
+    "p32_from_p30": "sizes",
+    "radius_exponent_from_trace": "sizes",
+    "trace_exponent_from_radius": "sizes",
 }
 
 __all__ = list(_SOURCES)

@@ -134,9 +134,9 @@ class JointSets2D:
         The angles that were clustered (NaN where undefined).
     log_likelihood : float
         Weighted log-likelihood of the axial angles in radians at the fit, weights scaled to sum to the
-        number of fitted angles.
+        effective number of angles n_eff = (sum w)^2 / sum w^2.
     bic : dict of int to float or None
-        BIC = -2 log L + (3k - 1) ln n for every k tried (None where k sets could not be fitted:
+        BIC = -2 log L + (3k - 1) ln n_eff for every k tried (None where k sets could not be fitted:
         fewer distinct angles than k, or a set that emptied during EM).
     selected_by : {"bic", "given"}
         How k was chosen.
@@ -289,8 +289,10 @@ def fit_axial_mixture(
     weighted circular k-means steps; it is reproducible from ``seed``.
 
     Capping κ keeps EM away from the unbounded likelihood of a set collapsed onto one angle, and keeps
-    all-parallel traces finite. BIC with length weights treats them as n independent angles: a
-    heuristic when lengths vary widely (then it tends to find more sets).
+    all-parallel traces finite. Length weights are scaled to sum to Kish's effective sample size
+    :math:`n_{eff} = (\sum w_i)^2 / \sum w_i^2` (Kish 1965), which is also the n of the BIC penalty
+    :math:`(3k - 1) \ln n_{eff}`: counting every trace as an independent angle while long traces
+    dominate the likelihood over-fits (on the bundled 3-set sample it split a set in two).
 
     References
     ----------
@@ -299,6 +301,7 @@ def fit_axial_mixture(
     .. [2] Mardia, K. V., Jupp, P. E. (2000). Directional Statistics. Wiley, §9.3, §10.3.
     .. [3] Arthur, D., Vassilvitskii, S. (2007). k-means++: the advantages of careful seeding. SODA.
     .. [4] Schwarz, G. (1978). Estimating the dimension of a model. Ann. Stat. 6, 461-464.
+    .. [5] Kish, L. (1965). Survey Sampling. Wiley, §11.7 (effective sample size of weighted data).
 
     Examples
     --------
@@ -321,7 +324,10 @@ def fit_axial_mixture(
     if n_fit == 0:
         raise ValueError("no angle to fit: every trace lacks a direction (zero length) or has weight 0")
     x = np.radians(2.0 * angles[fitted]) % (2.0 * np.pi)
-    wf = w[fitted] * (n_fit / w[fitted].sum())
+    # Kish's effective sample size: length weights make long traces count more, so the data carry
+    # (sum w)^2 / sum w^2 <= n independent angles; the likelihood and the BIC penalty both use it
+    n_eff = float(w[fitted].sum() ** 2 / np.sum(w[fitted] ** 2))
+    wf = w[fitted] * (n_eff / w[fitted].sum())
     n_distinct = np.unique(np.round(x, 12)).size
     if n_sets is not None:
         k_given = _integer_at_least(n_sets, "n_sets", 1, "number of joint sets")
@@ -335,13 +341,13 @@ def fit_axial_mixture(
         candidates = list(range(1, min(max_sets, n_distinct) + 1))
     data = _Angles(x, wf)
     fits = {k: _best_fit(data, k, kappa_max, seed, n_init) for k in candidates}
-    bic = {k: (None if f is None else -2.0 * f[3] + (3 * k - 1) * math.log(n_fit)) for k, f in fits.items()}
+    bic = {k: (None if f is None else -2.0 * f[3] + (3 * k - 1) * math.log(n_eff)) for k, f in fits.items()}
     feasible = [k for k in candidates if bic[k] is not None]
     if not feasible:
         raise ValueError(f"could not fit n_sets={candidates[0]} sets: a set emptied during EM; give fewer sets")
     k = min(feasible, key=lambda kk: (bic[kk], kk))
     mu, kappa, pi, loglik, rbar, converged, _ = fits[k]
-    return _result(angles, directed, mu, kappa, pi, loglik + n_fit * math.log(2.0), rbar, converged, bic,
+    return _result(angles, directed, mu, kappa, pi, loglik + n_eff * math.log(2.0), rbar, converged, bic,
                    "given" if n_sets is not None else "bic", kappa_max)
 
 

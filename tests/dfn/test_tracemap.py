@@ -353,15 +353,23 @@ def test_importing_dfn_or_its_atomic_writes_loads_neither_the_pipeline_nor_heavy
     assert out.stdout.strip() == "[]"
 
 
-def test_all_lists_the_public_api():
-    assert set(rockmass.dfn.__all__) == {
-        "TraceMap", "read_traces", "write_traces", "read_geojson", "write_geojson", "read_csv", "write_csv",
-    }
+def test_all_is_the_union_of_the_public_modules_all():
+    import importlib
+
+    modules = set(rockmass.dfn._SOURCES.values())
+    union = set()
+    for module in modules:
+        union |= set(importlib.import_module(f"rockmass.dfn.{module}").__all__)
+    assert set(rockmass.dfn.__all__) == union
+    assert {"TraceMap", "read_traces", "write_traces", "trace_map_statistics"} <= union
 
 
 def test_every_public_name_resolves_and_an_unknown_name_raises_attribute_error():
-    for name in rockmass.dfn.__all__:
-        assert getattr(rockmass.dfn, name).__name__ == name
+    import importlib
+
+    for name, module in rockmass.dfn._SOURCES.items():
+        defining = importlib.import_module(f"rockmass.dfn.{module}")
+        assert getattr(rockmass.dfn, name) is getattr(defining, name)
         assert name in dir(rockmass.dfn)
     with pytest.raises(AttributeError, match="has no attribute 'read_shapefile'"):
         rockmass.dfn.read_shapefile  # noqa: B018
