@@ -49,8 +49,12 @@ def _segment_cells(x0, y0, x1, y1, nbx, nby, strict, ids):
     length = np.sqrt(dx * dx + dy * dy)
     if length <= 0.0:
         return 0
-    tx, dtx = _first_crossing(x0, dx)
-    ty, dty = _first_crossing(y0, dy)
+    tx0, dtx = _first_crossing(x0, dx)
+    ty0, dty = _first_crossing(y0, dy)
+    tx = tx0
+    ty = ty0
+    kx = 0  # grid lines crossed so far; t of the next one is tx0 + kx * dtx (no summed round-off)
+    ky = 0
     n = 0
     t = 0.0
     while t < 1.0:
@@ -67,9 +71,11 @@ def _segment_cells(x0, y0, x1, y1, nbx, nby, strict, ids):
                 ids[n] = j * nbx + i
                 n += 1
         if tn == tx:
-            tx += dtx
+            kx += 1
+            tx = tx0 + kx * dtx
         if tn == ty:
-            ty += dty
+            ky += 1
+            ty = ty0 + ky * dty
         t = tn
     return n
 

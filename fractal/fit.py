@@ -140,7 +140,10 @@ def fit_range_mask(sizes_px, fit_range_px, grid: int) -> np.ndarray:
         lo, hi = float(sizes_px.min()), grid / 4.0
         what = f"the default fit range [smallest size, grid/4] = [{lo:g}, {hi:g}] px"
     else:
-        lo, hi = (float(v) for v in fit_range_px)
+        values = np.asarray(fit_range_px, dtype=np.float64).ravel()
+        if values.size != 2:
+            raise ValueError(f"fit range must be (min, max) box sizes in pixels, got {fit_range_px!r}")
+        lo, hi = float(values[0]), float(values[1])
         if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
             raise ValueError(f"fit range must be (min, max) box sizes in pixels with 0 < min < max, "
                              f"got {tuple(fit_range_px)}")

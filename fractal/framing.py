@@ -39,6 +39,11 @@ class Frame:
         np.clip(out, 0.0, units_per_side, out=out)
         return out
 
+    def square_ring(self) -> np.ndarray:
+        """The frame's square as a ring ``(4, 2)`` in metres, counter-clockwise."""
+        x0, y0, s = self.x0_m, self.y0_m, self.side_m
+        return np.array([[x0, y0], [x0 + s, y0], [x0 + s, y0 + s], [x0, y0 + s]])
+
     def ring_to_units(self, ring_m: np.ndarray, units_per_side: float) -> np.ndarray:
         """A polygon ring relative to the lower-left corner in the same scaled units."""
         scale = units_per_side / self.side_m
@@ -73,6 +78,9 @@ def as_ring(polygon, name: str = "mask") -> np.ndarray:
     vertices, non-finite coordinates or zero area.
     """
     if hasattr(polygon, "exterior"):
+        if len(getattr(polygon, "interiors", ())) > 0:
+            raise ValueError(f"{name}: polygons with holes are not supported (the hole would count "
+                             "as face); give the outer ring and drop the traces inside the hole")
         polygon = np.asarray(polygon.exterior.coords)
     ring = np.asarray(polygon, dtype=np.float64)
     if ring.ndim != 2 or ring.shape[1] != 2:

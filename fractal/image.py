@@ -28,9 +28,10 @@ import numpy as np
 
 __all__ = ["PreparedImage", "read_image", "prepare_binary_image", "divisors", "THICK_FRACTION"]
 
-THICK_FRACTION = 0.60
-# Measured on random networks at 360²: 1-pixel lines put 4-45 % of their pixels in full 2x2 blocks
-# (crossings and near-parallel neighbours; 45 % at 28 % fill), lines drawn 2-5 px wide 97-99.8 %.
+THICK_FRACTION = 0.95
+# Measured on random networks at 360² (the networks of benchmarks/bench_fractal_boxcount.py): 1-pixel
+# lines put 4 % (2 % fill) to 90 % (67 % fill, saturated) of their pixels in full 2x2 blocks; lines
+# drawn 2-6 px wide 97.8-99 % at every density. Reference fractals on their base grids: 0-90 %.
 MIN_THICK_WIDTH = 1.05  # pixels / skeleton pixels below which thinning changes too little
 MAX_LINE_WIDTH_PX = 15.0  # mean width (px) above which the image holds filled areas, not lines
 SKELETONIZE_CHOICES = ("auto", "always", "never")
@@ -79,8 +80,10 @@ def padded_side(height: int, width: int) -> int:
 def read_image(path) -> np.ndarray:
     """Read a PNG / TIFF / JPEG / BMP as a 2-D grey array (8 or 16 bit kept as read).
 
-    Colour images are converted to grey (ITU-R 601 luma, as OpenCV does); an alpha channel is
-    dropped. Raises ``OSError`` naming the file when it is missing or not an image.
+    Colour images are converted to grey (ITU-R 601 luma, as OpenCV does). An alpha channel is
+    dropped, except when the colour is uniform and only the alpha varies (lines drawn by opacity on
+    a transparent canvas): then the alpha channel is the image. Raises ``OSError`` naming the file
+    when it is missing or not an image.
     """
     import cv2
 
@@ -92,8 +95,12 @@ def read_image(path) -> np.ndarray:
     if img is None:
         raise OSError(f"{path}: not a readable image (PNG, TIFF, JPEG or BMP expected)")
     if img.ndim == 3:
-        code = cv2.COLOR_BGRA2GRAY if img.shape[2] == 4 else cv2.COLOR_BGR2GRAY
-        img = cv2.cvtColor(img, code)
+        if img.shape[2] == 4:
+            colour, alpha = img[:, :, :3], img[:, :, 3]
+            if colour.min() == colour.max() and alpha.min() != alpha.max():
+                return np.ascontiguousarray(alpha)
+            return cv2.cvtColor(img, cv2.COLOR_BGRA2GRAY)
+        img = cv2.cvtColor(img, cv2.COLOR_BGR2GRAY)
     return img
 
 
@@ -151,9 +158,12 @@ def prepare_binary_image(image, *, threshold: float | None = None, invert: bool 
         raise ValueError(f"{name}: image contains NaN or infinite values")
     notes = []
     if invert:
-        img = img.max() - img
-        notes.append("grey levels inverted (dark lines on light background)")
+        top = np.iinfo(img.dtype).max if np.issubdtype(img.dtype, np.integer) else img.max()
+        img = top - img.astype(np.float64 if img.dtype.kind == "f" else np.int64)
+        notes.append(f"grey levels inverted (v -> {top} - v: dark lines on a light background)")
     if threshold is not None:
+        if isinstance(threshold, (bool, np.bool_)) or not isinstance(threshold, (int, float, np.number)):
+            raise TypeError(f"threshold must be a number (a grey level), got {threshold!r}")
         if not np.isfinite(threshold):
             raise ValueError(f"{name}: threshold must be finite, got {threshold}")
         mask = img > threshold

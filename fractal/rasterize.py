@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .framing import Frame, as_segments, frame_for
+from .framing import Frame, as_segments, clip_segments_to_ring, frame_for
 
 __all__ = ["LINE_RULES", "rasterize_traces", "rasterize_segments_in_frame", "rasterize_polygon"]
 
@@ -76,8 +76,8 @@ def rasterize_traces(traces, grid: int = 360, *, window=None,
     grid : int, default 360
         Side N of the image in pixels (360 as in Jiang et al., seed 000 §4.1).
     window : (xmin, ymin, xmax, ymax), optional
-        Frame on this window instead of the network's bounding square. Segments are not clipped
-        here; parts outside the square are drawn on its edge pixels, so clip first if needed.
+        Frame on the square of side max(width, height) anchored at (xmin, ymin) instead of the
+        network's bounding square; segments are clipped to that square.
     line_rule : {"supercover", "bresenham"}, default "supercover"
         See the module docstring.
 
@@ -98,4 +98,6 @@ def rasterize_traces(traces, grid: int = 360, *, window=None,
     if seg.shape[0] == 0:
         raise ValueError("traces: there are no traces to draw")
     frame, _ = frame_for(seg, window)
+    if window is not None:
+        seg = clip_segments_to_ring(seg, frame.square_ring())
     return rasterize_segments_in_frame(seg, frame, grid, line_rule)

@@ -145,7 +145,9 @@ def straight_line(angle_deg: float = 0.0, length_m: float = 1.0) -> np.ndarray:
     if not (np.isfinite(angle_deg) and np.isfinite(length_m) and length_m > 0):
         raise ValueError(f"angle_deg must be finite and length_m > 0, got {angle_deg}, {length_m}")
     a = math.radians(angle_deg)
-    half = 0.5 * length_m * np.array([math.cos(a), math.sin(a)])
+    direction = np.array([math.cos(a), math.sin(a)])
+    direction[np.abs(direction) < 1e-15] = 0.0  # exact axes at multiples of 90°
+    half = 0.5 * length_m * direction
     return np.concatenate([-half, half])[None, :]
 
 

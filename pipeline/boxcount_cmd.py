@@ -15,6 +15,9 @@ import sys
 import time
 from pathlib import Path
 
+from .errors import InputError
+from .outputs import output_folder
+
 __all__ = ["add_parser", "run", "TRACE_SUFFIXES", "IMAGE_SUFFIXES"]
 
 TRACE_SUFFIXES = (".geojson", ".json", ".csv")
@@ -50,8 +53,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "'none', a GeoJSON file with a polygon, or for an image input a mask image "
                         "(non-zero = face)")
     p.add_argument("--threshold", type=float, help="for grey images: pixels above it are traces")
-    p.add_argument("--invert", action="store_true", default=None,
-                   help="dark lines on a light background")
+    p.add_argument("--invert", action=argparse.BooleanOptionalAction, default=None,
+                   help="dark lines on a light background (--no-invert overrides a config)")
     p.add_argument("--skeletonize", choices=SKELETONIZE_CHOICES,
                    help="thin lines to 1 pixel: auto (default), always, never")
     p.add_argument("--config", help="TOML file; its [fractal] section sets the defaults")
@@ -61,37 +64,54 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     return p
 
 
-def _resolve_settings(args):
-    """The FractalConfig from ``--config`` (or defaults), overridden by the flags given."""
-    from .config import FractalConfig, load_config
+# config field -> the flag that sets it, so errors name what the user typed
+FLAGS = {"grid": "--grid", "method": "--method", "range_px": "--range", "n_offsets": "--offsets",
+         "line_rule": "--line-rule", "threshold": "--threshold", "invert": "--invert",
+         "skeletonize": "--skeletonize"}
+
+
+def _resolve_settings(args, image_side: int | None):
+    """The FractalConfig from ``--config`` (or defaults), overridden by the flags given.
+
+    For an image the grid is the image's own (padded) side, so a fit range is checked against it.
+    """
+    from pydantic import ValidationError
+
+    from .config import FractalConfig, load_config, problems_from_validation_error
 
     base = FractalConfig()
     if args.config:
-        loaded = load_config(args.config)
-        base = loaded.fractal or base
-    overrides = {k: getattr(args, k) for k in
-                 ("grid", "method", "range_px", "n_offsets", "line_rule", "threshold", "invert",
-                  "skeletonize") if getattr(args, k) is not None}
+        base = load_config(args.config).fractal or base
+    overrides = {k: getattr(args, k) for k in FLAGS if getattr(args, k) is not None}
     if "range_px" in overrides:
         overrides["range_px"] = tuple(overrides["range_px"])
+    if image_side is not None:
+        overrides["grid"] = image_side
+    data = {**base.model_dump(), **overrides}
     try:
-        return FractalConfig.model_validate({**base.model_dump(), **overrides})
-    except Exception as exc:  # pydantic ValidationError: report as a flag problem (exit 2)
-        raise ValueError(f"invalid option: {exc}") from None
+        return FractalConfig.model_validate(data)
+    except ValidationError as exc:
+        problems = problems_from_validation_error(exc, FractalConfig, data)
+        raise InputError("; ".join(f"{FLAGS.get(field.split('.')[0].split('[')[0], field)} "
+                                   f"(or [fractal] {field} in the config): {message}"
+                                   for field, message in problems)) from None
 
 
 def _load_input(path: Path):
-    """('traces', TraceMap) or ('image', ndarray), by suffix."""
+    """('traces', TraceMap) or ('image', ndarray), by suffix; unreadable files are bad input."""
     suffix = path.suffix.lower()
-    if suffix in TRACE_SUFFIXES:
-        from .dfn import read_traces
+    try:
+        if suffix in TRACE_SUFFIXES:
+            from .dfn import read_traces
 
-        return "traces", read_traces(path)
-    if suffix in IMAGE_SUFFIXES:
-        from .fractal import read_image
+            return "traces", read_traces(path)
+        if suffix in IMAGE_SUFFIXES:
+            from .fractal import read_image
 
-        return "image", read_image(path)
-    raise ValueError(f"{path}: unknown file type {suffix or '(none)'}; expected traces "
+            return "image", read_image(path)
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read: {exc.strerror or exc}") from exc
+    raise InputError(f"{path}: unknown file type {suffix or '(none)'}; expected traces "
                      f"({', '.join(TRACE_SUFFIXES)}) or an image ({', '.join(IMAGE_SUFFIXES)})")
 
 
@@ -101,13 +121,16 @@ def _load_mask(spec: str, kind: str):
     if spec == "none":
         return None
     path = Path(spec)
-    if kind == "image":
-        from .fractal import read_image
+    try:
+        if kind == "image":
+            from .fractal import read_image
 
-        return read_image(path)
-    from .dfn import read_traces
+            return read_image(path)
+        from .dfn import read_traces
 
-    window = read_traces(path).window_xy_m
+        window = read_traces(path).window_xy_m
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read the --mask file: {exc.strerror or exc}") from exc
     if window is None:
         raise ValueError(f"{path}: --mask file holds no polygon (a GeoJSON Polygon feature is expected)")
     return window
@@ -116,22 +139,26 @@ def _load_mask(spec: str, kind: str):
 def compute(args) -> tuple[dict, object, dict]:
     """Read, count and fit; return the JSON document, the BoxCount and the settings used."""
     from .fractal import box_count
+    from .fractal.image import padded_side
 
-    settings = _resolve_settings(args)
     path = Path(args.file)
     t0 = time.perf_counter()
     kind, data = _load_input(path)
+    if kind == "image" and args.grid is not None:
+        raise InputError("--grid applies to traces; an image is counted on its own pixel grid")
+    if kind == "image" and args.window is not None:
+        raise InputError("--window applies to traces, not to an image")
+    settings = _resolve_settings(args, padded_side(*data.shape) if kind == "image" else None)
     mask = _load_mask(args.mask, kind)
     t1 = time.perf_counter()
-    if kind == "image" and args.grid is not None:
-        raise ValueError("--grid applies to traces; an image is counted on its own pixel grid")
-    if kind == "image" and args.window is not None:
-        raise ValueError("--window applies to traces, not to an image")
-    result = box_count(data, grid=settings.grid, method=settings.method,
-                       fit_range_px=settings.range_px, window=args.window, mask=mask,
-                       n_offsets=settings.n_offsets, line_rule=settings.line_rule,
-                       threshold=settings.threshold, invert=settings.invert,
-                       skeletonize=settings.skeletonize)
+    try:
+        result = box_count(data, kind=kind, grid=settings.grid, method=settings.method,
+                           fit_range_px=settings.range_px, window=args.window, mask=mask,
+                           n_offsets=settings.n_offsets, line_rule=settings.line_rule,
+                           threshold=settings.threshold, invert=settings.invert,
+                           skeletonize=settings.skeletonize)
+    except ValueError as exc:
+        raise InputError(f"{path}: {exc}") from None
     t2 = time.perf_counter()
     info = {"path": str(path), "kind": kind}
     if kind == "traces":
@@ -166,16 +193,15 @@ def run(args) -> int:
         from .fractal.plot import plot_box_count
         from .manifest import build_manifest
 
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
         t0 = time.perf_counter()
-        with ExitStack() as stack:  # every file is renamed into place only if all were written
+        with output_folder(args.out) as out, ExitStack() as stack:
+            # every file is renamed into place only if all of them were written
             png = stack.enter_context(atomic_path(out / "boxcount.png"))
             js = stack.enter_context(atomic_path(out / "boxcount.json"))
             plot_box_count(result, png, title=f"{Path(args.file).name}: box counting")
             atomic_write_json(js, document)
             timings = {**extra["timings"], "write_s": time.perf_counter() - t0}
-            manifest = build_manifest(command=["rockmass", *sys.argv[1:]] if sys.argv else "rockmass",
+            manifest = build_manifest(command=args.argv,
                                       config={"fractal": extra["settings"].model_dump(mode="json")},
                                       inputs=[args.file], timings_s=timings,
                                       extra={"dimension": result.dimension})

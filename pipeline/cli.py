@@ -1,7 +1,9 @@
 """The ``rockmass`` command line: subcommands, exit codes and error reporting.
 
 Exit codes (DESIGN.md §4): 0 success; 2 bad input or configuration (the message names the file, the
-field and what was expected); 1 failure while running. Heavy modules (numpy, numba, matplotlib,
+field and what was expected) — every ``ValueError``, which is what input validation raises, and
+input files that cannot be read, which the subcommands re-raise as :class:`InputError`; 1 failure
+while running — outputs that cannot be written (:class:`RunError`), and anything unexpected. Heavy modules (numpy, numba, matplotlib,
 OpenCV, scikit-image) are imported inside each subcommand's handler, never at start-up, so
 ``rockmass --help`` is instant and a typo costs nothing.
 """
@@ -11,7 +13,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .errors import EXIT_BAD_INPUT, EXIT_FAILURE
+from .errors import EXIT_BAD_INPUT, EXIT_FAILURE, RunError
 
 __all__ = ["build_parser", "main"]
 
@@ -47,9 +49,15 @@ def main(argv: list[str] | None = None) -> int:
     """Run the CLI; return the exit code (the console script passes it to ``sys.exit``)."""
     parser = build_parser()
     args = parser.parse_args(argv)  # usage errors exit with code 2 by argparse's own rule
+    args.argv = ["rockmass", *(sys.argv[1:] if argv is None else argv)]  # for manifests
     try:
         return int(args.handler(args) or 0)
-    except (ValueError, TypeError, OSError) as exc:  # includes InputError and ConfigError
+    except RunError as exc:  # a failure while running, e.g. outputs that could not be written
+        if args.debug:
+            raise
+        _error(args.command, "failed", exc)
+        return EXIT_FAILURE
+    except ValueError as exc:  # bad input: InputError, ConfigError and the stages' validation
         if args.debug:
             raise
         _error(args.command, "error", exc)

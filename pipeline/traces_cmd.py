@@ -16,6 +16,9 @@ import sys
 import time
 from pathlib import Path
 
+from .errors import InputError
+from .outputs import output_folder
+
 __all__ = ["add_parser", "run", "compute"]
 
 
@@ -53,10 +56,13 @@ def compute(args):
     from .fractal import box_count
 
     t0 = time.perf_counter()
-    trace_map = read_traces(Path(args.file))
+    try:
+        trace_map = read_traces(Path(args.file))
+        window = _read_area(args.area) if args.area else None
+    except OSError as exc:
+        raise InputError(f"{exc.filename or args.file}: cannot read: {exc.strerror or exc}") from exc
     if trace_map.n_traces == 0:
-        raise ValueError(f"{args.file}: the map holds no traces")
-    window = _read_area(args.area) if args.area else None
+        raise InputError(f"{args.file}: the map holds no traces")
     if window is not None:
         trace_map = trace_map.with_window(window)
     t1 = time.perf_counter()
@@ -105,11 +111,10 @@ def run(args) -> int:
         from .dfn.plots import plot_trace_map, rose_diagram
         from .manifest import build_manifest
 
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
         traces = summary["traces"]
         set_means = [s["Mean Angle"]["value"] for s in summary["sets"]]
-        with ExitStack() as stack:  # all files renamed into place only when every one is written
+        # all files renamed into place only when every one is written
+        with output_folder(args.out) as out, ExitStack() as stack:
             paths = {name: stack.enter_context(atomic_path(out / name))
                      for name in ("rose.png", "traces.png", "summary.json", "manifest.json")}
             rose_diagram(np.array(traces["angle_deg"], dtype=float),
@@ -119,7 +124,7 @@ def run(args) -> int:
                            title=f"{Path(args.file).name}: traces by set")
             atomic_write_json(paths["summary.json"], summary)
             manifest = build_manifest(
-                command=["rockmass", *sys.argv[1:]], inputs=[args.file] + ([args.area] if args.area else []),
+                command=args.argv, inputs=[args.file] + ([args.area] if args.area else []),
                 config={"n_sets": args.n_sets, "snap_tolerance_m": args.snap_tolerance_m},
                 timings_s=timings)
             atomic_write_json(paths["manifest.json"], manifest)

@@ -25,25 +25,39 @@ def naive_offset_boxes(mask: np.ndarray, size: int, off_r: int, off_c: int) -> i
     return naive_occupied_boxes(np.roll(mask, (off_r, off_c), axis=(0, 1)), size)
 
 
-def shapely_crossed_boxes(segments: np.ndarray, x0: float, y0: float, box: float, n_boxes: int) -> int:
-    """Boxes of an ``n_boxes`` x ``n_boxes`` grid whose interior a segment crosses with positive length.
+def shapely_crossed_boxes(segments: np.ndarray, x0: float, y0: float, box: float, n_boxes: int,
+                          shift=(0.0, 0.0), fold: bool = False) -> int:
+    """Boxes whose interior a segment crosses with positive length, by shapely (independent oracle).
 
-    Independent of the traversal kernel: shapely intersects every box with every segment. Only for
-    small grids.
+    The grid has ``n_boxes`` x ``n_boxes`` boxes of side ``box`` with corners at
+    ``(x0 - shift[0] + i * box, y0 - shift[1] + j * box)``; with ``fold`` the grid is cyclic on the
+    square of side ``(n_boxes - 1) * box`` (the last row and column are the first ones again).
+    Only for small grids: every box is intersected with every segment.
     """
     import shapely
 
-    lines = shapely.linestrings(segments.reshape(-1, 2, 2))
-    union = shapely.union_all(lines)
-    count = 0
+    union = shapely.union_all(shapely.linestrings(segments.reshape(-1, 2, 2)))
+    hit = set()
     for i in range(n_boxes):
         for j in range(n_boxes):
-            cell = shapely.box(x0 + i * box, y0 + j * box, x0 + (i + 1) * box, y0 + (j + 1) * box)
+            bx, by = x0 - shift[0] + i * box, y0 - shift[1] + j * box
+            cell = shapely.box(bx, by, bx + box, by + box)
             inner = shapely.intersection(union, cell)
             # a piece lying on the cell's boundary is not inside its interior
             if shapely.length(shapely.difference(inner, cell.exterior)) > 1e-9 * box:
-                count += 1
-    return count
+                m = n_boxes - 1 if fold else n_boxes
+                hit.add((i % m, j % m) if fold else (i, j))
+    return len(hit)
+
+
+def shapely_face_boxes(ring: np.ndarray, x0: float, y0: float, box: float, n_boxes: int) -> int:
+    """Boxes of the grid whose interior overlaps the polygon with positive area (shapely)."""
+    import shapely
+
+    polygon = shapely.Polygon(ring)
+    return sum(shapely.box(x0 + i * box, y0 + j * box, x0 + (i + 1) * box, y0 + (j + 1) * box)
+               .intersection(polygon).area > 1e-12 * box * box
+               for i in range(n_boxes) for j in range(n_boxes))
 
 
 def naive_line_statistics(mask: np.ndarray) -> tuple[int, int, int]:

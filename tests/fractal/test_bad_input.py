@@ -75,3 +75,25 @@ def test_mask_outside_the_traces_is_refused():
     with pytest.raises(ValueError, match="no trace"):
         box_count(np.array([[0.0, 0.0, 1.0, 1.0]]),
                   mask=np.array([[5.0, 5.0], [6.0, 5.0], [6.0, 6.0]]))
+
+
+def test_vector_sizes_that_would_exhaust_memory_are_refused():
+    seg = np.array([[0, 0, 1, 1.0], [0, 1, 1, 0.0]])
+    with pytest.raises(ValueError, match="sizes_px"):
+        box_count(seg, method="vector", sizes_px=[1e-6, 1e-5, 1e-4], fit_range_px=(1e-6, 1e-4))
+
+
+@pytest.mark.parametrize("kwargs, match", [({"sizes_px": []}, "sizes_px"),
+                                           ({"fit_range_px": (1, 2, 90)}, "fit range"),
+                                           ({"threshold": "5"}, "threshold")])
+def test_malformed_arguments_have_clear_messages(kwargs, match):
+    data = np.eye(60, dtype=np.uint8) if "threshold" in kwargs else np.array([[0, 0, 1, 1.0]])
+    with pytest.raises((ValueError, TypeError), match=match):
+        box_count(data, **kwargs)
+
+
+@pytest.mark.parametrize("scale", [1e160, 1e-200])
+def test_unrepresentable_extents_stop_with_a_message(scale):
+    seg = np.array([[0, 0, 1, 1.0], [0, 1, 1, 0.0], [0.2, 0.1, 0.9, 0.4]]) * scale
+    with pytest.raises(ValueError, match="rescale"):
+        box_count(seg)

@@ -5,7 +5,8 @@ import pytest
 
 from rockmass.fractal import box_count, divisors, fit_loglog, grid_offsets, rasterize_traces
 from tests.fractal._fixtures import (naive_line_statistics, naive_occupied_boxes,
-                                     naive_offset_boxes, random_network, shapely_crossed_boxes)
+                                     naive_offset_boxes, random_network, shapely_crossed_boxes,
+                                     shapely_face_boxes)
 
 
 def test_360_has_24_divisors():
@@ -21,16 +22,30 @@ def test_raster_counts_match_numpy_reshape_oracle():
 
 
 def test_offset_counts_match_rolled_image_oracle():
-    from rockmass.fractal.boxcount import _count_raster_mask
+    from rockmass.fractal.boxcount import _count_raster_mask, _raster_shifts
 
     image = rasterize_traces(random_network(40, seed=2), grid=120)
     sizes = divisors(120)
     offsets = grid_offsets(5)
     counts = _count_raster_mask(image, sizes, offsets)
+    shifts = _raster_shifts(sizes, offsets)  # (size, offset, (column, row)) in pixels
+    assert shifts[sizes >= 8].any()
     for a, s in enumerate(sizes):
-        for b, (fc, fr) in enumerate(offsets):
-            expected = naive_offset_boxes(image, int(s), int(np.floor(fr * s)), int(np.floor(fc * s)))
+        for b in range(offsets.shape[0]):
+            expected = naive_offset_boxes(image, int(s), int(shifts[a, b, 1]), int(shifts[a, b, 0]))
             assert counts[a, b] == expected
+
+
+@pytest.mark.parametrize("angle", [0.0, 30.0, 45.0, 90.0])
+def test_shifted_grids_of_traces_are_exact_in_raster_and_vector(angle):
+    """Raster counts of traces on shifted grids use exact sub-pixel shifts: both methods agree."""
+    from rockmass.fractal import reference
+
+    raster = box_count(reference.straight_line(angle), n_offsets=8)
+    vector = box_count(reference.straight_line(angle), method="vector", n_offsets=8)
+    assert np.array_equal(raster.offset_dimensions, vector.offset_dimensions)
+    if angle % 45 == 0:
+        assert np.allclose(raster.offset_dimensions, 1.0, atol=1e-9)
 
 
 def test_vector_count_matches_shapely_box_intersection():
@@ -44,9 +59,55 @@ def test_vector_count_matches_shapely_box_intersection():
         assert count == expected
 
 
+def test_shifted_vector_grids_match_shapely():
+    """Shifted (cyclic) grids against shapely boxes on the shifted, one-box-larger covering."""
+    from rockmass.fractal import _kernels
+
+    seg = random_network(20, seed=17, extent=1.0)
+    side = 1.3  # a frame larger than the network, anchored at the origin
+    shifted = seg + 0.1
+    for n in (4, 6):
+        d = side / n
+        for fx, fy in ((0.3, 0.7), (0.55, 0.1)):
+            counts = np.zeros((1, 1), dtype=np.int64)
+            totals = np.zeros_like(counts)
+            _kernels.count_crossed_boxes(shifted, side, np.array([d]), np.array([[fx, fy]]), 1 << 24,
+                                         counts, totals)
+            expected = shapely_crossed_boxes(shifted, 0.0, 0.0, d, n + 1, shift=(fx * d, fy * d),
+                                             fold=True)
+            assert counts[0, 0] == expected and totals[0, 0] == n * n
+
+
+def test_vector_count_at_sizes_that_do_not_divide_the_side_matches_shapely():
+    from rockmass.fractal import _kernels
+
+    seg = random_network(20, seed=18, extent=1.0) + 0.05
+    side = 1.1
+    d = side / 3.7  # 4 boxes per axis, the last one partial
+    counts = np.zeros((1, 1), dtype=np.int64)
+    totals = np.zeros_like(counts)
+    _kernels.count_crossed_boxes(seg, side, np.array([d]), np.zeros((1, 2)), 1 << 24, counts, totals)
+    assert counts[0, 0] == shapely_crossed_boxes(seg, 0.0, 0.0, d, 4)
+    assert totals[0, 0] == 16
+
+
+def test_face_boxes_match_shapely_polygon_overlap():
+    """The face count (boxes meeting a concave polygon) against shapely areas."""
+    ring = np.array([[0.5, 0.5], [9.0, 1.0], [5.0, 4.0], [9.5, 9.0], [1.0, 8.0]])
+    seg = random_network(60, seed=19)
+    for method in ("raster", "vector"):
+        result = box_count(seg, method=method, mask=ring, grid=36, n_offsets=1)
+        f = result.frame
+        for size, face in zip(result.sizes_px[:6], result.face_counts[:6]):
+            box = f["side_m"] * size / 36
+            n = int(round(36 / size))
+            assert face == shapely_face_boxes(ring, f["x0_m"], f["y0_m"], box, n)
+
+
 @pytest.mark.parametrize("seed", [4, 5, 6])
 def test_vector_and_supercover_raster_agree_exactly_at_zero_offset(seed):
-    """Two independent counters (pixel marks + summed-area table, and per-size traversal)."""
+    """Two counting paths (pixel marks + summed-area table, and per-size traversal) that share the
+    traversal rule; each is checked against shapely separately above."""
     seg = random_network(200, seed=seed)
     raster = box_count(seg, method="raster", n_offsets=1)
     vector = box_count(seg, method="vector", n_offsets=1)
@@ -223,10 +284,12 @@ def test_grey_image_with_threshold_and_invert():
 
 def test_non_square_image_is_padded_and_says_so():
     img = np.zeros((100, 250), dtype=np.uint8)
-    img[50, :] = 1
+    img[50, :] = 1  # a line across the whole width
     result = box_count(img, n_offsets=1)
-    assert result.grid % 250 == 0 or result.grid > 250
+    # 250 has only 8 divisors: padded to 270 = 2 * 3^3 * 5, the smallest 5-smooth side with >= 12
+    assert result.grid == 270 and divisors(270).size >= 12
     assert any("padded" in n for n in result.notes)
+    assert result.dimension == pytest.approx(1.0, abs=0.03)  # a line over 250 of the 270 px
 
 
 def test_inputs_are_not_modified():
@@ -248,3 +311,34 @@ def test_object_with_segments_method_is_accepted():
             return seg
 
     assert box_count(Traces()).dimension == box_count(seg).dimension
+
+
+def test_integer_segments_are_traces_and_uint8_quads_are_images():
+    hough = np.array([[0, 0, 10, 10], [0, 10, 10, 0]], dtype=np.int32)  # cv2.HoughLinesP output
+    assert box_count(hough, n_offsets=1).frame is not None
+    tiny = np.zeros((8, 4), dtype=np.uint8)
+    tiny[:, 1] = 1
+    assert box_count(tiny, n_offsets=1, fit_range_px=(1, 8)).frame is None  # counted as an image
+    floats = np.zeros((8, 4))
+    floats[:, 1] = 1.0
+    assert box_count(floats, kind="image", n_offsets=1, fit_range_px=(1, 8)).frame is None
+
+
+def test_mask_with_a_hole_is_refused():
+    import shapely
+
+    polygon = shapely.Polygon([(0, 0), (10, 0), (10, 10), (0, 10)], [[(4, 4), (6, 4), (6, 6), (4, 6)]])
+    with pytest.raises(ValueError, match="holes"):
+        box_count(random_network(20, seed=20), mask=polygon)
+
+
+def test_rasterize_with_a_window_clips_instead_of_bending():
+    img = rasterize_traces(np.array([[0.0, 0.0, 20.0, 5.0]]), grid=10, window=(0, 0, 10, 10))
+    rows = np.flatnonzero(img.any(axis=1))
+    assert 10 - rows.min() <= 3  # leaves the window at v = 2.5: no pixel above row 3 from the bottom
+
+
+def test_image_mask_of_the_wrong_shape_is_refused():
+    img = np.eye(60, dtype=np.uint8)
+    with pytest.raises(ValueError, match="shape"):
+        box_count(img, mask=np.ones((30, 30), dtype=np.uint8))

@@ -91,13 +91,60 @@ def test_nan_coordinate_names_the_feature_and_writes_nothing(tmp_path, capsys):
                    '{"type": "Feature", "properties": {"id": "B"}, "geometry": {"type": '
                    '"LineString", "coordinates": [[0, 0], [NaN, 1]]}}]}')
     out = tmp_path / "out"
-    _fails_with_2(["boxcount", str(bad), "--out", str(out)], capsys, "bad.geojson")
-    assert not (out / "boxcount.json").exists()
+    _fails_with_2(["boxcount", str(bad), "--out", str(out)], capsys, "bad.geojson", "id=B")
+    assert not out.exists()
 
 
-def test_empty_image_exits_2(tmp_path, capsys):
+def test_empty_image_exits_2_naming_the_file(tmp_path, capsys):
     path = _png(tmp_path / "empty.png", np.zeros((50, 50), np.uint8))
-    _fails_with_2(["boxcount", str(path)], capsys, "empty")
+    _fails_with_2(["boxcount", str(path)], capsys, "empty.png", "empty")
+
+
+def test_empty_trace_map_exits_2_naming_the_file(tmp_path, capsys):
+    path = tmp_path / "none.geojson"
+    path.write_text('{"type": "FeatureCollection", "features": []}')
+    _fails_with_2(["boxcount", str(path)], capsys, "none.geojson", "no traces")
+
+
+def test_unwritable_output_exits_1_naming_the_path(tmp_path, capsys):
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a folder")
+    code = main(["boxcount", str(SAMPLE), "--out", str(blocker / "out")])
+    err = capsys.readouterr().err
+    assert code == 1, err
+    assert "a_file" in err and "cannot write" in err
+
+
+def test_range_on_a_large_image_is_checked_against_its_own_grid(tmp_path, capsys):
+    img = np.zeros((1000, 1000), np.uint8)
+    img[500, :] = 255
+    path = _png(tmp_path / "big.png", img)
+    assert main(["boxcount", str(path), "--range", "1", "250", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["grid"] == 1000 and doc["settings"]["grid"] == 1000
+    assert doc["fit_range_px"] == [1.0, 250.0]
+
+
+def test_flag_errors_name_the_flag(tmp_path, capsys):
+    _fails_with_2(["boxcount", str(SAMPLE), "--offsets", "0"], capsys, "--offsets")
+
+
+def test_no_invert_overrides_the_config(tmp_path, capsys):
+    img = np.zeros((60, 60), np.uint8)
+    img[30, :] = 255
+    path = _png(tmp_path / "line.png", img)
+    config = tmp_path / "c.toml"
+    config.write_text("[fractal]\ninvert = true\nthreshold = 100.0\n")
+    assert main(["boxcount", str(path), "--config", str(config), "--no-invert", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["dimension"] == pytest.approx(1.0, abs=1e-12)
+
+
+def test_lines_drawn_by_opacity_on_a_transparent_canvas(tmp_path, capsys):
+    rgba = np.zeros((60, 60, 4), np.uint8)
+    rgba[30, :, 3] = 255  # black lines whose only signal is the alpha channel
+    path = _png(tmp_path / "alpha.png", rgba)
+    assert main(["boxcount", str(path), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["dimension"] == pytest.approx(1.0, abs=1e-12)
 
 
 def test_unreadable_image_exits_2(tmp_path, capsys):
@@ -138,6 +185,7 @@ def test_console_script_exit_codes():
     assert ok.stdout.startswith("D = ")
     bad = subprocess.run([sys.executable, "-m", "rockmass", "boxcount", "missing.csv"],
                          capture_output=True, text=True)
+    assert "missing.csv" in bad.stderr
     assert bad.returncode == 2 and "missing.csv" in bad.stderr
     usage = subprocess.run([sys.executable, "-m", "rockmass", "boxcount"], capture_output=True,
                            text=True)
