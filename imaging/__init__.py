@@ -1,18 +1,38 @@
 """Face photographs to joint traces (polylines in metres on the face frame).
 
-Available now:
-
-- :mod:`rockmass.imaging.frame` — pixel (row, col) <-> face frame (u, v) metres, the one place the
-  conversion happens;
-- :mod:`rockmass.imaging.synthetic` — synthetic face photographs with known traces (difficulty
-  levels easy / moderate / hard) and the trace-network generator behind them.
-
-The extraction chain (issue "Traces from face photographs") comes next.
+- :func:`extract` — the chain of REFERENCE.md §2: illumination flattening, multi-scale ridge filter
+  for dark lines, hysteresis threshold, cleanup, skeleton graph, spur pruning, X-node repair, gap
+  bridging, simplified polylines in metres; every setting in :class:`ExtractParams`.
+- :mod:`~rockmass.imaging.metrics` — accuracy against ground truth (buffered F1, P21 / P20, set
+  angles, D_box, nodes).
+- :mod:`~rockmass.imaging.synthetic` — synthetic face photographs with known traces (easy /
+  moderate / hard) and the trace-network generator behind them.
+- :mod:`~rockmass.imaging.frame` — pixel (row, col) <-> face frame (u, v) metres, the one place the
+  conversion happens.
 """
 
+from .enhance import flatten_illumination, read_photo, to_grey
+from .extract import ExtractParams, Extraction, ScaleInfo, extract, scale_from_control_points
 from .frame import rc_to_uv, uv_to_rc
+from .metrics import Accuracy, buffered_match, count_nodes, set_mean_angles, trace_accuracy
+from .ridges import ridge_response, ridge_sigmas
+from .segment import robust_thresholds, roi_mask, segment_ridges
+from .skeleton_graph import (SkeletonGraph, bridge_gaps, build_graph, chain_traces, prune_spurs,
+                             repair_crossings, skeletonize)
 from .synthetic import (DIFFICULTIES, FaceStyle, JointSetSpec, SyntheticFace, save_synthetic_face,
                         synthetic_face, synthetic_network)
+from .vectorize import axial_angle_deg, simplify_polylines, to_trace_map
 
-__all__ = ["rc_to_uv", "uv_to_rc", "DIFFICULTIES", "FaceStyle", "JointSetSpec", "SyntheticFace",
-           "synthetic_face", "synthetic_network", "save_synthetic_face"]
+__all__ = [
+    "extract", "ExtractParams", "Extraction", "ScaleInfo", "scale_from_control_points",
+    "read_photo", "to_grey", "flatten_illumination",
+    "ridge_response", "ridge_sigmas",
+    "segment_ridges", "roi_mask", "robust_thresholds",
+    "SkeletonGraph", "skeletonize", "build_graph", "prune_spurs", "repair_crossings", "bridge_gaps",
+    "chain_traces",
+    "to_trace_map", "axial_angle_deg", "simplify_polylines",
+    "trace_accuracy", "Accuracy", "buffered_match", "count_nodes", "set_mean_angles",
+    "rc_to_uv", "uv_to_rc",
+    "DIFFICULTIES", "FaceStyle", "JointSetSpec", "SyntheticFace", "synthetic_face",
+    "synthetic_network", "save_synthetic_face",
+]

@@ -166,15 +166,56 @@ class FractalConfig(StrictModel):
         return self
 
 
+class ImagingConfig(StrictModel):
+    """``[imaging]``: photo -> traces (:func:`rockmass.imaging.extract`).
+
+    Parameters
+    ----------
+    m_per_px : float, optional
+        Scale, metres per input pixel, > 0. Without it (and without control points on the command
+        line) the traces are in pixels and every output says so.
+    joint_width_px : float, default 3.0
+        Expected joint width in input pixels, > 0; sets the ridge filter scales.
+    face_dip_deg, face_dip_direction_deg : float, optional
+        Orientation of the face plane (0-90°, 0-360°), recorded for placing traces in 3D.
+    params : table, optional
+        Any field of :class:`rockmass.imaging.ExtractParams` (``low_k = 2.0``,
+        ``max_megapixels = 8.0``, ...); unknown keys and out-of-range values are errors.
+    """
+
+    m_per_px: float | None = Field(None, gt=0)
+    joint_width_px: float = Field(3.0, gt=0)
+    face_dip_deg: float | None = Field(None, ge=0, le=90)
+    face_dip_direction_deg: float | None = Field(None, ge=0, lt=360)
+    params: dict[str, bool | int | float | str] = Field(default_factory=dict)
+
+    @field_validator("params")
+    @classmethod
+    def _known_extract_params(cls, value: dict) -> dict:
+        import dataclasses
+
+        from rockmass.imaging.extract import ExtractParams  # lazy: only when a file has the key
+
+        allowed = [f.name for f in dataclasses.fields(ExtractParams)]
+        unknown = sorted(set(value) - set(allowed))
+        if unknown:
+            raise ValueError(f"unknown key(s) {', '.join(unknown)} (allowed: {', '.join(allowed)})")
+        ExtractParams(**value)  # its own range checks; the message names the key
+        return value
+
+
 class RockmassConfig(StrictModel):
     """The whole configuration document. Every section is optional: a stage runs only if asked for.
 
     Parameters
     ----------
+    imaging : ImagingConfig or None
+        ``[imaging]`` section.
     fractal : FractalConfig or None
         ``[fractal]`` section.
     """
 
+    imaging: ImagingConfig | None = None
     fractal: FractalConfig | None = None
 
 
@@ -592,7 +633,7 @@ def config_hash(obj: Any) -> str:
 
     Examples
     --------
-    >>> config_hash(RockmassConfig()) == config_hash({"fractal": None})
+    >>> config_hash(RockmassConfig()) == config_hash({"imaging": None, "fractal": None})
     True
     """
     return hashlib.sha256(canonical_json(obj).encode("utf-8")).hexdigest()

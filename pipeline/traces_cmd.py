@@ -83,14 +83,15 @@ def compute(args):
 
 
 def summary_text(summary: dict) -> str:
-    """A few human-readable lines: counts, intensities, sets and D."""
+    """A few human-readable lines: counts, intensities (with their units), sets and D."""
     def value(key, fmt=".4g"):
-        v = summary[key]["value"]
-        return "undefined" if v is None else format(v, fmt)
+        q = summary[key]
+        text = "undefined" if q["value"] is None else format(q["value"], fmt)
+        return text if q.get("unit") in (None, "-") else f"{text} {q['unit']}"
 
-    lines = [f"{value('Number of Traces', 'd')} traces, P20 = {value('Areal Frequency P20')} 1/m², "
-             f"P21 = {value('Fracture Intensity P21')} m/m², mean length "
-             f"{value('Trace Mean Length')} m, D_box = {value('Box-counting Dimension', '.4f')}"]
+    lines = [f"{value('Number of Traces', 'd')} traces, P20 = {value('Areal Frequency P20')}, "
+             f"P21 = {value('Fracture Intensity P21')}, mean length {value('Trace Mean Length')}, "
+             f"D_box = {value('Box-counting Dimension', '.4f')}"]
     for s in summary["sets"]:
         spread = s["Circular Spread"]["value"]
         lines.append(f"  set {s['Set']}: mean angle {s['Mean Angle']['value']:.1f}°, spread "

@@ -1,0 +1,67 @@
+"""The extraction overlay: traces coloured by joint set, drawn over the photograph.
+
+matplotlib is imported inside the function (Agg backend). Large photographs are shown down-sampled
+to at most ``max_side_px`` pixels on their longer side; the traces are scaled with them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .frame import uv_to_rc
+
+__all__ = ["plot_overlay"]
+
+
+def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title: str | None = None,
+                 max_side_px: int = 2000) -> None:
+    """Write the photograph (grey) with the traces on top, coloured by set (grey: unassigned).
+
+    Parameters
+    ----------
+    image : (H, W) or (H, W, 3|4) array
+        The photograph the traces were extracted from (input pixels).
+    trace_map : TraceMap
+        Traces in the face frame of that image.
+    path : path-like
+        Output file (format from the suffix).
+    m_per_px : float
+        The scale the traces are in (1.0 for traces in pixels).
+    set_ids : (n_traces,) array of int, optional
+        Joint set of each trace, -1 for none.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    from matplotlib.collections import LineCollection
+    from matplotlib.figure import Figure
+
+    img = np.asarray(image)
+    if img.ndim == 3:
+        img = img[..., :3].mean(axis=2)
+    h, w = img.shape
+    step = max(1, int(np.ceil(max(h, w) / max_side_px)))
+    shown = img[::step, ::step]
+    fig = Figure(figsize=(10.0, 10.0 * h / w + 0.6), layout="constrained")
+    ax = fig.add_subplot()
+    ax.imshow(shown, cmap="gray", extent=(-0.5, w - 0.5, h - 0.5, -0.5), interpolation="antialiased")
+    segments = trace_map.segments()
+    if segments.shape[0]:
+        a = uv_to_rc(segments[:, :2], h, m_per_px)
+        b = uv_to_rc(segments[:, 2:], h, m_per_px)
+        lines = np.stack([a[:, ::-1], b[:, ::-1]], axis=1)  # (x=col, y=row) for matplotlib
+        if set_ids is None:
+            colours = ["C0"] * len(lines)
+        else:
+            per_segment = np.asarray(set_ids)[trace_map.segment_trace_index()]
+            colours = ["0.7" if s < 0 else f"C{int(s) % 10}" for s in per_segment]
+        ax.add_collection(LineCollection(lines, colors=colours, linewidths=1.2))
+    if set_ids is not None:
+        for s in sorted(set(int(v) for v in np.asarray(set_ids) if v >= 0)):
+            ax.plot([], [], color=f"C{s % 10}", label=f"set {s}")
+        ax.legend(fontsize=8, loc="upper right")
+    ax.set_xlim(-0.5, w - 0.5)
+    ax.set_ylim(h - 0.5, -0.5)
+    ax.set_axis_off()
+    ax.set_title(title or f"{trace_map.n_traces} traces", fontsize=10)
+    fig.savefig(path, dpi=110)

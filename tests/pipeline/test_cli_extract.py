@@ -1,0 +1,103 @@
+"""``rockmass extract``: outputs on a synthetic face and on a real photograph, units, bad input."""
+
+import json
+
+import numpy as np
+import pytest
+
+from rockmass.cli import main
+from rockmass.dfn import read_traces
+from rockmass.imaging import save_synthetic_face, synthetic_face
+
+OUTPUTS = ("traces.geojson", "summary.json", "overlay.png", "rose.png", "manifest.json")
+
+
+@pytest.fixture(scope="module")
+def face_png(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("face")
+    face = synthetic_face("easy", seed=11, shape_px=(300, 450), m_per_px=0.02)
+    return save_synthetic_face(face, folder)["image"], face
+
+
+def test_synthetic_face_gives_every_output_in_metres(face_png, tmp_path):
+    path, face = face_png
+    out = tmp_path / "out"
+    assert main(["extract", str(path), "--m-per-px", "0.02", "--out", str(out), "--debug"]) == 0
+    for name in OUTPUTS:
+        assert (out / name).stat().st_size > 0
+    assert list(out.glob("debug_*.png"))
+    summary = json.loads((out / "summary.json").read_text())
+    traces = read_traces(out / "traces.geojson")
+    assert traces.n_traces == summary["extraction"]["n_traces"] > 0
+    assert {"id", "set", "length_m", "angle_deg"} <= set(traces.attributes)
+    assert summary["extraction"]["units"] == "m"
+    assert summary["statistics"]["Fracture Intensity P21"]["unit"] == "m/m²"
+    # the truth P21 over the same window: the extraction is within 25 % on an easy face
+    truth_p21 = face.truth.total_length_m() / (0.02 * 450 * 0.02 * 300)
+    got = summary["statistics"]["Fracture Intensity P21"]["value"]
+    assert abs(got - truth_p21) / truth_p21 < 0.25
+
+
+def test_control_points_give_the_same_scale_as_m_per_px(face_png, tmp_path, capsys):
+    path, _ = face_png
+    assert main(["extract", str(path), "--control-points", "0", "0", "30", "40", "1.0",
+                 "--out", str(tmp_path / "a"), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["extraction"]["scale"]["m_per_px"] == pytest.approx(0.02)
+
+
+def test_missing_scale_runs_in_pixels_with_a_warning(face_png, tmp_path, capsys):
+    path, _ = face_png
+    assert main(["extract", str(path), "--out", str(tmp_path / "px"), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["extraction"]["units"] == "px"
+    assert any("pixels" in w for w in summary["extraction"]["warnings"])
+    assert summary["statistics"]["Fracture Intensity P21"]["unit"] == "px/px²"
+
+
+def test_brick_photo_with_bright_lines_finds_the_two_joint_sets(tmp_path, capsys):
+    import cv2
+    import skimage.data
+
+    photo = tmp_path / "brick.png"
+    cv2.imwrite(str(photo), skimage.data.brick())
+    assert main(["extract", str(photo), "--bright-lines", "--joint-width", "12",
+                 "--out", str(tmp_path / "b"), "--json"]) == 0
+    sets = json.loads(capsys.readouterr().out)["statistics"]["sets"]
+    angles = sorted(s["Mean Angle"]["value"] % 180 for s in sets)
+    assert len(angles) == 2
+    assert min(angles[0], 180 - angles[0]) < 10 and abs(angles[1] - 90) < 10
+
+
+@pytest.mark.parametrize("args, fragment", [
+    (["--control-points", "0", "0", "30", "40", "0"], "distance"),
+    (["--m-per-px", "-1"], "m_per_px"),
+])
+def test_bad_scale_exits_2(face_png, tmp_path, capsys, args, fragment):
+    path, _ = face_png
+    out = tmp_path / "o"
+    assert main(["extract", str(path), "--out", str(out), *args]) == 2
+    assert fragment in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_tiny_and_unreadable_images_exit_2(tmp_path, capsys):
+    import cv2
+
+    tiny = tmp_path / "tiny.png"
+    cv2.imwrite(str(tiny), np.zeros((1, 1), np.uint8))
+    assert main(["extract", str(tiny), "--out", str(tmp_path / "t")]) == 2
+    assert "tiny.png" in capsys.readouterr().err
+    junk = tmp_path / "junk.jpg"
+    junk.write_bytes(b"\xff\xd8\xff not a jpeg")
+    assert main(["extract", str(junk), "--out", str(tmp_path / "j")]) == 2
+    assert "junk.jpg" in capsys.readouterr().err
+
+
+def test_unknown_imaging_param_in_config_names_the_key(face_png, tmp_path, capsys):
+    path, _ = face_png
+    config = tmp_path / "c.toml"
+    config.write_text("[imaging]\nm_per_px = 0.02\n[imaging.params]\nlow_kk = 2.0\n")
+    assert main(["extract", str(path), "--config", str(config), "--out", str(tmp_path / "c")]) == 2
+    err = capsys.readouterr().err
+    assert "c.toml" in err and "imaging.params" in err and "low_kk" in err
