@@ -132,8 +132,17 @@ def disk_polygons(network: DiskNetwork, n_vertices: int = 16) -> np.ndarray:
                                                + np.sin(angle)[None, :, None] * e2[:, None, :])
 
 
-def write_fractures_vtu(network: DiskNetwork, path: str | os.PathLike, *, n_vertices: int = 16) -> None:
-    """Write the disks as ``n_vertices``-gons with cell data ``set`` and ``id`` (VTU via meshio).
+def write_fractures_vtu(network: DiskNetwork, path: str | os.PathLike, *, n_vertices: int | ArrayLike = 16) -> None:
+    """Write the disks as regular polygons with cell data ``set`` and ``id`` (VTU via meshio).
+
+    Parameters
+    ----------
+    network : DiskNetwork
+    path : str or path-like
+        The ``.vtu`` file (written atomically).
+    n_vertices : int or sequence of int, default 16
+        Polygon vertices per disk, >= 3: one number for all, or one per set id (``n_vertices[set_id]``).
+        Disks with the same count form one ``polygon`` cell block (blocks in increasing count).
 
     Examples
     --------
@@ -147,12 +156,26 @@ def write_fractures_vtu(network: DiskNetwork, path: str | os.PathLike, *, n_vert
     """
     import meshio
 
-    vertices = disk_polygons(network, n_vertices)
-    n = network.n_fractures
-    points = vertices.reshape(-1, 3)
-    cells = np.arange(n * n_vertices, dtype=np.int64).reshape(n, n_vertices)
-    mesh = meshio.Mesh(points, [("polygon", cells)],
-                       cell_data={"set": [network.set_id.astype(np.int64)],
-                                  "id": [np.arange(n, dtype=np.int64)]})
+    _require_network(network)
+    counts = np.asarray(n_vertices)
+    if counts.dtype.kind not in "iu" or counts.ndim > 1 or (counts < 3).any():
+        raise ValueError(f"n_vertices must be an integer >= 3 or one such integer per set, got {n_vertices!r}")
+    if counts.ndim == 1:
+        if network.n_fractures and network.set_id.max() >= counts.size:
+            raise ValueError(f"n_vertices gives {counts.size} counts but set ids go up to {network.set_id.max()}")
+        per_disk = counts[network.set_id] if network.n_fractures else np.zeros(0, np.int64)
+    else:
+        per_disk = np.full(network.n_fractures, int(counts))
+    points, cells, set_data, id_data, start = [], [], [], [], 0
+    for m in np.unique(per_disk):
+        rows = np.flatnonzero(per_disk == m)
+        vertices = disk_polygons(network.subset(rows), int(m)).reshape(-1, 3)
+        points.append(vertices)
+        cells.append(("polygon", start + np.arange(rows.size * m, dtype=np.int64).reshape(rows.size, m)))
+        set_data.append(network.set_id[rows].astype(np.int64))
+        id_data.append(rows.astype(np.int64))
+        start += vertices.shape[0]
+    mesh = meshio.Mesh(np.concatenate(points) if points else np.zeros((0, 3)), cells,
+                       cell_data={"set": set_data, "id": id_data})
     with atomic_path(path) as tmp:
         meshio.write(tmp, mesh, file_format="vtu")

@@ -66,3 +66,13 @@ def test_polygon_area_approaches_disk_area():
     poly = disk_polygons(net, 360)[0]
     area = 0.5 * np.linalg.norm(np.cross(poly, np.roll(poly, -1, axis=0)).sum(axis=0))
     assert area == pytest.approx(np.pi * 4, rel=1e-4)
+
+
+def test_vtu_with_vertex_counts_per_set_has_one_block_per_count(network, tmp_path):
+    path = tmp_path / "f.vtu"
+    write_fractures_vtu(network, path, n_vertices=[6, 12, 6, 20])
+    mesh = meshio.read(path)
+    assert [b.data.shape[1] for b in mesh.cells] == [6, 12, 20]
+    ids = np.concatenate(mesh.cell_data["id"])
+    assert sorted(ids.tolist()) == list(range(network.n_fractures))
+    assert np.array_equal(np.concatenate(mesh.cell_data["set"]), network.set_id[ids])

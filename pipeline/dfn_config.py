@@ -1,0 +1,234 @@
+"""``[dfn]``: seeded generation of disk fracture networks (:mod:`rockmass.dfn.generate`).
+
+Example (every number is range-checked; unknown keys are errors)::
+
+    [dfn]
+    seed = 1
+    realizations = 3
+    max_fractures = 2_000_000
+
+    [dfn.domain]
+    min_m = [0.0, 0.0, 0.0]          # x East, y North, z Up, metres
+    max_m = [50.0, 80.0, 6.0]
+
+    [[dfn.sets]]
+    name = "J1"
+    orientation = { distribution = "fisher", dip_deg = 50, dip_direction_deg = 270, kappa = 20 }
+    size = { distribution = "power_law", r_min_m = 2.0, r_max_m = 40.0, alpha = 2.5 }
+    intensity = { measure = "P32", value = 0.333 }
+
+Orientation ``distribution``: ``fisher`` (``dip_deg`` 0-90, ``dip_direction_deg`` 0-360, ``kappa``
+>= 0), ``uniform``, or ``bootstrap`` (``planes_deg = [[dip, dip_direction], ...]``). Size
+``distribution``: ``constant`` (``radius_m``), ``power_law`` (``r_min_m`` < ``r_max_m``, ``alpha``
+>= 0, density ∝ r^-(alpha+1)), ``lognormal`` (``mean_m``, ``sd_m``, optional ``r_min_m``,
+``r_max_m``), ``exponential`` (``scale_m``, optional ``r_min_m``, ``r_max_m``). Intensity ``measure``:
+``P32`` (m²/m³, one-sided), ``P10`` (1/m, with the scanline's ``trend_deg`` and ``plunge_deg``) or
+``P21`` (m/m², with the sampling plane's ``dip_deg`` and ``dip_direction_deg``); P10 and P21 are
+converted to P32 with the set's C13 / C23.
+
+Load a file that holds only this section with ``load_config(path, model=DFNDocument)``.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from .config import StrictModel, field_problem
+
+__all__ = ["DFNConfig", "DFNDocument", "DomainConfig", "FractureSetConfig"]
+
+Dip = Annotated[float, Field(ge=0, le=90)]
+Azimuth = Annotated[float, Field(ge=0, le=360)]
+Length = Annotated[float, Field(gt=0, le=1e6)]
+Triple = Annotated[tuple[float, float, float], Field(strict=False)]
+
+
+class DomainConfig(StrictModel):
+    """``[dfn.domain]``: the box ``min_m`` .. ``max_m`` (x East, y North, z Up), metres."""
+
+    min_m: Triple
+    max_m: Triple
+
+    @model_validator(mode="after")
+    def _max_above_min(self) -> DomainConfig:
+        if not all(hi > lo for lo, hi in zip(self.min_m, self.max_m)):
+            raise field_problem(self, "max_m", f"must be > min_m {list(self.min_m)} on every axis, got "
+                                f"{list(self.max_m)}", list(self.max_m))
+        if max(abs(v) for v in (*self.min_m, *self.max_m)) > 1e7:
+            raise field_problem(self, "max_m", "coordinates must be within ±1e7 m", list(self.max_m))
+        return self
+
+
+# -- orientation ---------------------------------------------------------------------------------
+
+
+class FisherConfig(StrictModel):
+    distribution: Literal["fisher"]
+    dip_deg: Dip
+    dip_direction_deg: Azimuth
+    kappa: float = Field(ge=0, le=1e6)
+
+
+class UniformConfig(StrictModel):
+    distribution: Literal["uniform"]
+
+
+class BootstrapConfig(StrictModel):
+    distribution: Literal["bootstrap"]
+    planes_deg: Annotated[list[Annotated[tuple[Dip, Azimuth], Field(strict=False)]], Field(min_length=1)]
+
+
+# -- size ------------------------------------------------------------------------------------------
+
+
+class ConstantConfig(StrictModel):
+    distribution: Literal["constant"]
+    radius_m: Length
+
+
+class PowerLawConfig(StrictModel):
+    distribution: Literal["power_law"]
+    r_min_m: Length
+    r_max_m: Length
+    alpha: float = Field(ge=0, le=20)
+
+    @model_validator(mode="after")
+    def _range(self) -> PowerLawConfig:
+        if not self.r_min_m < self.r_max_m:
+            raise field_problem(self, "r_min_m", f"must be < r_max_m ({self.r_max_m}), got {self.r_min_m}",
+                                self.r_min_m)
+        return self
+
+
+def _truncation(model, r_min: float, r_max: float | None):
+    if r_max is not None and not r_min < r_max:
+        raise field_problem(model, "r_min_m", f"must be < r_max_m ({r_max}), got {r_min}", r_min)
+    return model
+
+
+class LognormalConfig(StrictModel):
+    distribution: Literal["lognormal"]
+    mean_m: Length
+    sd_m: Length
+    r_min_m: float = Field(0.0, ge=0, le=1e6)
+    r_max_m: Length | None = None
+
+    @model_validator(mode="after")
+    def _range(self) -> LognormalConfig:
+        return _truncation(self, self.r_min_m, self.r_max_m)
+
+
+class ExponentialConfig(StrictModel):
+    distribution: Literal["exponential"]
+    scale_m: Length
+    r_min_m: float = Field(0.0, ge=0, le=1e6)
+    r_max_m: Length | None = None
+
+    @model_validator(mode="after")
+    def _range(self) -> ExponentialConfig:
+        return _truncation(self, self.r_min_m, self.r_max_m)
+
+
+# -- intensity -----------------------------------------------------------------------------------
+
+Intensity = Annotated[float, Field(gt=0, le=1e4)]
+
+
+class P32Config(StrictModel):
+    measure: Literal["P32"]
+    value: Intensity
+
+
+class P10Config(StrictModel):
+    measure: Literal["P10"]
+    value: Intensity
+    trend_deg: Azimuth
+    plunge_deg: float = Field(ge=-90, le=90)
+
+
+class P21Config(StrictModel):
+    measure: Literal["P21"]
+    value: Intensity
+    dip_deg: Dip
+    dip_direction_deg: Azimuth
+
+
+class FractureSetConfig(StrictModel):
+    """One ``[[dfn.sets]]`` entry: ``orientation``, ``size`` and ``intensity`` tables."""
+
+    name: str = Field("", max_length=64)
+    orientation: Annotated[FisherConfig | UniformConfig | BootstrapConfig, Field(discriminator="distribution")]
+    size: Annotated[ConstantConfig | PowerLawConfig | LognormalConfig | ExponentialConfig,
+                    Field(discriminator="distribution")]
+    intensity: Annotated[P32Config | P10Config | P21Config, Field(discriminator="measure")]
+    shape: Literal["disk"] = "disk"
+    n_vertices: int = Field(16, ge=3, le=1024)
+
+    def to_spec(self):
+        """The :class:`rockmass.dfn.generate.FractureSetSpec` (imports numpy-level code lazily)."""
+        from .dfn import ConstantSize, ExponentialSize, LognormalSize, PowerLawSize, pole_from_dip
+        from .dfn.generate import BootstrapOrientation, FisherOrientation, FractureSetSpec, IntensityP10, \
+            IntensityP21, IntensityP32, UniformOrientation
+
+        o = self.orientation
+        if isinstance(o, FisherConfig):
+            orientation = FisherOrientation(o.dip_deg, o.dip_direction_deg, o.kappa)
+        elif isinstance(o, UniformConfig):
+            orientation = UniformOrientation()
+        else:
+            planes = np.array(o.planes_deg, dtype=float)
+            orientation = BootstrapOrientation(pole_from_dip(planes[:, 0], planes[:, 1]))
+        s = self.size
+        if isinstance(s, ConstantConfig):
+            size = ConstantSize(s.radius_m)
+        elif isinstance(s, PowerLawConfig):
+            size = PowerLawSize(s.r_min_m, s.r_max_m, s.alpha)
+        elif isinstance(s, LognormalConfig):
+            size = LognormalSize(s.mean_m, s.sd_m, s.r_min_m, np.inf if s.r_max_m is None else s.r_max_m)
+        else:
+            size = ExponentialSize(s.scale_m, s.r_min_m, np.inf if s.r_max_m is None else s.r_max_m)
+        i = self.intensity
+        if isinstance(i, P32Config):
+            intensity = IntensityP32(i.value)
+        elif isinstance(i, P10Config):
+            intensity = IntensityP10(i.value, i.trend_deg, i.plunge_deg)
+        else:
+            intensity = IntensityP21(i.value, i.dip_deg, i.dip_direction_deg)
+        return FractureSetSpec(orientation, size, intensity, name=self.name, shape=self.shape,
+                               n_vertices=self.n_vertices)
+
+
+class DFNConfig(StrictModel):
+    """``[dfn]``: domain, seeding, guard and fracture sets.
+
+    Parameters
+    ----------
+    domain : DomainConfig
+    seed : int, default 0
+        Root seed, 0 <= seed < 2**63 (DESIGN.md §3 seeding rule).
+    realizations : int, default 1
+        Number of realizations, 1-10000 (indices 0..K-1).
+    max_fractures : int, default 5,000,000
+        Guard on the number of fractures one realization may need, 1 to 1e9.
+    sets : list of FractureSetConfig
+        1-50 sets.
+    """
+
+    domain: DomainConfig
+    seed: int = Field(0, ge=0, le=2 ** 63 - 1)
+    realizations: int = Field(1, ge=1, le=10000)
+    max_fractures: int = Field(5_000_000, ge=1, le=10 ** 9)
+    sets: Annotated[list[FractureSetConfig], Field(min_length=1, max_length=50)]
+
+    def domain_m(self) -> np.ndarray:
+        """The domain box as ``(2, 3)`` float64."""
+        return np.array([self.domain.min_m, self.domain.max_m], dtype=float)
+
+
+class DFNDocument(StrictModel):
+    """A configuration file read by ``rockmass dfn``: the ``[dfn]`` section only."""
+
+    dfn: DFNConfig
