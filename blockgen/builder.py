@@ -1,0 +1,454 @@
+"""Build a :class:`~rockmass.blockgen.BlockModel`: cut a domain by joint sets or traces, mark the
+excavation stages, merge slivers, make every block convex, and find the contacts.
+
+Steps (each change is listed in ``model.quality``, nothing is moved silently):
+
+1. **Sources.** The domain outline, each excavation outline, the joints of every set (clipped to the
+   domain) and the traces (clipped to the domain).
+2. **Noding** (GEOS ``unary_union``) into 2-point segments; each keeps the label of the source it lies
+   on (:mod:`rockmass.blockgen.network`).
+3. **Dangling ends** (joints or traces ending in intact rock), by ``dangling``: ``"glued"`` (default)
+   extends each along its own direction to the first line it meets, as a glued contact (a
+   potential crack with intact-rock strength); ``"joint"`` extends it the same way as an ordinary
+   joint of its set or trace; ``"drop"`` removes the dangling parts.
+4. **Polygonisation** into faces; a face belongs to the first excavation stage whose outline
+   contains it (region k), else to the rock mass (region 0).
+5. **Slivers.** A block whose mean width 2·area/perimeter is below ``sliver_width_m`` (= the minimum
+   edge 2d) is merged with the neighbour of the same region across their shared edges: the
+   neighbour whose union with it is convex, else the one sharing the longest boundary. The removed
+   edges and both blocks are reported.
+6. **Convex decomposition** of concave blocks by bisector cuts (:mod:`rockmass.blockgen.convex`),
+   the cuts becoming glued contacts (source ``-2``); reported per block.
+7. **Contacts**: block edges matched by coordinates; consecutive edges of one pair and label are
+   summed into one contact.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import shapely
+
+from .convex import convex_cuts, reflex_vertices
+from .excavations import Excavation, _as_ring
+from .joints import JointSet, set_segments
+from .model import (CONTACT_KINDS, KIND_DOMAIN, KIND_EXCAVATION, KIND_GLUED, KIND_JOINT, KIND_TRACE,
+                    SOURCE_CONVEX_CUT, BlockModel)
+from .network import (Sources, dangling_extensions, label_segments, node, polygonize_segments,
+                      ring_segments, segment_keys, snap_to_grid)
+from .tolerances import model_tolerances
+
+__all__ = ["build", "DANGLING_CHOICES"]
+
+DANGLING_CHOICES = ("glued", "joint", "drop")
+
+
+def _trace_segments(traces):
+    """(n, 2, 2) segments and their trace index from a TraceMap or an (n, 2, 2) array."""
+    if hasattr(traces, "segments") and hasattr(traces, "segment_trace_index"):
+        segs = np.asarray(traces.segments(), float).reshape(-1, 2, 2)
+        idx = np.asarray(traces.segment_trace_index(), np.int64)
+    else:
+        try:
+            segs = np.array(traces, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise ValueError("traces must be a TraceMap or an (n, 2, 2) array of segments") from exc
+        if segs.ndim != 3 or segs.shape[1:] != (2, 2):
+            raise ValueError(f"traces must have shape (n, 2, 2), got {segs.shape}")
+        idx = np.arange(len(segs))
+    bad = ~np.isfinite(segs).all(axis=(1, 2))
+    if bad.any():
+        raise ValueError(f"traces: {int(bad.sum())} segments have NaN or infinite coordinates "
+                         f"(trace indices {sorted(set(idx[bad].tolist()))[:10]})")
+    zero = np.all(segs[:, 0] == segs[:, 1], axis=1)
+    return segs[~zero], idx[~zero]
+
+
+def _clip_segments(segs: np.ndarray, source: np.ndarray, domain):
+    """Clip segments to the domain polygon; returns (m, 2, 2) pieces and their source index."""
+    if not len(segs):
+        return np.empty((0, 2, 2)), np.empty(0, np.int64)
+    clipped = shapely.intersection(shapely.linestrings(segs), domain)
+    parts, part_of = shapely.get_parts(clipped, return_index=True)
+    lines = shapely.get_type_id(parts) == 1
+    parts, part_of = parts[lines], part_of[lines]
+    coords, index = shapely.get_coordinates(parts, return_index=True)
+    same = index[1:] == index[:-1]
+    out = np.stack([coords[:-1][same], coords[1:][same]], axis=1)
+    src = source[part_of[index[:-1][same]]]
+    keep = np.any(out[:, 0] != out[:, 1], axis=1)
+    return out[keep], src[keep]
+
+
+def _ring_edges(faces):
+    """Edges of polygons shells and holes (exact: ring by ring)."""
+    rings = shapely.get_exterior_ring(faces)
+    n_int = shapely.get_num_interior_rings(faces)
+    ring_face = [np.arange(len(faces))]
+    all_rings = [rings]
+    if n_int.sum():
+        for k in range(int(n_int.max())):
+            has = np.flatnonzero(n_int > k)
+            all_rings.append(shapely.get_interior_ring(faces[has], k))
+            ring_face.append(has)
+    all_rings = np.concatenate(all_rings)
+    ring_face = np.concatenate(ring_face)
+    coords, index = shapely.get_coordinates(all_rings, return_index=True)
+    same = index[1:] == index[:-1]
+    seg = np.stack([coords[:-1][same], coords[1:][same]], axis=1)
+    return seg, ring_face[index[:-1][same]]
+
+
+def _pairs(faces, grid_m):
+    """Matched edges: (segments, face_a, face_b) with face_b = -1 for unmatched edges."""
+    seg, face = _ring_edges(faces)
+    keys = segment_keys(seg, grid_m)
+    _, inv, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    inv = inv.ravel()
+    order = np.argsort(inv, kind="stable")
+    first = np.ones(len(order), bool)
+    first[1:] = inv[order][1:] != inv[order][:-1]
+    a_idx = order[first]
+    uniq = inv[a_idx]
+    face_a = face[a_idx]
+    face_b = np.full(len(a_idx), -1, np.int64)
+    second = order[~first]
+    face_b[np.searchsorted(uniq, inv[second])] = face[second]
+    if (counts > 2).any():
+        raise RuntimeError(f"{int((counts > 2).sum())} block edges are shared by more than two blocks "
+                           "(overlapping blocks): a noding failure")
+    return seg[a_idx], face_a, face_b
+
+
+def _is_convex(poly, reflex_sin):
+    if len(poly.interiors):
+        return False
+    xy = np.asarray(poly.exterior.coords)[:-1]
+    return len(reflex_vertices(xy, reflex_sin)) == 0
+
+
+def _regions(faces, excavations):
+    region = np.zeros(len(faces), np.int64)
+    pts = shapely.point_on_surface(faces)
+    for k, exc in reversed(list(enumerate(excavations, start=1))):
+        region[shapely.contains(exc.polygon(), pts)] = k  # earlier stages win on overlap
+    return region
+
+
+def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="glued", seed=0,
+          rounding_m=None, min_edge_m=None, merge_slivers=True, convex=True) -> BlockModel:
+    """Cut a 2D domain into blocks.
+
+    Parameters
+    ----------
+    domain_xy_m : (k, 2) array_like of float
+        Domain outline in metres (a simple polygon, either orientation).
+    joint_sets : sequence of JointSet, optional
+        UDEC-style joint sets (:class:`rockmass.blockgen.JointSet`).
+    traces : TraceMap or (n, 2, 2) array_like, optional
+        Traces (a DFN section, an extracted face, a digitised map), clipped to the domain.
+    excavations : sequence of Excavation, optional
+        Stages in removal order; each must lie inside the domain.
+    dangling : {"glued", "joint", "drop"}, default "glued"
+        What to do with joint or trace ends inside intact rock (see the module docstring).
+    seed : int or numpy.random.SeedSequence, default 0
+        Root seed; joint set i draws from child i of ``SeedSequence(seed)``.
+    rounding_m, min_edge_m : float, optional
+        The solver's corner rounding d (default 1 % of the median edge) and minimum edge (default 2d).
+    merge_slivers, convex : bool, default True
+        Run steps 5 and 6 of the module docstring.
+
+    Returns
+    -------
+    BlockModel
+
+    Raises
+    ------
+    ValueError
+        Naming the field: a degenerate domain, an excavation outside the domain, a set or trace map
+        that puts no joint in the domain, NaN traces, a bad ``dangling`` choice, a minimum edge
+        larger than the blocks.
+
+    Examples
+    --------
+    >>> m = build([(0, 0), (1, 0), (1, 1), (0, 1)],
+    ...           [JointSet(0, 0.25, origin_xy_m=(0, 0)), JointSet(90, 0.25, origin_xy_m=(0, 0))])
+    >>> m.n_blocks, float(m.area_m2.min())
+    (16, 0.0625)
+    """
+    domain_xy = _as_ring(domain_xy_m, "domain_xy_m")
+    domain = shapely.Polygon(domain_xy)
+    if dangling not in DANGLING_CHOICES:
+        raise ValueError(f"dangling must be one of {DANGLING_CHOICES}, got {dangling!r}")
+    joint_sets = list(joint_sets)
+    for i, js in enumerate(joint_sets):
+        if not isinstance(js, JointSet):
+            raise TypeError(f"joint_sets[{i}] must be a JointSet, got {type(js).__name__}")
+    excavations = list(excavations)
+    for i, exc in enumerate(excavations):
+        if not isinstance(exc, Excavation):
+            raise TypeError(f"excavations[{i}] must be an Excavation, got {type(exc).__name__}")
+        if not domain.covers(exc.polygon()):
+            outside = exc.polygon().difference(domain).area / exc.polygon().area
+            raise ValueError(f"excavations[{i}] ({exc.name!r}) lies {'partly' if domain.intersects(exc.polygon()) else 'wholly'} "
+                             f"outside the domain ({outside:.1%} of its area)")
+    for name, value in (("rounding_m", rounding_m), ("min_edge_m", min_edge_m)):
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise ValueError(f"{name} must be > 0 and finite, got {value!r}")
+    minx, miny, maxx, maxy = domain.bounds
+    size = float(math.hypot(maxx - minx, maxy - miny))
+    tol0 = model_tolerances(size, size)
+    snap_m, label_m, grid = tol0.snap_m, tol0.label_m, tol0.grid_m
+    sources = Sources(piece_m=size / 64)
+    sources.add(ring_segments(domain_xy), KIND_DOMAIN, -1)
+    all_segs = [ring_segments(domain_xy)]
+    for k, exc in enumerate(excavations, start=1):
+        sources.add(ring_segments(exc.xy_m), KIND_EXCAVATION, k)
+        all_segs.append(ring_segments(exc.xy_m))
+    root = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
+    children = root.spawn(len(joint_sets)) if joint_sets else []
+    joint_parts, set_names = [], []
+    for i, js in enumerate(joint_sets):
+        rng = np.random.default_rng(children[i])
+        raw = set_segments(js, domain_xy, rng, i)
+        segs, _ = _clip_segments(snap_to_grid(raw, grid), np.zeros(len(raw), np.int64), domain)
+        if not len(segs):
+            raise ValueError(f"joint_sets[{i}]: the set produces no joints in the domain "
+                             f"(spacing_m {js.spacing_m:g}, angle_deg {js.angle_deg:g})")
+        sources.add(segs, KIND_JOINT, i)
+        all_segs.append(segs)
+        joint_parts.append((KIND_JOINT, np.full(len(segs), i), segs))
+        set_names.append(js.name or f"set {i}")
+    n_traces_in = 0
+    if traces is not None:
+        tsegs, tidx = _trace_segments(traces)
+        segs, src = _clip_segments(snap_to_grid(tsegs, grid), tidx, domain)
+        if not len(segs):
+            raise ValueError("traces: no trace crosses the domain")
+        n_traces_in = int(len(np.unique(src)))
+        sources.add(segs, KIND_TRACE, src)
+        all_segs.append(segs)
+    if not joint_sets and traces is None and not excavations:
+        raise ValueError("joint_sets, traces or excavations: nothing cuts the domain")
+
+    report = {"dangling": {"rule": dangling}, "slivers_merged": [], "convex_splits": [],
+              "snapped_cuts": 0,
+              "convex_failures": 0}
+    noded = node(snap_to_grid(np.concatenate(all_segs), grid), grid)
+    kind, src = label_segments(noded, sources, label_m)
+    # 3. dangling ends
+    ext, parent, n_dangling = dangling_extensions(noded, grid, 2 * size)
+    report["dangling"]["n_dangling_ends"] = int(n_dangling)
+    if n_dangling and dangling != "drop":
+        ext_kind = np.full(len(ext), KIND_GLUED) if dangling == "glued" else kind[parent]
+        for k in np.unique(ext_kind):
+            sel = ext_kind == k
+            sources.add(ext[sel], int(k), src[parent[sel]], priority=3)
+        report["dangling"]["n_extended"] = int(len(ext))
+        report["dangling"]["extended_length_m"] = float(np.hypot(*(ext[:, 1] - ext[:, 0]).T).sum())
+        noded = node(np.concatenate([noded, ext]), grid)
+        kind, src = label_segments(noded, sources, label_m)
+    faces = polygonize_segments(noded)
+    if dangling == "drop" and n_dangling:
+        kept = _ring_edges(faces)[0]
+        report["dangling"]["dropped_length_m"] = float(
+            np.hypot(*(noded[:, 1] - noded[:, 0]).T).sum()
+            - 0.5 * np.hypot(*(kept[:, 1] - kept[:, 0]).T).sum()
+            - 0.5 * shapely.length(shapely.boundary(shapely.union_all(faces))))
+    region = _regions(faces, excavations)
+
+    # tolerances from the cut blocks
+    edges = _ring_edges(faces)[0]
+    typical = float(np.median(np.hypot(*(edges[:, 1] - edges[:, 0]).T)))
+    tol = model_tolerances(size, typical, rounding_m, min_edge_m)
+    width = 2 * shapely.area(faces) / shapely.length(faces)
+    if tol.min_edge_m > np.median(width):
+        raise ValueError(f"min_edge_m ({tol.min_edge_m:g} m) is larger than the blocks (median block "
+                         f"width 2·area/perimeter = {np.median(width):g} m); lower min_edge_m or "
+                         "rounding_m")
+
+    # 5. slivers
+    if merge_slivers:
+        noded, faces, region = _merge_slivers(noded, faces, region, tol, report, excavations)
+    # 6. convex decomposition
+    if convex:
+        # a cut of one face can end on a vertex shared with a neighbour and leave that neighbour
+        # with a new reflex vertex: repeat until every face is convex (reported rounds)
+        for rounds in range(1, 6):
+            n_before = len(report["convex_splits"])
+            noded, faces, region = _make_convex(noded, faces, region, tol, report, sources,
+                                                excavations, label_m)
+            if len(report["convex_splits"]) == n_before:
+                break
+        report["convex_rounds"] = rounds
+    kind, src = label_segments(noded, sources, label_m)
+    return _assemble(faces, region, noded, kind, src, tol, report, domain_xy, excavations,
+                     set_names, domain, n_traces_in)
+
+
+def _merge_slivers(noded, faces, region, tol, report, excavations):
+    width = 2 * shapely.area(faces) / shapely.length(faces)
+    slivers = np.flatnonzero(width < tol.sliver_width_m)
+    if not len(slivers):
+        return noded, faces, region
+    seg, fa, fb = _pairs(faces, tol.grid_m)
+    length = np.hypot(*(seg[:, 1] - seg[:, 0]).T)
+    used = np.zeros(len(faces), bool)
+    remove = []
+    for s in slivers:
+        if used[s]:
+            continue
+        shared = {}
+        for sel, other in ((fa == s, fb), (fb == s, fa)):
+            for e in np.flatnonzero(sel):
+                o = int(other[e])
+                if o >= 0 and region[o] == region[s] and not used[o]:
+                    shared.setdefault(o, []).append(e)
+        if not shared:
+            report["slivers_merged"].append({"centroid_xy_m": list(shapely.get_coordinates(
+                faces[s].centroid)[0]), "area_m2": float(faces[s].area), "width_m": float(width[s]),
+                "merged_into": None, "reason": "no neighbour in the same region: kept"})
+            continue
+        def score(o):
+            union = shapely.union(faces[s], faces[o])
+            convex_union = union.geom_type == "Polygon" and _is_convex(union, tol.reflex_sin)
+            return (convex_union, sum(length[e] for e in shared[o]))
+        best = max(shared, key=score)
+        conv, shared_len = score(best)
+        used[s] = used[best] = True
+        remove.extend(shared[best])
+        report["slivers_merged"].append({
+            "centroid_xy_m": [float(v) for v in shapely.get_coordinates(faces[s].centroid)[0]],
+            "area_m2": float(faces[s].area), "width_m": float(width[s]),
+            "merged_into_centroid_xy_m": [float(v) for v in
+                                          shapely.get_coordinates(faces[best].centroid)[0]],
+            "removed_edge_length_m": float(shared_len), "union_convex": bool(conv)})
+    if not remove:
+        return noded, faces, region
+    drop = segment_keys(seg[remove], tol.grid_m)
+    keys = segment_keys(noded, tol.grid_m)
+    gone = _rows_in(keys, drop)
+    noded = noded[~gone]
+    faces = polygonize_segments(noded)
+    return noded, faces, _regions(faces, excavations)
+
+
+def _rows_in(a, b):
+    """Mask of rows of int array ``a`` that occur in ``b``."""
+    both = np.concatenate([a, b])
+    _, inv = np.unique(both, axis=0, return_inverse=True)
+    inv = inv.ravel()
+    return np.isin(inv[:len(a)], inv[len(a):])
+
+
+def _make_convex(noded, faces, region, tol, report, sources, excavations, label_m):
+    concave = [i for i in range(len(faces)) if not _is_convex(faces[i], tol.reflex_sin)]
+    if not concave:
+        return noded, faces, region
+    cuts = []
+    for i in concave:
+        c, n_snapped, n_failed = convex_cuts(faces[i], tol.reflex_sin, tol.min_edge_m,
+                                             16 * tol.snap_m)
+        report["snapped_cuts"] += int(n_snapped)
+        report["convex_failures"] += int(n_failed)
+        report["convex_splits"].append({
+            "centroid_xy_m": [float(v) for v in shapely.get_coordinates(faces[i].centroid)[0]],
+            "area_m2": float(faces[i].area), "region": int(region[i]), "n_cuts": len(c),
+            "n_pieces": len(c) + 1 - len(faces[i].interiors), "snapped": int(n_snapped)})
+        cuts.extend(c)
+    if not cuts:
+        return noded, faces, region
+    cuts = np.array(cuts)
+    sources.add(cuts, KIND_GLUED, SOURCE_CONVEX_CUT, priority=4)
+    # re-node only the boundaries of the concave faces with the cuts
+    bseg = _ring_edges(faces[concave])[0]
+    keys = segment_keys(noded, tol.grid_m)
+    touched = _rows_in(keys, segment_keys(bseg, tol.grid_m))
+    renoded = node(np.concatenate([noded[touched], cuts]), tol.grid_m)
+    noded = np.concatenate([noded[~touched], renoded])
+    faces = polygonize_segments(noded)
+    return noded, faces, _regions(faces, excavations)
+
+
+def _assemble(faces, region, noded, kind, src, tol, report, domain_xy, excavations, set_names,
+              domain, n_traces_in):
+    # block order: rows bottom to top, then left to right (stable ids for a given input)
+    order = np.lexsort((shapely.get_coordinates(shapely.centroid(faces))[:, 0],
+                        np.round(shapely.get_coordinates(shapely.centroid(faces))[:, 1]
+                                 / tol.snap_m / 1e3)))
+    faces, region = faces[order], region[order]
+    coords, index = shapely.get_coordinates(shapely.get_exterior_ring(faces), return_index=True)
+    counts = np.bincount(index, minlength=len(faces)) - 1  # open rings
+    keep = np.ones(len(coords), bool)
+    ends = np.cumsum(counts + 1) - 1
+    keep[ends] = False
+    xy = coords[keep]
+    offsets = np.concatenate([[0], np.cumsum(counts)])
+    # contacts
+    seg, fa, fb = _pairs(faces, tol.grid_m)
+    ekeys = segment_keys(seg, tol.grid_m)
+    nkeys = segment_keys(noded, tol.grid_m)
+    both = np.concatenate([ekeys, nkeys])
+    _, inv = np.unique(both, axis=0, return_inverse=True)
+    inv = inv.ravel()
+    lookup = np.full(inv.max() + 1, -1, np.int64)
+    lookup[inv[len(ekeys):]] = np.arange(len(nkeys))
+    where = lookup[inv[:len(ekeys)]]
+    if (where < 0).any():
+        raise RuntimeError(f"{int((where < 0).sum())} block edges are not in the cut network")
+    ek, es = kind[where], src[where]
+    if (ek < 0).any():
+        raise RuntimeError(f"{int((ek < 0).sum())} block edges have no source line")
+    a = np.where(fb < 0, fa, np.minimum(fa, fb))
+    b = np.where(fb < 0, -1, np.maximum(fa, fb))
+    # unmatched edges lie on the domain boundary
+    length = np.hypot(*(seg[:, 1] - seg[:, 0]).T)
+    ek = np.where(b < 0, KIND_DOMAIN, ek)
+    es = np.where(b < 0, -1, es)
+    table = np.column_stack([a, b, ek, es])
+    uniq, cinv = np.unique(table, axis=0, return_inverse=True)
+    clen = np.bincount(cinv.ravel(), length, len(uniq))
+    contact_blocks, contact_kind, contact_source = uniq[:, :2], uniq[:, 2], uniq[:, 3]
+    # quality
+    areas = shapely.area(faces)
+    nxt = np.arange(len(xy)) + 1
+    nxt[offsets[1:] - 1] = offsets[:-1]
+    edge_len = np.hypot(*(xy[nxt] - xy).T)
+    block_of_vertex = np.repeat(np.arange(len(faces)), counts)
+    tiny = np.flatnonzero(edge_len < tol.min_edge_m)
+    rect = shapely.minimum_rotated_rectangle(faces)
+    rc = shapely.get_coordinates(shapely.get_exterior_ring(rect)).reshape(len(faces), 5, 2)
+    s1 = np.hypot(*(rc[:, 1] - rc[:, 0]).T)
+    s2 = np.hypot(*(rc[:, 2] - rc[:, 1]).T)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        aspect = np.maximum(s1, s2) / np.minimum(s1, s2)
+    domain_area = domain.area
+    total = float(areas.sum())
+    excavated = float(areas[region > 0].sum())
+    report.update({
+        "n_blocks": int(len(faces)),
+        "n_blocks_by_region": {name: int((region == k).sum())
+                               for k, name in enumerate(["rock"] + [e.name for e in excavations])},
+        "n_contacts": int(len(uniq)),
+        "n_contacts_by_kind": {name: int((contact_kind == k).sum())
+                               for k, name in enumerate(CONTACT_KINDS)},
+        "area_m2": {"min": float(areas.min()), "median": float(np.median(areas)),
+                    "max": float(areas.max()), "mean": float(areas.mean())},
+        "aspect_ratio": {"median": float(np.median(aspect)), "max": float(np.max(aspect))},
+        "smallest_edge_m": float(edge_len.min()),
+        "tiny_edges": {"count": int(len(tiny)), "rule": "edges shorter than min_edge_m that remain "
+                       "(collinear vertices shared with a neighbour, or joint intersections closer "
+                       "than min_edge_m) are listed, not moved",
+                       "blocks": sorted(set(block_of_vertex[tiny].tolist()))[:100]},
+        "area_balance": {"domain_m2": float(domain_area), "blocks_m2": total,
+                         "excavated_m2": excavated, "rock_m2": total - excavated,
+                         "relative_error": abs(total - domain_area) / domain_area},
+        "n_traces_used": n_traces_in,
+        "tolerances": tol.to_dict(),
+    })
+    return BlockModel(xy_m=xy, offsets=offsets, region=region,
+                      region_names=["rock"] + [e.name for e in excavations],
+                      contact_blocks=contact_blocks, contact_length_m=clen,
+                      contact_kind=contact_kind, contact_source=contact_source,
+                      set_names=set_names, domain_xy_m=domain_xy, quality=report)

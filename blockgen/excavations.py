@@ -1,0 +1,175 @@
+"""Excavation outlines: circle, horseshoe, arched cavern, rectangle and any polygon, as named stages.
+
+Each constructor returns an :class:`Excavation` (a stage name and a counter-clockwise outline in
+metres). Curved parts are polygons; the approximation is stated so that tests can check it.
+
+Circle approximation
+--------------------
+A circle of radius r is the regular n-gon *inscribed* in it (vertices on the circle), n = ``n_sides``
+(default 36, one side per 10°). Its perimeter is 2 n r sin(π/n), short of 2πr by the relative error
+1 − (n/π) sin(π/n) ≈ π²/(6n²) (0.127 % for n = 36); its area is ½ n r² sin(2π/n). Arcs of the
+horseshoe and the arched cavern use the same rule with one side per ``360/n_sides`` degrees of arc.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Excavation", "circle", "horseshoe", "arched_cavern", "rectangle", "polygon_excavation",
+           "DEFAULT_CIRCLE_SIDES", "circle_perimeter_m"]
+
+DEFAULT_CIRCLE_SIDES = 36
+
+
+@dataclass(frozen=True)
+class Excavation:
+    """One excavation stage: ``name`` and its outline ``xy_m`` ((k, 2) float64, counter-clockwise,
+    open ring). Stages are removed by the solver in the order given to :func:`build`."""
+
+    name: str
+    xy_m: np.ndarray
+
+    def __post_init__(self):
+        xy = _as_ring(self.xy_m, f"excavation {self.name!r}.xy_m")
+        object.__setattr__(self, "xy_m", xy)
+
+    def polygon(self):
+        import shapely
+
+        return shapely.Polygon(self.xy_m)
+
+
+def _as_ring(xy, name: str) -> np.ndarray:
+    try:
+        xy = np.array(xy, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be an (k, 2) array of numbers") from exc
+    if xy.ndim != 2 or xy.shape[1] != 2:
+        raise ValueError(f"{name} must have shape (k, 2), got {xy.shape}")
+    if not np.isfinite(xy).all():
+        raise ValueError(f"{name} has non-finite coordinates")
+    if len(xy) > 1 and np.array_equal(xy[0], xy[-1]):
+        xy = xy[:-1]
+    if len(xy) < 3:
+        raise ValueError(f"{name} needs at least 3 distinct vertices, got {len(xy)}")
+    import shapely
+
+    poly = shapely.Polygon(xy)
+    if not poly.is_valid or poly.area <= 0:
+        raise ValueError(f"{name} is a degenerate or self-intersecting polygon "
+                         f"({shapely.is_valid_reason(poly)}, area {poly.area:g})")
+    if _signed_area(xy) < 0:
+        xy = xy[::-1].copy()
+    xy.setflags(write=False)
+    return xy
+
+
+def _signed_area(xy: np.ndarray) -> float:
+    x, y = xy[:, 0], xy[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def _positive(value, name):
+    value = float(value)
+    if not (math.isfinite(value) and value > 0):
+        raise ValueError(f"{name} must be > 0 and finite, got {value!r}")
+    return value
+
+
+def _sides(n_sides, name="n_sides"):
+    if int(n_sides) != n_sides or n_sides < 8:
+        raise ValueError(f"{name} must be an integer >= 8, got {n_sides!r}")
+    return int(n_sides)
+
+
+def _arc(cx, cy, r, a0, a1, n_sides):
+    """Points on an arc from angle a0 to a1 (radians, counter-clockwise), inscribed chords."""
+    k = max(1, int(math.ceil(abs(a1 - a0) / (2 * math.pi / n_sides) - 1e-9)))
+    t = np.linspace(a0, a1, k + 1)
+    return np.column_stack([cx + r * np.cos(t), cy + r * np.sin(t)])
+
+
+def circle_perimeter_m(radius_m: float, n_sides: int = DEFAULT_CIRCLE_SIDES) -> float:
+    """Perimeter 2 n r sin(π/n) of the inscribed n-gon that stands for a circle.
+
+    >>> round(circle_perimeter_m(1.0, 36) / (2 * math.pi), 5)
+    0.99873
+    """
+    return 2.0 * n_sides * radius_m * math.sin(math.pi / n_sides)
+
+
+def circle(center_xy_m, radius_m, name="tunnel", n_sides=DEFAULT_CIRCLE_SIDES) -> Excavation:
+    """Circular opening: the inscribed regular ``n_sides``-gon (see the module Notes).
+
+    >>> e = circle((0, 0), 1.0, n_sides=8)
+    >>> e.xy_m.shape
+    (8, 2)
+    """
+    r = _positive(radius_m, "radius_m")
+    n = _sides(n_sides)
+    cx, cy = (float(v) for v in center_xy_m)
+    t = 2 * math.pi * np.arange(n) / n
+    return Excavation(name, np.column_stack([cx + r * np.cos(t), cy + r * np.sin(t)]))
+
+
+def horseshoe(center_xy_m, span_m, wall_height_m, name="tunnel",
+              n_sides=DEFAULT_CIRCLE_SIDES) -> Excavation:
+    """Horseshoe opening: flat invert of width ``span_m`` at ``center_xy_m[1]``, vertical walls of
+    height ``wall_height_m`` and a semicircular roof of radius span/2.
+
+    >>> horseshoe((0, 0), 2.0, 1.0, n_sides=8).xy_m.shape
+    (7, 2)
+    """
+    s = _positive(span_m, "span_m")
+    h = _positive(wall_height_m, "wall_height_m")
+    cx, y0 = (float(v) for v in center_xy_m)
+    r = s / 2
+    roof = _arc(cx, y0 + h, r, 0.0, math.pi, _sides(n_sides))
+    xy = np.vstack([[[cx - r, y0], [cx + r, y0]], roof])
+    return Excavation(name, xy)
+
+
+def arched_cavern(center_xy_m, span_m, wall_height_m, arch_rise_m, name="cavern",
+                  n_sides=DEFAULT_CIRCLE_SIDES) -> Excavation:
+    """Arched cavern: floor of width ``span_m`` at ``center_xy_m[1]``, vertical walls of height
+    ``wall_height_m``, and a circular arch of rise ``arch_rise_m`` (<= span/2) over the span; the
+    arch radius is R = (s²/4 + f²) / (2f).
+
+    >>> e = arched_cavern((0, 0), 20.0, 10.0, 5.0)
+    >>> round(float(e.xy_m[:, 1].max()), 6)
+    15.0
+    """
+    s = _positive(span_m, "span_m")
+    h = _positive(wall_height_m, "wall_height_m")
+    f = _positive(arch_rise_m, "arch_rise_m")
+    if f > s / 2:
+        raise ValueError(f"arch_rise_m must be <= span_m / 2 ({s / 2:g}), got {f:g}")
+    cx, y0 = (float(v) for v in center_xy_m)
+    radius = (s * s / 4 + f * f) / (2 * f)
+    cy = y0 + h + f - radius
+    half = math.asin((s / 2) / radius)
+    roof = _arc(cx, cy, radius, math.pi / 2 - half, math.pi / 2 + half, _sides(n_sides))
+    xy = np.vstack([[[cx - s / 2, y0], [cx + s / 2, y0], [cx + s / 2, y0 + h]], roof[1:-1],
+                    [[cx - s / 2, y0 + h]]])
+    return Excavation(name, xy)
+
+
+def rectangle(center_xy_m, width_m, height_m, name="excavation") -> Excavation:
+    """Rectangular opening centred on ``center_xy_m``.
+
+    >>> rectangle((0, 0), 2, 1).polygon().area
+    2.0
+    """
+    w = _positive(width_m, "width_m")
+    h = _positive(height_m, "height_m")
+    cx, cy = (float(v) for v in center_xy_m)
+    return Excavation(name, np.array([[cx - w / 2, cy - h / 2], [cx + w / 2, cy - h / 2],
+                                      [cx + w / 2, cy + h / 2], [cx - w / 2, cy + h / 2]]))
+
+
+def polygon_excavation(xy_m, name="excavation") -> Excavation:
+    """Any simple polygon (vertices in metres, either orientation)."""
+    return Excavation(name, xy_m)

@@ -1,0 +1,159 @@
+"""The cut network: source lines, noding, labels, dangling ends and polygonisation (shapely/GEOS).
+
+Every block edge comes from one noded network of 2-point segments, so two adjacent blocks share
+exactly the same edge vertices and contacts can be matched by coordinates. Labels travel from the
+source lines to the noded segments by proximity (``label_m``, :mod:`rockmass.blockgen.tolerances`),
+with a priority when sources overlap: domain boundary, then excavation outline, then joints and
+traces, then extensions of dangling ends, then convex-decomposition cuts.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import shapely
+
+from .model import KIND_DOMAIN, KIND_EXCAVATION, KIND_GLUED
+
+__all__ = ["Sources", "snap_to_grid", "node", "label_segments", "dangling_extensions", "polygonize_segments",
+           "segment_keys"]
+
+# priority of a kind when two sources cover the same edge (lower wins)
+_PRIORITY = {KIND_DOMAIN: 0, KIND_EXCAVATION: 1}
+
+
+class Sources:
+    """Labelled source lines, kept as 2-point pieces short enough for a useful spatial index."""
+
+    def __init__(self, piece_m: float):
+        self.piece_m = piece_m
+        self._segs, self._kind, self._src, self._prio = [], [], [], []
+
+    def add(self, segments: np.ndarray, kind: int, source, priority: int | None = None):
+        segments = np.asarray(segments, float).reshape(-1, 2, 2)
+        if not len(segments):
+            return
+        src = np.broadcast_to(np.asarray(source, np.int64), (len(segments),))
+        # split long segments into pieces of at most piece_m
+        length = np.hypot(*(segments[:, 1] - segments[:, 0]).T)
+        k = np.maximum(1, np.ceil(length / self.piece_m).astype(np.int64))
+        rep = np.repeat(np.arange(len(segments)), k)
+        j = np.arange(k.sum()) - np.repeat(np.cumsum(k) - k, k)
+        t0, t1 = j / k[rep], (j + 1) / k[rep]
+        a, b = segments[rep, 0], segments[rep, 1]
+        pieces = np.stack([a + (b - a) * t0[:, None], a + (b - a) * t1[:, None]], axis=1)
+        prio = _PRIORITY.get(kind, 2) if priority is None else priority
+        self._segs.append(pieces)
+        self._kind.append(np.full(len(pieces), kind, np.int64))
+        self._src.append(src[rep])
+        self._prio.append(np.full(len(pieces), prio, np.int64))
+
+    def arrays(self):
+        return (np.concatenate(self._segs), np.concatenate(self._kind), np.concatenate(self._src),
+                np.concatenate(self._prio))
+
+
+def ring_segments(xy: np.ndarray) -> np.ndarray:
+    return np.stack([xy, np.roll(xy, -1, axis=0)], axis=1)
+
+
+def snap_to_grid(a: np.ndarray, grid: float) -> np.ndarray:
+    """Round coordinates to a dyadic grid (``grid`` a power of two): values already on the grid,
+    such as 0.25 or integers, are unchanged; round-off like cos(90°) = 6e-17 becomes exactly 0."""
+    return np.round(np.asarray(a, float) / grid) * grid
+
+
+def node(segments: np.ndarray, grid: float) -> np.ndarray:
+    """Node 2-point segments and return the noded 2-point segments.
+
+    GEOS ``unary_union`` with ``grid_size`` runs snap-rounding noding: every output vertex lies on
+    the ``grid`` (a power of two, see :func:`snap_to_grid`), so two intersections closer than the
+    grid become one node and no edge shorter than the grid can appear.
+    """
+    lines = shapely.linestrings(segments)
+    merged = shapely.unary_union(lines, grid_size=grid)
+    coords, index = shapely.get_coordinates(shapely.get_parts(merged), return_index=True)
+    same = index[1:] == index[:-1]
+    out = np.stack([coords[:-1][same], coords[1:][same]], axis=1)
+    return out[np.any(out[:, 0] != out[:, 1], axis=1)]
+
+
+def segment_keys(segments: np.ndarray, grid: float) -> np.ndarray:
+    """Orientation-free integer keys (4 int64) of segments whose ends lie on the noding ``grid``."""
+    q = np.round(segments / grid).astype(np.int64)
+    a, b = q[:, 0], q[:, 1]
+    swap = (a[:, 0] > b[:, 0]) | ((a[:, 0] == b[:, 0]) & (a[:, 1] > b[:, 1]))
+    lo = np.where(swap[:, None], b, a)
+    hi = np.where(swap[:, None], a, b)
+    return np.column_stack([lo, hi])
+
+
+def label_segments(segments: np.ndarray, sources: Sources, label_m: float):
+    """Kind and source of each noded segment: the best-priority source piece within ``label_m``
+    of its midpoint. Segments no source explains get kind -1 (a bug; the caller checks)."""
+    pieces, kind, src, prio = sources.arrays()
+    tree = shapely.STRtree(shapely.linestrings(pieces))
+    mid = shapely.points(segments.mean(axis=1))
+    i, j = tree.query(mid, predicate="dwithin", distance=label_m)
+    order = np.lexsort((src[j], prio[j], i))
+    i, j = i[order], j[order]
+    first = np.ones(len(i), bool)
+    first[1:] = i[1:] != i[:-1]
+    out_kind = np.full(len(segments), -1, np.int64)
+    out_src = np.full(len(segments), -1, np.int64)
+    out_kind[i[first]] = kind[j[first]]
+    out_src[i[first]] = src[j[first]]
+    return out_kind, out_src
+
+
+def _ray_hits(origins, directions, segments, max_len):
+    """Distance along each ray to the first segment it crosses beyond a tiny start offset."""
+    tree = shapely.STRtree(shapely.linestrings(segments))
+    rays = shapely.linestrings(np.stack([origins, origins + directions * max_len], axis=1))
+    r, s = tree.query(rays, predicate="intersects")
+    p, d = origins[r], directions[r]
+    a, b = segments[s, 0], segments[s, 1]
+    e = b - a
+    denom = d[:, 0] * e[:, 1] - d[:, 1] * e[:, 0]
+    w = a - p
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (w[:, 0] * e[:, 1] - w[:, 1] * e[:, 0]) / denom
+    t = np.where(np.abs(denom) > 0, t, np.inf)
+    t = np.where(t > max_len * 1e-9, t, np.inf)
+    best = np.full(len(origins), np.inf)
+    np.minimum.at(best, r, t)
+    return best
+
+
+def dangling_extensions(segments: np.ndarray, grid: float, max_len: float):
+    """Dangling ends (nodes of degree 1) and the segments that extend them to the first line hit.
+
+    Returns
+    -------
+    ext : (k, 2, 2) float64
+        One extension per dangling end (dangling ends that hit nothing are left out).
+    parent : (k,) int64
+        Index into ``segments`` of the segment each extension continues.
+    n_dangling : int
+    """
+    q = np.round(segments.reshape(-1, 2) / grid).astype(np.int64)
+    _, inverse, counts = np.unique(q, axis=0, return_inverse=True, return_counts=True)
+    deg1 = counts[inverse.ravel()] == 1
+    ends = np.flatnonzero(deg1)
+    if not len(ends):
+        return np.empty((0, 2, 2)), np.empty(0, np.int64), 0
+    seg = ends // 2
+    tip = segments[seg, ends % 2]
+    other = segments[seg, 1 - ends % 2]
+    d = tip - other
+    d /= np.hypot(d[:, 0], d[:, 1])[:, None]
+    t = _ray_hits(tip, d, segments, max_len)
+    ok = np.isfinite(t)
+    ext = np.stack([tip[ok], tip[ok] + d[ok] * t[ok, None]], axis=1)
+    return ext, seg[ok], len(ends)
+
+
+def polygonize_segments(segments: np.ndarray) -> np.ndarray:
+    """Faces of a noded network as an array of polygons (dangles and cut edges dropped),
+    oriented counter-clockwise."""
+    faces = shapely.get_parts(shapely.polygonize(shapely.linestrings(segments)))
+    return shapely.orient_polygons(faces)
