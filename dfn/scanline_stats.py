@@ -20,6 +20,8 @@ References
 .. [Ter65] Terzaghi, R. D. (1965). Sources of error in joint surveys. Géotechnique 15(3), 287-304.
 .. [PH76] Priest, S. D., Hudson, J. A. (1976). Discontinuity spacings in rock. Int. J. Rock Mech.
    Min. Sci. 13, 135-148.
+.. [Pri93] Priest, S. D. (1993). Discontinuity Analysis for Rock Engineering. Chapman & Hall
+   (set spacing normal to the mean plane from spacings along a scanline).
 .. [Dee64] Deere, D. U. (1964). Technical description of rock cores for engineering purposes. Rock
    Mechanics and Engineering Geology 1, 16-22.
 """
@@ -267,7 +269,8 @@ def scanline_statistics(scanline: Scanline, membership: ArrayLike | None = None,
         intersection out of every set. Default None: one set holding every intersection.
     set_fits : sequence of FisherFit or None, optional
         Fisher fit of each set (:attr:`JointSets3D.fits`), reported with the set: mean dip / dip
-        direction, κ, α95, variability cones, and the angle between the line and the mean pole.
+        direction, κ, α95, variability cones, the angle δ between the line and the mean pole, and
+        the mean spacing normal to the mean plane (mean spacing along the line × cos δ).
     terzaghi_cap_deg : float, default 15.0
         Blind-zone angle γ of the Terzaghi weights (0 < γ < 90): the largest weight is 1 / sin γ.
     rqd_threshold_m : float, default 0.1
@@ -333,7 +336,7 @@ def scanline_statistics(scanline: Scanline, membership: ArrayLike | None = None,
         fit = fits[j] if j < len(fits) else None
         orientation: dict[str, Any] = dict.fromkeys(
             ("mean_dip_deg", "mean_dip_direction_deg", "mean_pole_xyz", "kappa", "alpha95_deg",
-             "variability_63_deg", "variability_95_deg", "angle_line_to_pole_deg"))
+             "variability_63_deg", "variability_95_deg", "angle_line_to_pole_deg", "mean_normal_spacing_m"))
         if fit is not None:
             dip, dip_direction = dip_from_normal(fit.mean_pole)
             angle = float(angle_between(fit.mean_pole, direction))  # axial, 0-90
@@ -344,6 +347,8 @@ def scanline_statistics(scanline: Scanline, membership: ArrayLike | None = None,
                 variability_63_deg=_finite_or_none(fit.variability_63_deg),
                 variability_95_deg=_finite_or_none(fit.variability_95_deg),
                 angle_line_to_pole_deg=angle)
+            if group["spacing_m"]["mean_m"] is not None:  # apparent spacing x |cos| ([Pri93]_)
+                orientation["mean_normal_spacing_m"] = group["spacing_m"]["mean_m"] * math.cos(math.radians(angle))
             if angle > 90.0 - cap:
                 out["warnings"].append(
                     f"set {j}: the scanline is {90.0 - angle:.1f}° from the set's mean plane (less than "

@@ -122,3 +122,54 @@ def test_a_line_parallel_to_a_set_warns():
 def test_bad_arguments_are_named(kwargs, match):
     with pytest.raises(ValueError, match=match):
         scanline_statistics(_line([1.0, 1.5], [0, 0], [0, 0]), **kwargs)
+
+
+@pytest.mark.slow
+def test_terzaghi_p10_of_a_long_synthetic_line_estimates_p32_per_set():
+    """Thinning oracle: Poisson(P32 L) Fisher fractures, each hit with probability |n.t| (REFERENCE §4).
+
+    Raw P10 must be P32 / C13 (stereology) and the Terzaghi-weighted P10 must be P32, each within 3
+    standard deviations of its Poisson spread; the sets found by BIC must be the three drawn.
+    """
+    from rockmass.dfn import (angle_between, c13, dip_from_normal, pole_from_dip, sample_fisher,
+                              terzaghi_weights, vector_from_trend_plunge)
+    from rockmass.dfn.sets3d import fit_sets_3d
+
+    rng = np.random.default_rng(2024)  # fixed seed
+    truth = ((50.0, 270.0), (80.0, 10.0), (70.0, 150.0))  # seed 001, Table 1
+    p32, kappa, length = 1.5, 30.0, 300.0
+    line = vector_from_trend_plunge(135.0, 10.0)
+    poles, labels = [], []
+    for j, (dip, dip_direction) in enumerate(truth):
+        candidates = sample_fisher(rng, pole_from_dip(dip, dip_direction), kappa, rng.poisson(p32 * length))
+        kept = candidates[rng.random(candidates.shape[0]) < np.abs(candidates @ line)]
+        poles.append(kept)
+        labels.append(np.full(kept.shape[0], j))
+    poles, labels = np.vstack(poles), np.concatenate(labels)
+    distance = rng.uniform(0.0, length, labels.size)
+    order = np.argsort(distance)
+    dip, dip_direction = dip_from_normal(poles[order])
+    scanline = Scanline(distance_m=distance[order], dip_deg=dip, dip_direction_deg=dip_direction,
+                        trend_deg=135.0, plunge_deg=10.0, length_m=length)
+    sets = fit_sets_3d(scanline.poles())
+    assert sets.n_sets == 3
+    stats = scanline_statistics(scanline, sets.membership, sets.fits)
+    true_poles = pole_from_dip(*np.array(truth).T)
+    for j, entry in enumerate(stats["sets"]):
+        true = int(np.argmin(angle_between(true_poles, entry["mean_pole_xyz"])))
+        expected_p10 = p32 / float(c13(line, true_poles[true], kappa))
+        assert entry["p10_per_m"] == pytest.approx(expected_p10, abs=3.0 * math.sqrt(expected_p10 * length) / length)
+        # a compound Poisson sum: the sd of sum(w) / L is sqrt(sum(w^2)) / L
+        weights = terzaghi_weights(scanline.poles()[sets.membership == j], line)
+        assert entry["p10_terzaghi_per_m"] == pytest.approx(p32, abs=3.0 * math.sqrt(np.sum(weights**2)) / length)
+
+
+def test_normal_spacing_is_the_apparent_spacing_times_cos_delta():
+    from rockmass.dfn import fit_fisher, pole_from_dip
+
+    # horizontal line due East, planes dipping 60° East: |cos delta| = sin 60°
+    line = _line([0.5, 1.5, 2.5], [60.0, 60.0, 60.0], [90.0, 90.0, 90.0], trend=90.0, plunge=0.0, length=3.0)
+    fit = fit_fisher(pole_from_dip([60.0, 60.0, 60.0], [90.0, 90.0, 90.0]))
+    entry = scanline_statistics(line, [0, 0, 0], [fit])["sets"][0]
+    assert entry["angle_line_to_pole_deg"] == pytest.approx(30.0, abs=1e-9)
+    assert entry["mean_normal_spacing_m"] == pytest.approx(math.sin(math.radians(60.0)), rel=1e-9)

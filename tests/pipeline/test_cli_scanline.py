@@ -63,3 +63,14 @@ def test_bad_input_exits_2_and_writes_nothing(tmp_path, capsys, text, args, frag
 def test_missing_file_exits_2(tmp_path, capsys):
     assert main(["scanline", str(tmp_path / "nothing.csv")]) == 2
     assert "nothing.csv" in capsys.readouterr().err
+
+
+def test_bundled_sample_is_what_its_script_makes():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("make_scanline_sample", SAMPLE.with_name("make_scanline_sample.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    rows = [line.split(",") for line in SAMPLE.read_text().splitlines() if line and not line.startswith("#")][1:]
+    expected = [[f"{d:.2f}", str(a), str(b), f"{t:.1f}", str(e)] for d, a, b, t, e in module.make_rows()]
+    assert rows == expected
