@@ -111,8 +111,14 @@ class _Parser:
         self.in_header = True
 
     def _lines(self, handle: IO[str]) -> Iterator[str]:
+        in_quotes = False  # inside a quoted field that spans physical lines (RFC 4180)
         for number, text in enumerate(handle, start=1):
             self.line = number
+            continues = in_quotes
+            in_quotes ^= text.count('"') % 2 == 1  # an escaped quote ("") does not change parity
+            if continues:
+                yield text  # part of a quoted value, never a comment
+                continue
             stripped = text.strip()
             if stripped.startswith("#"):
                 match = _METADATA.match(stripped)

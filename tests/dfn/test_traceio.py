@@ -482,3 +482,17 @@ def test_zero_area_window_names_the_feature(tmp_path):
     text = '{"type": "Polygon", "coordinates": [[[0, 0], [1, 1], [2, 2], [0, 0]]]}'
     with pytest.raises(ValueError, match=r"z\.geojson: feature 0: window_xy_m encloses zero area"):
         read_geojson(_write(tmp_path, "z.geojson", text))
+
+
+@pytest.mark.parametrize("layout", ["segments", "polylines"])
+def test_csv_value_with_a_line_break_before_a_hash_round_trips(tmp_path, layout):
+    """Regression (found by hypothesis): a quoted value "s:\r#" spans two physical lines, and the
+    second one starts with '#'; it must not be read as a comment line."""
+    tm = TraceMap.from_polylines([np.zeros((2, 2)), np.ones((2, 2))],
+                                 attributes={"note": np.array(["s:\r#", "s:"])})
+    path = tmp_path / "notes.csv"
+    write_csv(tm, path, layout=layout)
+    back = read_csv(path)
+    assert back.n_traces == 2
+    assert back.attributes["note"].tolist() == ["s:\r#", "s:"]
+    assert np.array_equal(back.xy_m, tm.xy_m)
