@@ -86,8 +86,10 @@ def _sides(n_sides, name="n_sides"):
 
 
 def _arc(cx, cy, r, a0, a1, n_sides):
-    """Points on an arc from angle a0 to a1 (radians, counter-clockwise), inscribed chords."""
-    k = max(1, int(math.ceil(abs(a1 - a0) / (2 * math.pi / n_sides) - 1e-9)))
+    """Points on an arc from angle a0 to a1 (radians, counter-clockwise): an even number k of
+    equal inscribed chords, k >= (a1 - a0) / (2π / n_sides)."""
+    k = max(2, int(math.ceil(abs(a1 - a0) / (2 * math.pi / n_sides) - 1e-9)))
+    k += k % 2  # even: the crown of a symmetric arch is a vertex
     t = np.linspace(a0, a1, k + 1)
     return np.column_stack([cx + r * np.cos(t), cy + r * np.sin(t)])
 

@@ -1,0 +1,260 @@
+"""``[blocks]``: the block-model section (:func:`rockmass.blockgen.build`), strict and range-checked.
+
+Example::
+
+    [blocks]
+    seed = 0
+    dangling = "glued"            # or "joint", "drop"
+    [blocks.domain]
+    width_m = 1.22
+    height_m = 0.61
+    [[blocks.sets]]
+    angle_deg = 45
+    spacing_m = 0.05
+    [[blocks.excavations]]
+    shape = "circle"
+    name = "tunnel"
+    center_xy_m = [0.61, 0.305]
+    radius_m = 0.076
+
+``[blocks.two_sets]`` (``alpha_deg``, ``theta_deg``, ``spacing_m``) is the seed-000 parametrisation:
+set 1 at α from the horizontal, set 2 at α + θ. Hook into :class:`rockmass.config.RockmassConfig` with
+``blocks: BlocksConfig | None = None``; :class:`BlocksDocument` is the top level for ``rockmass blocks``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Literal
+
+from pydantic import Field, model_validator
+
+from .config import StrictModel, field_problem
+
+__all__ = ["BlocksConfig", "BlocksDocument", "DomainSection", "JointSetConfig", "TwoSetsConfig",
+           "CircleConfig", "HorseshoeConfig", "ArchedCavernConfig", "RectangleConfig",
+           "PolygonConfig"]
+
+Coord = Annotated[float, Field(ge=-1e7, le=1e7)]
+Point = Annotated[tuple[Coord, Coord], Field(strict=False)]
+Length = Annotated[float, Field(gt=0, le=1e6)]
+Angle = Annotated[float, Field(ge=-360, le=360)]
+Name = Annotated[str, Field(min_length=1, max_length=64)]
+Sides = Annotated[int, Field(ge=8, le=4096)]
+
+
+class DomainSection(StrictModel):
+    """``[blocks.domain]``: a ``width_m`` × ``height_m`` rectangle with its lower-left corner at
+    ``origin_xy_m`` (default (0, 0)), or any simple polygon ``polygon_xy_m`` (3 to 10⁴ vertices)."""
+
+    width_m: Length | None = None
+    height_m: Length | None = None
+    origin_xy_m: Point = (0.0, 0.0)
+    polygon_xy_m: Annotated[list[Point], Field(min_length=3, max_length=10000)] | None = None
+
+    @model_validator(mode="after")
+    def _one_form(self):
+        rect = self.width_m is not None or self.height_m is not None
+        if rect and self.polygon_xy_m is not None:
+            raise field_problem(self, "polygon_xy_m", "give either width_m and height_m or "
+                                "polygon_xy_m, not both", self.polygon_xy_m)
+        if not rect and self.polygon_xy_m is None:
+            raise field_problem(self, "width_m", "give width_m and height_m (or polygon_xy_m)", None)
+        if rect and (self.width_m is None or self.height_m is None):
+            missing = "height_m" if self.height_m is None else "width_m"
+            raise field_problem(self, missing, "required with the other side of the rectangle", None)
+        return self
+
+    def xy_m(self) -> list[tuple[float, float]]:
+        if self.polygon_xy_m is not None:
+            return [tuple(p) for p in self.polygon_xy_m]
+        x, y = self.origin_xy_m
+        return [(x, y), (x + self.width_m, y), (x + self.width_m, y + self.height_m),
+                (x, y + self.height_m)]
+
+
+class JointSetConfig(StrictModel):
+    """``[[blocks.sets]]``: one :class:`rockmass.blockgen.JointSet` (same field names and meaning)."""
+
+    angle_deg: Angle
+    spacing_m: Length
+    spacing_distribution: Literal["constant", "exponential", "lognormal"] = "constant"
+    spacing_std_m: float = Field(0.0, ge=0, le=1e6)
+    trace_length_m: Length | None = None
+    gap_length_m: Length | None = None
+    origin_xy_m: Point | None = None
+    name: Name | None = None
+
+    @model_validator(mode="after")
+    def _pairs(self):
+        if (self.trace_length_m is None) != (self.gap_length_m is None):
+            field = "gap_length_m" if self.gap_length_m is None else "trace_length_m"
+            raise field_problem(self, field, "trace_length_m and gap_length_m go together "
+                                "(persistence); give both or neither", None)
+        if self.spacing_distribution == "lognormal" and self.spacing_std_m <= 0:
+            raise field_problem(self, "spacing_std_m", "must be > 0 for a lognormal spacing",
+                                self.spacing_std_m)
+        return self
+
+    def to_joint_set(self):
+        from .blockgen import JointSet
+
+        return JointSet(**self.model_dump())
+
+
+class TwoSetsConfig(StrictModel):
+    """``[blocks.two_sets]``: seed 000's two sets, set 1 at ``alpha_deg`` from the horizontal and set
+    2 at ``alpha_deg + theta_deg`` (0 < θ <= 90), spacings ``spacing_m = [s1, s2]``."""
+
+    alpha_deg: Annotated[float, Field(ge=0, lt=180)]
+    theta_deg: Annotated[float, Field(gt=0, le=90)]
+    spacing_m: Annotated[tuple[Length, Length], Field(strict=False)]
+    trace_length_m: Length | None = None
+    gap_length_m: Length | None = None
+
+    def to_joint_sets(self):
+        from .blockgen import JointSet
+
+        extra = {"trace_length_m": self.trace_length_m, "gap_length_m": self.gap_length_m}
+        return [JointSet(self.alpha_deg, self.spacing_m[0], name="set 1 (alpha)", **extra),
+                JointSet(self.alpha_deg + self.theta_deg, self.spacing_m[1],
+                         name="set 2 (alpha + theta)", **extra)]
+
+
+class CircleConfig(StrictModel):
+    shape: Literal["circle"]
+    name: Name
+    center_xy_m: Point
+    radius_m: Length
+    n_sides: Sides = 36
+
+    def to_excavation(self):
+        from .blockgen import circle
+
+        return circle(self.center_xy_m, self.radius_m, self.name, self.n_sides)
+
+
+class HorseshoeConfig(StrictModel):
+    shape: Literal["horseshoe"]
+    name: Name
+    center_xy_m: Point  # middle of the invert
+    span_m: Length
+    wall_height_m: Length
+    n_sides: Sides = 36
+
+    def to_excavation(self):
+        from .blockgen import horseshoe
+
+        return horseshoe(self.center_xy_m, self.span_m, self.wall_height_m, self.name, self.n_sides)
+
+
+class ArchedCavernConfig(StrictModel):
+    shape: Literal["arched_cavern"]
+    name: Name
+    center_xy_m: Point  # middle of the floor
+    span_m: Length
+    wall_height_m: Length
+    arch_rise_m: Length
+    n_sides: Sides = 36
+
+    @model_validator(mode="after")
+    def _rise(self):
+        if self.arch_rise_m > self.span_m / 2:
+            raise field_problem(self, "arch_rise_m", f"must be <= span_m / 2 ({self.span_m / 2:g}), "
+                                f"got {self.arch_rise_m:g}", self.arch_rise_m)
+        return self
+
+    def to_excavation(self):
+        from .blockgen import arched_cavern
+
+        return arched_cavern(self.center_xy_m, self.span_m, self.wall_height_m, self.arch_rise_m,
+                             self.name, self.n_sides)
+
+
+class RectangleConfig(StrictModel):
+    shape: Literal["rectangle"]
+    name: Name
+    center_xy_m: Point
+    width_m: Length
+    height_m: Length
+
+    def to_excavation(self):
+        from .blockgen import rectangle
+
+        return rectangle(self.center_xy_m, self.width_m, self.height_m, self.name)
+
+
+class PolygonConfig(StrictModel):
+    shape: Literal["polygon"]
+    name: Name
+    xy_m: Annotated[list[Point], Field(min_length=3, max_length=10000)]
+
+    def to_excavation(self):
+        from .blockgen import polygon_excavation
+
+        return polygon_excavation([tuple(p) for p in self.xy_m], self.name)
+
+
+ExcavationConfig = Annotated[CircleConfig | HorseshoeConfig | ArchedCavernConfig | RectangleConfig
+                             | PolygonConfig, Field(discriminator="shape")]
+
+
+class BlocksConfig(StrictModel):
+    """``[blocks]``: domain, joint sets and/or traces, excavation stages (in removal order).
+
+    Parameters
+    ----------
+    domain : DomainSection
+    sets : list of JointSetConfig, default []
+    two_sets : TwoSetsConfig, optional
+        Appended after ``sets``.
+    traces : str, optional
+        Trace file (GeoJSON / CSV, :func:`rockmass.dfn.read_traces`), relative to the config file.
+    excavations : list, default []
+        Stages (``shape`` = circle, horseshoe, arched_cavern, rectangle, polygon), unique names.
+    dangling : {"glued", "joint", "drop"}, default "glued"
+    seed : int, default 0 (0 <= seed < 2**63)
+    rounding_m, min_edge_m : float, optional
+        Solver corner rounding d and minimum edge (defaults: 1 % of the median edge, 2d).
+    merge_slivers, convex : bool, default true
+    """
+
+    domain: DomainSection
+    sets: Annotated[list[JointSetConfig], Field(max_length=32)] = Field(default_factory=list)
+    two_sets: TwoSetsConfig | None = None
+    traces: str | None = None
+    excavations: Annotated[list[ExcavationConfig], Field(max_length=64)] = Field(default_factory=list)
+    dangling: Literal["glued", "joint", "drop"] = "glued"
+    seed: int = Field(0, ge=0, lt=2 ** 63)
+    rounding_m: Length | None = None
+    min_edge_m: Length | None = None
+    merge_slivers: bool = True
+    convex: bool = True
+
+    @model_validator(mode="after")
+    def _something_cuts(self):
+        if not self.sets and self.two_sets is None and self.traces is None and not self.excavations:
+            raise field_problem(self, "sets", "nothing cuts the domain: give sets, two_sets, traces "
+                                "or excavations", [])
+        names = [e.name for e in self.excavations]
+        if len(set(names)) != len(names):
+            raise field_problem(self, "excavations", f"stage names must be unique, got {names}", names)
+        return self
+
+    def joint_sets(self):
+        sets = [s.to_joint_set() for s in self.sets]
+        if self.two_sets is not None:
+            sets += self.two_sets.to_joint_sets()
+        return sets
+
+    def traces_path(self, config_path) -> Path | None:
+        if self.traces is None:
+            return None
+        p = Path(self.traces)
+        return p if p.is_absolute() else Path(config_path).parent / p
+
+
+class BlocksDocument(StrictModel):
+    """Top level of a ``rockmass blocks`` config: the ``[blocks]`` section only."""
+
+    blocks: BlocksConfig
