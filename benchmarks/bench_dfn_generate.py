@@ -22,7 +22,7 @@ import numpy as np
 
 from _common import header, save, table, timed
 from rockmass.dfn import ConstantSize, PowerLawSize, c23
-from rockmass.dfn.generate import FisherOrientation, FractureSetSpec, IntensityP32, generate
+from rockmass.dfn.generation import FisherOrientation, FractureSetSpec, IntensityP32, generate
 from rockmass.dfn.sampling import sample_plane
 from rockmass.dfn.section import generate_section
 

@@ -18,6 +18,15 @@ Trace-map statistics
     dip / dip direction, strike, trend / plunge conversions (:mod:`~rockmass.dfn.orientation`),
     Fisher sampling and fitting (:mod:`~rockmass.dfn.fisher`), stereology C13 / C23 and the P32
     solve (:mod:`~rockmass.dfn.stereology`), size distributions (:mod:`~rockmass.dfn.sizes`).
+DFN generation and virtual sampling
+    seeded disk networks filled to a clipped P32 (:mod:`~rockmass.dfn.generation`,
+    :class:`DiskNetwork`), line and plane sampling (:mod:`~rockmass.dfn.sampling`), sections generated
+    directly on a plane (:mod:`~rockmass.dfn.section`), ``fractures.csv`` / ``.vtu``
+    (:mod:`~rockmass.dfn.network_io`).
+Scanline surveys
+    reading (:mod:`~rockmass.dfn.scanline`), 3D joint sets from poles (:mod:`~rockmass.dfn.sets3d`),
+    P10, Terzaghi, spacing fits and RQD (:mod:`~rockmass.dfn.scanline_stats`). Figures:
+    :mod:`rockmass.dfn.plots` (rose, trace map) and :mod:`rockmass.dfn.stereonet`.
 
 ``rockmass.dfn`` depends on numpy and shapely only: it never imports the pipeline package
 (``rockmass`` top-level modules) nor numba, matplotlib, OpenCV or scikit-image at import time.
@@ -45,6 +54,14 @@ if TYPE_CHECKING:
     from .fisher import FisherFit, confidence_cone, fisher_angle_cdf, fisher_angle_pdf, fisher_density, fit_fisher, orientation_tensor, sample_fisher, variability_cone
     from .stereology import C13_ISOTROPIC, C23_ISOTROPIC, P32Solution, c13, c13_from_angle, c23, c23_from_angle, p10_from_p32, p21_from_p32, p32_from_p10, p32_from_p21, solve_p32, terzaghi_weights
     from .sizes import ConstantSize, ExponentialSize, LognormalSize, PowerLawSize, SizeDistribution, mean_trace_length, p20_from_p30, p30_from_p32, p32_from_p30, radius_exponent_from_trace, trace_exponent_from_radius
+    from .network import DiskNetwork, disk_basis, as_box
+    from .generation import BootstrapOrientation, DEFAULT_MAX_FRACTURES, FisherOrientation, FractureSetSpec, IntensityP10, IntensityP21, IntensityP32, UniformOrientation, generate, realization_seed, realizations, size_upper_bound
+    from .sampling import LineSample, plane_frame, sample_line, sample_plane
+    from .section import generate_section, size_biased_sample
+    from .network_io import CSV_COLUMNS, read_fractures_csv, write_fractures_csv, write_fractures_vtu, disk_polygons
+    from .scanline import Scanline, read_scanline
+    from .sets3d import JointSets3D, fit_sets_3d
+    from .scanline_stats import SpacingFit, fit_spacings, rqd_direct, rqd_priest_hudson, scanline_statistics
 
 #: Public name -> the module that defines it.
 _SOURCES = {
@@ -118,6 +135,41 @@ _SOURCES = {
     "p32_from_p30": "sizes",
     "radius_exponent_from_trace": "sizes",
     "trace_exponent_from_radius": "sizes",
+    "DiskNetwork": "network",
+    "disk_basis": "network",
+    "as_box": "network",
+    "BootstrapOrientation": "generation",
+    "DEFAULT_MAX_FRACTURES": "generation",
+    "FisherOrientation": "generation",
+    "FractureSetSpec": "generation",
+    "IntensityP10": "generation",
+    "IntensityP21": "generation",
+    "IntensityP32": "generation",
+    "UniformOrientation": "generation",
+    "generate": "generation",
+    "realization_seed": "generation",
+    "realizations": "generation",
+    "size_upper_bound": "generation",
+    "LineSample": "sampling",
+    "plane_frame": "sampling",
+    "sample_line": "sampling",
+    "sample_plane": "sampling",
+    "generate_section": "section",
+    "size_biased_sample": "section",
+    "CSV_COLUMNS": "network_io",
+    "read_fractures_csv": "network_io",
+    "write_fractures_csv": "network_io",
+    "write_fractures_vtu": "network_io",
+    "disk_polygons": "network_io",
+    "Scanline": "scanline",
+    "read_scanline": "scanline",
+    "JointSets3D": "sets3d",
+    "fit_sets_3d": "sets3d",
+    "SpacingFit": "scanline_stats",
+    "fit_spacings": "scanline_stats",
+    "rqd_direct": "scanline_stats",
+    "rqd_priest_hudson": "scanline_stats",
+    "scanline_statistics": "scanline_stats",
 }
 
 __all__ = list(_SOURCES)

@@ -17,7 +17,7 @@ P30 · 2 E[r] / C23, mean trace length π E[r²]/(2 E[r])) at a cost proportiona
 volume. The one difference: the volume is filled to its P32 target exactly, so its disk count does
 not fluctuate, while here the count is Poisson — the expected intensities are the same.
 
-Seeding as :func:`rockmass.dfn.generate.generate`: realization i, set j use spawn key (i, j).
+Seeding as :func:`rockmass.dfn.generation.generate`: realization i, set j use spawn key (i, j).
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .generate import DEFAULT_MAX_FRACTURES, FractureSetSpec, _check_index, _check_sets, _set_label, \
+from .generation import DEFAULT_MAX_FRACTURES, FractureSetSpec, _check_index, _check_sets, _set_label, \
     realization_seed, size_upper_bound
 from .sampling import _plane_traces, _point, _window, plane_frame
 from .sizes import ConstantSize, LognormalSize, PowerLawSize, _check_sample_args, _check_size

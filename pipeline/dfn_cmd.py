@@ -59,7 +59,7 @@ def compute(args):
     """Load, validate and generate; return (config, specs, seed, [(index, network, summary)], timings)."""
     from .config import load_config
     from .dfn_config import DFNDocument
-    from .dfn.generate import generate
+    from .dfn.generation import generate
 
     _check_flag(args.seed, "--seed", 0)
     _check_flag(args.realizations, "--realizations", 1)

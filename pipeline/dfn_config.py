@@ -1,4 +1,4 @@
-"""``[dfn]``: seeded generation of disk fracture networks (:mod:`rockmass.dfn.generate`).
+"""``[dfn]``: seeded generation of disk fracture networks (:mod:`rockmass.dfn.generation`).
 
 Example (every number is range-checked; unknown keys are errors)::
 
@@ -168,9 +168,9 @@ class FractureSetConfig(StrictModel):
     n_vertices: int = Field(16, ge=3, le=1024)
 
     def to_spec(self):
-        """The :class:`rockmass.dfn.generate.FractureSetSpec` (imports numpy-level code lazily)."""
+        """The :class:`rockmass.dfn.generation.FractureSetSpec` (imports numpy-level code lazily)."""
         from .dfn import ConstantSize, ExponentialSize, LognormalSize, PowerLawSize, pole_from_dip
-        from .dfn.generate import BootstrapOrientation, FisherOrientation, FractureSetSpec, IntensityP10, \
+        from .dfn.generation import BootstrapOrientation, FisherOrientation, FractureSetSpec, IntensityP10, \
             IntensityP21, IntensityP32, UniformOrientation
 
         o = self.orientation

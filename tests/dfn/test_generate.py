@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from rockmass.dfn import ConstantSize, ExponentialSize, LognormalSize, PowerLawSize, c13, c23, pole_from_dip
-from rockmass.dfn.generate import (BootstrapOrientation, FisherOrientation, FractureSetSpec, IntensityP10,
+from rockmass.dfn.generation import (BootstrapOrientation, FisherOrientation, FractureSetSpec, IntensityP10,
                                    IntensityP21, IntensityP32, UniformOrientation, generate, realizations,
                                    size_upper_bound)
 from rockmass.dfn.network import DiskNetwork

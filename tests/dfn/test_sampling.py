@@ -6,7 +6,7 @@ import shapely
 from scipy import stats
 
 from rockmass.dfn import ConstantSize, c13, c23
-from rockmass.dfn.generate import FisherOrientation, FractureSetSpec, IntensityP32, generate
+from rockmass.dfn.generation import FisherOrientation, FractureSetSpec, IntensityP32, generate
 from rockmass.dfn.network import DiskNetwork
 from rockmass.dfn.sampling import plane_frame, sample_line, sample_plane
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from rockmass.dfn import ConstantSize, ExponentialSize, LognormalSize, PowerLawSize, c23
-from rockmass.dfn.generate import FisherOrientation, FractureSetSpec, IntensityP32, generate
+from rockmass.dfn.generation import FisherOrientation, FractureSetSpec, IntensityP32, generate
 from rockmass.dfn.sampling import sample_plane
 from rockmass.dfn.section import generate_section, size_biased_sample
 
