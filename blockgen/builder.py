@@ -36,7 +36,7 @@ from .joints import JointSet, set_segments
 from .model import (CONTACT_KINDS, KIND_DOMAIN, KIND_EXCAVATION, KIND_GLUED, KIND_JOINT, KIND_TRACE,
                     SOURCE_CONVEX_CUT, BlockModel)
 from .network import (Sources, dangling_extensions, label_segments, node, polygonize_segments,
-                      ring_segments, segment_keys, snap_to_grid)
+                      ring_segments, segment_keys, snap_to_grid, collapse_short)
 from .tolerances import model_tolerances
 
 __all__ = ["build", "DANGLING_CHOICES"]
@@ -126,6 +126,27 @@ def _is_convex(poly, reflex_sin):
         return False
     xy = np.asarray(poly.exterior.coords)[:-1]
     return len(reflex_vertices(xy, reflex_sin)) == 0
+
+
+def _concave_mask(faces, reflex_sin):
+    """Faces that have a hole or a reflex vertex (vectorised over all faces)."""
+    coords, index = shapely.get_coordinates(shapely.get_exterior_ring(faces), return_index=True)
+    counts = np.bincount(index, minlength=len(faces))
+    start = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    last = start + counts - 1  # closing point (equal to the first)
+    keep = np.ones(len(coords), bool)
+    keep[last] = False
+    xy, face = coords[keep], index[keep]
+    k = counts - 1
+    first = np.concatenate([[0], np.cumsum(k)[:-1]])
+    pos = np.arange(len(xy)) - first[face]
+    prev = first[face] + (pos - 1) % k[face]
+    nxt = first[face] + (pos + 1) % k[face]
+    e_in, e_out = xy - xy[prev], xy[nxt] - xy
+    cross = e_in[:, 0] * e_out[:, 1] - e_in[:, 1] * e_out[:, 0]
+    norm = np.hypot(e_in[:, 0], e_in[:, 1]) * np.hypot(e_out[:, 0], e_out[:, 1])
+    reflex = np.bincount(face, cross < -reflex_sin * norm, len(faces)) > 0
+    return reflex | (shapely.get_num_interior_rings(faces) > 0)
 
 
 def _regions(faces, excavations):
@@ -235,7 +256,18 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
     report = {"dangling": {"rule": dangling}, "slivers_merged": [], "convex_splits": [],
               "snapped_cuts": 0,
               "convex_failures": 0}
-    noded = node(snap_to_grid(np.concatenate(all_segs), grid), grid)
+    report["nodes_merged"] = {"rule": "nodes joined by an edge shorter than snap_m are one node",
+                              "count": 0}
+
+    def collapse(segments):
+        out, n = collapse_short(segments, snap_m, grid)
+        report["nodes_merged"]["count"] += n
+        return out
+
+    def renode(segments):
+        return collapse(node(segments, grid))
+
+    noded = renode(snap_to_grid(np.concatenate(all_segs), grid))
     kind, src = label_segments(noded, sources, label_m)
     # 3. dangling ends
     ext, parent, n_dangling = dangling_extensions(noded, grid, 2 * size)
@@ -247,7 +279,7 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
             sources.add(ext[sel], int(k), src[parent[sel]], priority=3)
         report["dangling"]["n_extended"] = int(len(ext))
         report["dangling"]["extended_length_m"] = float(np.hypot(*(ext[:, 1] - ext[:, 0]).T).sum())
-        noded = node(np.concatenate([noded, ext]), grid)
+        noded = renode(np.concatenate([noded, ext]))
         kind, src = label_segments(noded, sources, label_m)
     faces = polygonize_segments(noded)
     if dangling == "drop" and n_dangling:
@@ -275,13 +307,15 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
     if convex:
         # a cut of one face can end on a vertex shared with a neighbour and leave that neighbour
         # with a new reflex vertex: repeat until every face is convex (reported rounds)
-        for rounds in range(1, 6):
-            n_before = len(report["convex_splits"])
+        n_concave = int(_concave_mask(faces, tol.reflex_sin).sum())
+        rounds = 0
+        while n_concave and rounds < 8:
+            rounds += 1
             noded, faces, region = _make_convex(noded, faces, region, tol, report, sources,
-                                                excavations, label_m)
-            if len(report["convex_splits"]) == n_before:
-                break
+                                                excavations, label_m, collapse)
+            n_concave = int(_concave_mask(faces, tol.reflex_sin).sum())
         report["convex_rounds"] = rounds
+        report["concave_blocks_left"] = int(_concave_mask(faces, tol.reflex_sin).sum())
     kind, src = label_segments(noded, sources, label_m)
     return _assemble(faces, region, noded, kind, src, tol, report, domain_xy, excavations,
                      set_names, domain, n_traces_in)
@@ -342,8 +376,8 @@ def _rows_in(a, b):
     return np.isin(inv[:len(a)], inv[len(a):])
 
 
-def _make_convex(noded, faces, region, tol, report, sources, excavations, label_m):
-    concave = [i for i in range(len(faces)) if not _is_convex(faces[i], tol.reflex_sin)]
+def _make_convex(noded, faces, region, tol, report, sources, excavations, label_m, collapse):
+    concave = np.flatnonzero(_concave_mask(faces, tol.reflex_sin)).tolist()
     if not concave:
         return noded, faces, region
     cuts = []
@@ -366,7 +400,7 @@ def _make_convex(noded, faces, region, tol, report, sources, excavations, label_
     keys = segment_keys(noded, tol.grid_m)
     touched = _rows_in(keys, segment_keys(bseg, tol.grid_m))
     renoded = node(np.concatenate([noded[touched], cuts]), tol.grid_m)
-    noded = np.concatenate([noded[~touched], renoded])
+    noded = collapse(np.concatenate([noded[~touched], renoded]))
     faces = polygonize_segments(noded)
     return noded, faces, _regions(faces, excavations)
 

@@ -14,7 +14,7 @@ import shapely
 
 from .model import KIND_DOMAIN, KIND_EXCAVATION, KIND_GLUED
 
-__all__ = ["Sources", "snap_to_grid", "node", "label_segments", "dangling_extensions", "polygonize_segments",
+__all__ = ["Sources", "snap_to_grid", "node", "collapse_short", "label_segments", "dangling_extensions", "polygonize_segments",
            "segment_keys"]
 
 # priority of a kind when two sources cover the same edge (lower wins)
@@ -75,6 +75,42 @@ def node(segments: np.ndarray, grid: float) -> np.ndarray:
     same = index[1:] == index[:-1]
     out = np.stack([coords[:-1][same], coords[1:][same]], axis=1)
     return out[np.any(out[:, 0] != out[:, 1], axis=1)]
+
+
+def collapse_short(segments: np.ndarray, min_len: float, grid: float):
+    """Merge the two nodes of every segment shorter than ``min_len`` into one.
+
+    Snap-rounding keeps distinct nodes on neighbouring grid cells (an edge one cell long, whose
+    direction is noise). Each cluster of nodes joined by such edges becomes its lowest-numbered
+    node; the short segments vanish and duplicates are removed. Nodes move by < ``min_len`` ×
+    cluster size. Returns (segments, number of nodes merged away).
+    """
+    length = np.hypot(*(segments[:, 1] - segments[:, 0]).T)
+    short = length < min_len
+    if not short.any():
+        return segments, 0
+    q = np.round(segments.reshape(-1, 2) / grid).astype(np.int64)
+    uniq, inv = np.unique(q, axis=0, return_inverse=True)
+    inv = inv.reshape(-1, 2)
+    xy = np.zeros((len(uniq), 2))
+    xy[inv.ravel()] = segments.reshape(-1, 2)
+    label = np.arange(len(uniq))
+    a, b = inv[short, 0], inv[short, 1]
+    while True:  # label propagation: every node takes the smallest label in its cluster
+        m = np.minimum(label[a], label[b])
+        new = label.copy()
+        np.minimum.at(new, a, m)
+        np.minimum.at(new, b, m)
+        new = new[new]
+        if np.array_equal(new, label):
+            break
+        label = new
+    n_merged = int((label != np.arange(len(uniq))).sum())
+    ends = label[inv]
+    keep = ends[:, 0] != ends[:, 1]
+    ends = np.sort(ends[keep], axis=1)
+    ends = np.unique(ends, axis=0)
+    return xy[ends], n_merged
 
 
 def segment_keys(segments: np.ndarray, grid: float) -> np.ndarray:

@@ -11,7 +11,8 @@ from rockmass.cli import main
 SAMPLES = Path(__file__).resolve().parents[2] / "samples"
 
 
-@pytest.mark.parametrize("name", ["blocks_shaketable.toml", "blocks_cavern.toml"])
+@pytest.mark.parametrize("name", ["blocks_shaketable.toml", "blocks_cavern.toml",
+                                  "blocks_dfn_horseshoe.toml"])
 def test_sample_configs_build_models_that_pass_the_invariants(name, tmp_path, capsys):
     assert main(["blocks", str(SAMPLES / name), "--out", str(tmp_path)]) == 0
     names = sorted(p.name for p in tmp_path.iterdir())
@@ -78,3 +79,11 @@ def test_unknown_key_is_refused(tmp_path, capsys):
     path = _write(tmp_path, _BASE.format(spacing="0.1") + "spacinng = 3\n")
     assert main(["blocks", str(path), "--out", str(tmp_path / "out")]) == 2
     assert "unknown key" in capsys.readouterr().err
+
+
+def test_dfn_sample_labels_contacts_by_trace(tmp_path):
+    assert main(["blocks", str(SAMPLES / "blocks_dfn_horseshoe.toml"), "--out", str(tmp_path)]) == 0
+    model = read_json(tmp_path / "blocks.json")
+    kinds = set(model.contact_kind.tolist())
+    assert {1, 2, 3, 4} <= kinds  # trace, glued (extended dangling ends), excavation, domain
+    assert model.quality["dangling"]["n_extended"] > 0
