@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
-from .model import KIND_DOMAIN, KIND_EXCAVATION, KIND_GLUED
+from .model import KIND_DOMAIN, KIND_EXCAVATION
 
 __all__ = ["Sources", "snap_to_grid", "node", "collapse_short", "label_segments", "dangling_extensions", "polygonize_segments",
            "segment_keys"]

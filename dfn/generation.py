@@ -39,7 +39,7 @@ from .fisher import sample_fisher
 from .network import DiskNetwork, as_box, clipped_disk_areas
 from .orientation import _as_angle_range, _as_float_array, _as_scalar, _as_vectors, pole_from_dip, \
     vector_from_trend_plunge
-from .sizes import ConstantSize, ExponentialSize, LognormalSize, PowerLawSize, _check_size
+from .sizes import ConstantSize, _check_size
 from .stereology import c13, c23
 
 __all__ = [

@@ -487,7 +487,7 @@ def _box_count_traces(traces, grid, method, sizes_px, fit_range_px, window, mask
         sizes = _vector_sizes(sizes_px, grid)
         in_fit = fit_range_mask(sizes, fit_range_px, grid)
         sizes_m = sizes * frame.side_m / grid
-        _check_vector_budget(seg, sizes_m, offsets.shape[0])
+        _check_vector_budget(seg, sizes_m)
         counts, totals = _vector_counts(seg, frame, sizes_m, offsets)
         face = _vector_face_counts(face_ring, frame, sizes_m, offsets) if masked else None
         line_rule = None
@@ -510,15 +510,15 @@ def _vector_counts(seg: np.ndarray, frame: Frame, sizes_m: np.ndarray, offsets: 
     return counts, totals
 
 
-def _check_vector_budget(seg: np.ndarray, sizes_m: np.ndarray, n_offsets: int) -> None:
-    """Refuse a vector count whose box visits would exhaust memory; name the sizes that cost most."""
+def _check_vector_budget(seg: np.ndarray, sizes_m: np.ndarray) -> None:
+    """Refuse a vector count whose box visits would exhaust memory (per grid: every shifted grid
+    reuses the same buffers); name the sizes that cost most."""
     travel = float(np.sum(np.abs(seg[:, 2] - seg[:, 0]) + np.abs(seg[:, 3] - seg[:, 1])))
     visits = travel / sizes_m.min() + 3 * seg.shape[0]
     if visits > _MAX_VECTOR_CELLS:
         raise ValueError(
             f"sizes_px: boxes of {sizes_m.min():.3g} m would make the vector count visit about "
             f"{visits:.2g} boxes (limit {_MAX_VECTOR_CELLS:.0e}, about 1.6 GB); use larger box sizes")
-    del n_offsets  # each shifted grid reuses the same buffers: the budget is per grid
 
 
 def _intersect_rings(rings):

@@ -9,13 +9,12 @@ invariants checked) before the first file is written. ``--json`` prints the qual
 from __future__ import annotations
 
 import argparse
-import json
 import re
-import sys
 import time
 
 from .errors import InputError, RunError
-from .outputs import output_folder
+from .inputs import read_trace_file
+from .outputs import output_folder, print_json
 
 __all__ = ["add_parser", "run", "compute"]
 
@@ -59,12 +58,7 @@ def compute(args):
         joint_sets = cfg.joint_sets()
         excavations = [e.to_excavation() for e in cfg.excavations]
         if path is not None:
-            from .dfn import read_traces
-
-            try:
-                traces = read_traces(path)
-            except OSError as exc:
-                raise InputError(f"{path}: cannot read (blocks.traces): {exc.strerror or exc}") from exc
+            traces = read_trace_file(path, "blocks.traces")
         t1 = time.perf_counter()
         model = build(cfg.domain.xy_m(), joint_sets, traces, excavations, dangling=cfg.dangling,
                       seed=cfg.seed, rounding_m=cfg.rounding_m, min_edge_m=cfg.min_edge_m,
@@ -108,8 +102,7 @@ def run(args) -> int:
         atomic_write_json(paths["manifest.json"], manifest)
     q = model.quality
     if args.json:
-        json.dump(q, sys.stdout, indent=2)
-        sys.stdout.write("\n")
+        print_json(q)
     else:
         print(f"{model.n_blocks} blocks ({', '.join(f'{k}: {v}' for k, v in q['n_blocks_by_region'].items())}), "
               f"{model.n_contacts} contacts; area balance {q['area_balance']['relative_error']:.2e}; "

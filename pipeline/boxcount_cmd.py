@@ -10,13 +10,13 @@ stdout. Settings come from ``--config`` (its ``[fractal]`` section), then the fl
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from pathlib import Path
 
 from .errors import InputError
-from .outputs import output_folder
+from .inputs import read_polygon_file, read_trace_file
+from .outputs import output_folder, print_json
 
 __all__ = ["add_parser", "run", "TRACE_SUFFIXES", "IMAGE_SUFFIXES"]
 
@@ -100,17 +100,10 @@ def _resolve_settings(args, image_side: int | None):
 def _load_input(path: Path):
     """('traces', TraceMap) or ('image', ndarray), by suffix; unreadable files are bad input."""
     suffix = path.suffix.lower()
-    try:
-        if suffix in TRACE_SUFFIXES:
-            from .dfn import read_traces
-
-            return "traces", read_traces(path)
-        if suffix in IMAGE_SUFFIXES:
-            from .fractal import read_image
-
-            return "image", read_image(path)
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read: {exc.strerror or exc}") from exc
+    if suffix in TRACE_SUFFIXES:
+        return "traces", read_trace_file(path)
+    if suffix in IMAGE_SUFFIXES:
+        return "image", _read_image_file(path, "input")
     raise InputError(f"{path}: unknown file type {suffix or '(none)'}; expected traces "
                      f"({', '.join(TRACE_SUFFIXES)}) or an image ({', '.join(IMAGE_SUFFIXES)})")
 
@@ -120,20 +113,18 @@ def _load_mask(spec: str, kind: str):
         return "auto"
     if spec == "none":
         return None
-    path = Path(spec)
+    if kind == "image":
+        return _read_image_file(Path(spec), "--mask")
+    return read_polygon_file(spec, "--mask")
+
+
+def _read_image_file(path: Path, what: str):
+    from .fractal import read_image
+
     try:
-        if kind == "image":
-            from .fractal import read_image
-
-            return read_image(path)
-        from .dfn import read_traces
-
-        window = read_traces(path).window_xy_m
+        return read_image(path)
     except OSError as exc:
-        raise InputError(f"{path}: cannot read the --mask file: {exc.strerror or exc}") from exc
-    if window is None:
-        raise ValueError(f"{path}: --mask file holds no polygon (a GeoJSON Polygon feature is expected)")
-    return window
+        raise InputError(f"{path}: cannot read the {what} image: {exc.strerror or exc}") from exc
 
 
 def compute(args) -> tuple[dict, object, dict]:
@@ -208,8 +199,7 @@ def run(args) -> int:
             mf = stack.enter_context(atomic_path(out / "manifest.json"))
             atomic_write_json(mf, manifest)
     if args.json:
-        json.dump(document, sys.stdout, indent=2)
-        sys.stdout.write("\n")
+        print_json(document)
     else:
         print(summary_line(result))
         for note in result.notes:

@@ -14,14 +14,15 @@ pixels and labelled so, with a warning.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 import warnings
 from pathlib import Path
 
 from .errors import InputError
-from .outputs import output_folder
+from .inputs import read_polygon_file
+from .outputs import output_folder, print_json
+from .traces_cmd import dimension_entry
 
 __all__ = ["add_parser", "run", "compute"]
 
@@ -59,18 +60,6 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     return p
 
 
-def _read_polygon(path: str, what: str):
-    from .dfn import read_traces
-
-    try:
-        ring = read_traces(path).window_xy_m
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read the {what} file: {exc.strerror or exc}") from exc
-    if ring is None:
-        raise InputError(f"{path}: the {what} file holds no polygon (a GeoJSON Polygon is expected)")
-    return ring
-
-
 def _settings(args):
     from .config import ImagingConfig, load_config
 
@@ -87,7 +76,8 @@ def _settings(args):
 
 
 def compute(args):
-    """Extract and analyse; return (summary, extraction, image, set ids, timings)."""
+    """Extract and analyse; return (summary, extraction, traces with sets, image, set ids, timings,
+    settings used)."""
     import dataclasses
 
     import numpy as np
@@ -109,9 +99,9 @@ def compute(args):
         raise InputError(f"{path}: {exc}") from None
     roi = None
     if args.roi:
-        roi = {"uv_m": _read_polygon(args.roi, "--roi")}
+        roi = {"uv_m": read_polygon_file(args.roi, "--roi")}
     elif args.roi_px:
-        roi = {"rc_px": _read_polygon(args.roi_px, "--roi-px")[:, ::-1]}
+        roi = {"rc_px": read_polygon_file(args.roi_px, "--roi-px")[:, ::-1]}
     control = None
     if args.control_points:
         r1, c1, r2, c2, distance = args.control_points
@@ -137,9 +127,7 @@ def compute(args):
         stats = trace_map_statistics(traces, n_sets=args.n_sets, length_unit=unit)
         set_ids = np.asarray(stats["traces"]["set"], dtype=np.int64)
         dimension = box_count(traces)
-        stats["Box-counting Dimension"] = {
-            "value": dimension.dimension, "unit": "-", "ci95": list(dimension.ci95),
-            "r2": dimension.r2, "fit_range_px": list(dimension.fit_range_px), "grid": dimension.grid}
+        stats["Box-counting Dimension"] = dimension_entry(dimension)
         summary["statistics"] = stats
     else:
         summary["statistics"] = None
@@ -147,7 +135,7 @@ def compute(args):
     attributes = {**traces.attributes, "set": set_ids}
     traces = dataclasses.replace(traces, attributes=attributes)
     timings = {"read_s": t1 - t0, "extract_s": t2 - t1, "analyse_s": time.perf_counter() - t2}
-    return summary, result, traces, image, set_ids, timings
+    return summary, result, traces, image, set_ids, timings, settings
 
 
 def run(args) -> int:
@@ -156,7 +144,7 @@ def run(args) -> int:
 
     import numpy as np
 
-    summary, result, traces, image, set_ids, timings = compute(args)
+    summary, result, traces, image, set_ids, timings, settings = compute(args)
     from .atomic import atomic_path, atomic_write_json
     from .dfn import write_traces
     from .dfn.plots import rose_diagram
@@ -182,10 +170,9 @@ def run(args) -> int:
         atomic_write_json(paths["summary.json"], summary)
         atomic_write_json(paths["manifest.json"], build_manifest(
             command=args.argv, inputs=[args.photo] + [p for p in (args.roi, args.roi_px, args.config) if p],
-            config={"imaging": _settings(args)}, timings_s=timings))
+            config={"imaging": settings}, timings_s=timings))
     if args.json:
-        json.dump(summary, sys.stdout, indent=2)
-        sys.stdout.write("\n")
+        print_json(summary)
     else:
         from .traces_cmd import summary_text
 

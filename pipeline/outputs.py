@@ -15,7 +15,7 @@ from pathlib import Path
 
 from .errors import RunError
 
-__all__ = ["output_folder"]
+__all__ = ["output_folder", "print_json"]
 
 
 @contextlib.contextmanager
@@ -32,3 +32,12 @@ def output_folder(path) -> Iterator[Path]:
                 folder.rmdir()  # only succeeds when nothing was left in it
         where = exc.filename or folder
         raise RunError(f"{where}: cannot write the outputs: {exc.strerror or exc}") from exc
+
+
+def print_json(document) -> None:
+    """Write a JSON document to stdout (``--json``): strict JSON, no NaN, indented."""
+    import json
+    import sys
+
+    json.dump(document, sys.stdout, indent=2, allow_nan=False)
+    sys.stdout.write("\n")

@@ -13,13 +13,11 @@ none. ``--json`` prints the summary to stdout.
 from __future__ import annotations
 
 import argparse
-import json
-import sys
 import time
 from pathlib import Path
 
 from .errors import InputError
-from .outputs import output_folder
+from .outputs import output_folder, print_json
 
 __all__ = ["add_parser", "run", "compute"]
 
@@ -143,8 +141,7 @@ def run(args) -> int:
                 seeds={"sets": args.seed}, timings_s=timings)
             atomic_write_json(paths["manifest.json"], manifest)
     if args.json:
-        json.dump(summary, sys.stdout, indent=2, allow_nan=False)
-        sys.stdout.write("\n")
+        print_json(summary)
     else:
         print(summary_text(summary))
     return 0

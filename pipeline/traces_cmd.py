@@ -11,13 +11,12 @@ and ``manifest.json`` — all of them or none. ``--json`` prints the summary to 
 from __future__ import annotations
 
 import argparse
-import json
-import sys
 import time
 from pathlib import Path
 
 from .errors import InputError
-from .outputs import output_folder
+from .inputs import read_polygon_file, read_trace_file
+from .outputs import output_folder, print_json
 
 __all__ = ["add_parser", "run", "compute"]
 
@@ -41,26 +40,21 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     return p
 
 
-def _read_area(path: str):
-    from .dfn import read_traces
-
-    window = read_traces(path).window_xy_m
-    if window is None:
-        raise ValueError(f"{path}: --area file holds no polygon (a GeoJSON Polygon feature is expected)")
-    return window
+def dimension_entry(result) -> dict:
+    """The "Box-counting Dimension" entry of a summary, from a :class:`~rockmass.fractal.BoxCount`."""
+    return {"value": result.dimension, "unit": "-", "ci95": list(result.ci95), "r2": result.r2,
+            "fit_range_px": list(result.fit_range_px), "grid": result.grid, "method": result.method,
+            "offsets_min": result.offset_range[0], "offsets_max": result.offset_range[1]}
 
 
 def compute(args):
     """Read and analyse; return (summary dict, trace map, timings)."""
-    from .dfn import read_traces, trace_map_statistics
+    from .dfn import trace_map_statistics
     from .fractal import box_count
 
     t0 = time.perf_counter()
-    try:
-        trace_map = read_traces(Path(args.file))
-        window = _read_area(args.area) if args.area else None
-    except OSError as exc:
-        raise InputError(f"{exc.filename or args.file}: cannot read: {exc.strerror or exc}") from exc
+    trace_map = read_trace_file(Path(args.file))
+    window = read_polygon_file(args.area, "--area") if args.area else None
     if trace_map.n_traces == 0:
         raise InputError(f"{args.file}: the map holds no traces")
     if window is not None:
@@ -71,11 +65,7 @@ def compute(args):
     t2 = time.perf_counter()
     dimension = box_count(trace_map)  # the map's window (if any) is the face mask
     t3 = time.perf_counter()
-    summary["Box-counting Dimension"] = {
-        "value": dimension.dimension, "unit": "-", "ci95": list(dimension.ci95), "r2": dimension.r2,
-        "fit_range_px": list(dimension.fit_range_px), "grid": dimension.grid,
-        "method": dimension.method, "offsets_min": dimension.offset_range[0],
-        "offsets_max": dimension.offset_range[1]}
+    summary["Box-counting Dimension"] = dimension_entry(dimension)
     summary["input"] = {"path": str(args.file), "n_traces": int(trace_map.n_traces),
                         "frame": trace_map.frame, "crs": trace_map.crs}
     timings = {"read_s": t1 - t0, "statistics_s": t2 - t1, "box_count_s": t3 - t2}
@@ -130,8 +120,7 @@ def run(args) -> int:
                 timings_s=timings)
             atomic_write_json(paths["manifest.json"], manifest)
     if args.json:
-        json.dump(summary, sys.stdout, indent=2)
-        sys.stdout.write("\n")
+        print_json(summary)
     else:
         print(summary_text(summary))
     return 0
