@@ -2,7 +2,8 @@
 
 Writes under ``--out``: ``blocks.json`` (blocks, contacts, quality report; read back with
 :func:`rockmass.blockgen.read_json`), ``blocks.vtu`` (polygons with block id, region and set),
-``blocks.png`` and ``manifest.json`` — all of them or none. Everything is computed (and the model's
+``blocks.png`` and ``manifest.json`` — all of them or none. The config file may hold other stage
+sections as well (:class:`rockmass.config.RockmassConfig`); every section is validated. Everything is computed (and the model's
 invariants checked) before the first file is written. ``--json`` prints the quality report.
 """
 
@@ -12,7 +13,7 @@ import argparse
 import re
 import time
 
-from .errors import InputError, RunError
+from .errors import ConfigError, InputError, RunError
 from .inputs import read_trace_file
 from .outputs import output_folder, print_json
 
@@ -47,10 +48,13 @@ def compute(args):
     """Load, validate and build; return (document, model, invariants, timings)."""
     from .blockgen import build, check_model
     from .config import load_config
-    from .blocks_config import BlocksDocument
 
     t0 = time.perf_counter()
-    document = load_config(args.config, model=BlocksDocument)
+    # the whole document is validated (a file may hold other stages too); this command reads [blocks]
+    document = load_config(args.config)
+    if document.blocks is None:
+        raise ConfigError(args.config, [("blocks", "required section is missing (rockmass blocks "
+                                                   "reads the [blocks] section)")])
     cfg = document.blocks
     traces = None
     path = cfg.traces_path(args.config)

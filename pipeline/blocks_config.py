@@ -18,8 +18,9 @@ Example::
     radius_m = 0.076
 
 ``[blocks.two_sets]`` (``alpha_deg``, ``theta_deg``, ``spacing_m``) is the seed-000 parametrisation:
-set 1 at α from the horizontal, set 2 at α + θ. Hook into :class:`rockmass.config.RockmassConfig` with
-``blocks: BlocksConfig | None = None``; :class:`BlocksDocument` is the top level for ``rockmass blocks``.
+set 1 at α from the horizontal, set 2 at α + θ. The section is the ``blocks`` field of
+:class:`rockmass.config.RockmassConfig` (what ``rockmass blocks`` loads, so one file can hold several
+stages); :class:`BlocksDocument` is a top level with the ``[blocks]`` section only.
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from .config import StrictModel, field_problem
+from .strict import StrictModel, field_problem
 
 __all__ = ["BlocksConfig", "BlocksDocument", "DomainSection", "JointSetConfig", "TwoSetsConfig",
            "CircleConfig", "HorseshoeConfig", "ArchedCavernConfig", "RectangleConfig",

@@ -10,8 +10,13 @@ indices in brackets) and a message that says what was wrong, what is expected an
 
 Adding a section
 ----------------
-Define ``class DfnConfig(StrictModel): ...`` (in this module, or in a module imported here) and add
-one line to :class:`RockmassConfig`: ``dfn: DfnConfig | None = None``.
+Define ``class XyzConfig(StrictModel): ...`` in its own module ``xyz_config.py`` (importing
+:class:`StrictModel` and :func:`field_problem` from :mod:`rockmass.strict`, never from here) and add
+one line to :class:`RockmassConfig`: ``xyz: Stage("xyz_config", "XyzConfig") = None``.
+
+Stage sections (``[dfn]``, ``[blocks]``) are resolved lazily: their module is imported only when
+the document has that section, so ``import rockmass.config`` (and ``RockmassConfig()``) stays free
+of numpy. Validation and error messages are the same as for a section typed directly.
 
 Typing rules (why :class:`StrictModel` is strict)
 -------------------------------------------------
@@ -45,11 +50,11 @@ import typing
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
-from pydantic_core import InitErrorDetails, PydanticCustomError
+from pydantic import AfterValidator, BaseModel, Field, ValidationError, field_validator, model_validator
 
 from .atomic import to_jsonable
 from .errors import ConfigError
+from .strict import StrictModel, field_problem
 
 __all__ = [
     "StrictModel",
@@ -58,58 +63,10 @@ __all__ = [
     "load_config",
     "problems_from_validation_error",
     "field_problem",
+    "Stage",
     "canonical_json",
     "config_hash",
 ]
-
-
-class StrictModel(BaseModel):
-    """Base class of every config section: unknown keys forbidden, frozen, strict types.
-
-    ``extra="forbid"`` makes a misspelt key an error; ``frozen=True`` makes a loaded config immutable
-    (and hashable); ``validate_default=True`` checks defaults against the same bounds as user values;
-    ``strict=True`` and ``allow_inf_nan=False`` implement the typing rules in the module docstring.
-    """
-
-    model_config = ConfigDict(
-        extra="forbid",
-        frozen=True,
-        validate_default=True,
-        strict=True,
-        allow_inf_nan=False,
-    )
-
-
-def field_problem(
-    model: type[BaseModel] | BaseModel, field: str, message: str, value: Any
-) -> ValidationError:
-    """A validation error attached to ``field`` of ``model``, for cross-field checks.
-
-    Raise the returned error from a ``model_validator(mode="after")``: pydantic then reports it at the
-    field's own location (``fractal.range_px``) rather than at the section.
-
-    Parameters
-    ----------
-    model : pydantic model class or instance
-        The model being validated (used for the error title).
-    field : str
-        Name of the offending field in that model.
-    message : str
-        What is wrong and what is expected, including the bad value.
-    value : object
-        The offending value.
-
-    Returns
-    -------
-    pydantic.ValidationError
-    """
-    title = model.__name__ if isinstance(model, type) else type(model).__name__
-    detail = InitErrorDetails(
-        type=PydanticCustomError("rockmass_field", "{message}", {"message": message}),
-        loc=(field,),
-        input=value,
-    )
-    return ValidationError.from_exception_data(title, [detail])
 
 
 # ----------------------------------------------------------------------------------------- sections
@@ -204,8 +161,56 @@ class ImagingConfig(StrictModel):
         return value
 
 
+class _LazySection:
+    """Marker in ``Annotated[Any, _LazySection(...)]``: the section class ``rockmass.<module>.<name>``.
+
+    The class is imported on first use (:meth:`resolve`), i.e. when a document has the section or
+    when an error inside it is being described.
+    """
+
+    __slots__ = ("module", "name")
+
+    def __init__(self, module: str, name: str) -> None:
+        self.module = module
+        self.name = name
+
+    def resolve(self) -> type[BaseModel]:
+        import importlib
+
+        return getattr(importlib.import_module(f"{__package__}.{self.module}"), self.name)
+
+    def validate(self, value: Any) -> Any:
+        """``None`` passes; anything else is validated by the section class (errors keep their
+        location below the section, e.g. ``blocks.domain.width_m``)."""
+        return None if value is None else self.resolve().model_validate(value)
+
+    def __repr__(self) -> str:
+        return f"Stage({self.module!r}, {self.name!r})"
+
+
+def Stage(module: str, name: str) -> Any:  # noqa: N802 (reads as a type in a field annotation)
+    """Annotation of an optional stage section validated by ``rockmass.<module>.<name>``, imported lazily.
+
+    Examples
+    --------
+    >>> class Doc(StrictModel):
+    ...     blocks: Stage("blocks_config", "BlocksConfig") = None
+    >>> Doc().blocks is None
+    True
+    """
+    marker = _LazySection(module, name)
+    return Annotated[Any, marker, AfterValidator(marker.validate)]
+
+
+DFNSection = Stage("dfn_config", "DFNConfig")
+BlocksSection = Stage("blocks_config", "BlocksConfig")
+
+
 class RockmassConfig(StrictModel):
     """The whole configuration document. Every section is optional: a stage runs only if asked for.
+
+    One file can hold several stages; each command reads its own section (``rockmass dfn`` reads
+    ``[dfn]``, ``rockmass blocks`` reads ``[blocks]``).
 
     Parameters
     ----------
@@ -213,10 +218,16 @@ class RockmassConfig(StrictModel):
         ``[imaging]`` section.
     fractal : FractalConfig or None
         ``[fractal]`` section.
+    dfn : rockmass.dfn_config.DFNConfig or None
+        ``[dfn]`` section (disk fracture network generation).
+    blocks : rockmass.blocks_config.BlocksConfig or None
+        ``[blocks]`` section (block model of a 2D section).
     """
 
     imaging: ImagingConfig | None = None
     fractal: FractalConfig | None = None
+    dfn: DFNSection = None
+    blocks: BlocksSection = None
 
 
 # ------------------------------------------------------------------------------------------ loading
@@ -354,10 +365,19 @@ def _unwrap(annotation: Any) -> list[Any]:
     """The concrete types an annotation admits (Optional, unions and Annotated removed)."""
     origin = typing.get_origin(annotation)
     if origin is Annotated:
+        lazy = [m for m in annotation.__metadata__ if isinstance(m, _LazySection)]
+        if lazy:
+            return [lazy[0].resolve()]
         return _unwrap(typing.get_args(annotation)[0])
     if origin in (typing.Union, types.UnionType):
         return [t for arg in typing.get_args(annotation) for t in _unwrap(arg) if t is not type(None)]
     return [annotation]
+
+
+def _field_types(info: Any) -> list[Any]:
+    """Types a model field admits; a lazy stage section (:func:`Stage`) gives its section class."""
+    lazy = [m for m in info.metadata if isinstance(m, _LazySection)]
+    return [lazy[0].resolve()] if lazy else _unwrap(info.annotation)
 
 
 def _annotation_at(model: type[BaseModel], keys: list[str | int]) -> list[Any]:
@@ -369,7 +389,7 @@ def _annotation_at(model: type[BaseModel], keys: list[str | int]) -> list[Any]:
             if isinstance(ann, type) and issubclass(ann, BaseModel) and isinstance(key, str):
                 for name, info in ann.model_fields.items():
                     if key in (name, info.alias):
-                        following.extend(_unwrap(info.annotation))
+                        following.extend(_field_types(info))
             elif isinstance(key, int):
                 args = typing.get_args(ann)
                 origin = typing.get_origin(ann)
@@ -633,7 +653,8 @@ def config_hash(obj: Any) -> str:
 
     Examples
     --------
-    >>> config_hash(RockmassConfig()) == config_hash({"imaging": None, "fractal": None})
+    >>> empty = {"imaging": None, "fractal": None, "dfn": None, "blocks": None}
+    >>> config_hash(RockmassConfig()) == config_hash(empty)
     True
     """
     return hashlib.sha256(canonical_json(obj).encode("utf-8")).hexdigest()

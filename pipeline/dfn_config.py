@@ -36,7 +36,7 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field, model_validator
 
-from .config import StrictModel, field_problem
+from .strict import StrictModel, field_problem
 
 __all__ = ["DFNConfig", "DFNDocument", "DomainConfig", "FractureSetConfig"]
 
