@@ -27,6 +27,10 @@ Scanline surveys
     reading (:mod:`~rockmass.dfn.scanline`), 3D joint sets from poles (:mod:`~rockmass.dfn.sets3d`),
     P10, Terzaghi, spacing fits and RQD (:mod:`~rockmass.dfn.scanline_stats`). Figures:
     :mod:`rockmass.dfn.plots` (rose, trace map) and :mod:`rockmass.dfn.stereonet`.
+Fitting from field data and the closed loop
+    disk radius laws from censored trace lengths (:mod:`~rockmass.dfn.size_fit`), orientation, size
+    and P32 per set from scanlines and faces (:mod:`~rockmass.dfn.field_fit`), generate → sample →
+    re-fit → compare (:mod:`~rockmass.dfn.validation`).
 
 ``rockmass.dfn`` depends on numpy and shapely only: it never imports the pipeline package
 (``rockmass`` top-level modules) nor numba, matplotlib, OpenCV or scikit-image at import time.
@@ -62,6 +66,9 @@ if TYPE_CHECKING:
     from .scanline import Scanline, read_scanline
     from .sets3d import JointSets3D, fit_sets_3d
     from .scanline_stats import SpacingFit, fit_spacings, rqd_direct, rqd_priest_hudson, scanline_statistics
+    from .size_fit import CensoredTraces, SizeFit, censored_traces, fit_sizes, trace_length_functions
+    from .field_fit import FaceSurvey, FieldFit, FittedSet, assign_traces, fit_field
+    from .validation import ClosedLoop, closed_loop, virtual_face, virtual_scanline
 
 #: Public name -> the module that defines it.
 _SOURCES = {
@@ -170,6 +177,20 @@ _SOURCES = {
     "rqd_direct": "scanline_stats",
     "rqd_priest_hudson": "scanline_stats",
     "scanline_statistics": "scanline_stats",
+    "CensoredTraces": "size_fit",
+    "SizeFit": "size_fit",
+    "censored_traces": "size_fit",
+    "fit_sizes": "size_fit",
+    "trace_length_functions": "size_fit",
+    "FaceSurvey": "field_fit",
+    "FieldFit": "field_fit",
+    "FittedSet": "field_fit",
+    "assign_traces": "field_fit",
+    "fit_field": "field_fit",
+    "ClosedLoop": "validation",
+    "closed_loop": "validation",
+    "virtual_face": "validation",
+    "virtual_scanline": "validation",
 }
 
 __all__ = list(_SOURCES)
