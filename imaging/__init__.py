@@ -2,7 +2,8 @@
 
 - :func:`extract` — the chain of REFERENCE.md §2: illumination flattening, multi-scale ridge filter
   for dark lines, hysteresis threshold, cleanup, skeleton graph, spur pruning, X-node repair, gap
-  bridging, simplified polylines in metres; every setting in :class:`ExtractParams`.
+  bridging, linking of pieces that continue one another (:mod:`~rockmass.imaging.link`),
+  simplified polylines in metres; every setting in :class:`ExtractParams`.
 - :mod:`~rockmass.imaging.metrics` — accuracy against ground truth (buffered F1, P21 / P20, set
   angles, D_box, nodes).
 - :mod:`~rockmass.imaging.synthetic` — synthetic face photographs with known traces (easy /
@@ -14,6 +15,7 @@
 from .enhance import flatten_illumination, read_photo, to_grey
 from .extract import ExtractParams, Extraction, ScaleInfo, extract, scale_from_control_points
 from .frame import rc_to_uv, uv_to_rc
+from .link import extend_to_border, link_traces
 from .metrics import Accuracy, buffered_match, count_nodes, set_mean_angles, trace_accuracy
 from .ridges import ridge_response, ridge_sigmas
 from .segment import robust_thresholds, roi_mask, segment_ridges
@@ -29,7 +31,7 @@ __all__ = [
     "ridge_response", "ridge_sigmas",
     "segment_ridges", "roi_mask", "robust_thresholds",
     "SkeletonGraph", "skeletonize", "build_graph", "prune_spurs", "repair_crossings", "bridge_gaps",
-    "chain_traces",
+    "chain_traces", "link_traces", "extend_to_border",
     "to_trace_map", "axial_angle_deg", "simplify_polylines",
     "trace_accuracy", "Accuracy", "buffered_match", "count_nodes", "set_mean_angles",
     "rc_to_uv", "uv_to_rc",

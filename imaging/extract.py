@@ -12,7 +12,10 @@ ridges               Sato tubeness, σ from the joint width             :mod:`.r
 segment              hysteresis (median + k MAD), ROI, small objects   :mod:`.segment`
 skeleton, graph      Zhang–Suen, skan pixel graph                      :mod:`.skeleton_graph`
 prune, X, bridge     spurs, X crossings, gaps (distance and angle)     :mod:`.skeleton_graph`
-chain, vectorise     straight-through chaining, Douglas–Peucker, m     :mod:`.vectorize`
+chain                straight-through chaining at junctions            :mod:`.skeleton_graph`
+link, border         join pieces that continue one another (gaps,       :mod:`.link`
+                     crossings left as two Y nodes); ends to the border
+vectorise            Douglas–Peucker, metres on the face frame          :mod:`.vectorize`
 ===================  ================================================  ===========================
 
 Pixel-valued parameters in :class:`ExtractParams` are in pixels of the *working* image (the image
@@ -91,8 +94,27 @@ class ExtractParams:
         Both end tangents must lie within this angle of the gap direction.
     tangent_skip_px, tangent_reach_px : float, default 2.0, 12.0
         Branch directions are measured between these arc lengths from the branch end.
+    link_gap_px : float, default 50.0
+        After chaining, two trace ends up to this far apart are joined when the pieces continue one
+        another (:func:`rockmass.imaging.link.link_traces`): across hidden stretches longer than
+        ``bridge_distance_px``, and through crossings the skeleton left as two Y nodes. 0 turns
+        linking off. Tuned (seeds 100-102): moderate dP20 +27 % -> -2 %, node-count error 0.48 ->
+        0.21, F1 and dP21 unchanged or better; 40 px leaves more long gaps open, 80 px gains
+        nothing more.
+    link_turn_deg : float, default 15.0
+        The two end tangents must be anti-parallel within this angle.
+    link_offset_px : float, default 5.0
+        Largest sideways offset between the two pieces' tangent lines (3 px misses wiggly traces
+        across long gaps: moderate dP20 +7 %; 6 px gains nothing more).
+    link_skip_px, link_reach_px : float, default 6.0, 25.0
+        End tangents for linking are measured between these arc lengths from each end: past the
+        hook a skeleton end makes into a junction or a gap's rounded edge (2 / 12 px: dP20 +7 %).
+    border_extend_px : float, default 12.0
+        Trace ends that stop within this distance of the image border, pointing at it (within
+        45° of its normal), are extended to it (the ridge filter fades near the border); 0 turns
+        this off.
     min_trace_length_px : float, default 20.0
-        Traces shorter than this are dropped.
+        Traces shorter than this (after linking) are dropped.
     simplify_tolerance_px : float, default 1.0
         Douglas–Peucker tolerance.
     """
@@ -116,6 +138,12 @@ class ExtractParams:
     bridge_angle_deg: float = 20.0
     tangent_skip_px: float = 2.0
     tangent_reach_px: float = 12.0
+    link_gap_px: float = 50.0
+    link_turn_deg: float = 15.0
+    link_offset_px: float = 5.0
+    link_skip_px: float = 6.0
+    link_reach_px: float = 25.0
+    border_extend_px: float = 12.0
     min_trace_length_px: float = 20.0
     simplify_tolerance_px: float = 1.0
 
@@ -123,9 +151,10 @@ class ExtractParams:
         if self.line_polarity not in ("dark", "bright"):
             raise ValueError(f"params.line_polarity must be 'dark' or 'bright', got {self.line_polarity!r}")
         positive = ("max_megapixels", "background_sigma_px", "scale_spread", "min_sigma_px",
-                    "tangent_reach_px", "clahe_clip_limit")
+                    "tangent_reach_px", "clahe_clip_limit", "link_reach_px")
         non_negative = ("low_k", "high_k", "spur_length_px", "crossing_link_px", "bridge_distance_px",
-                        "tangent_skip_px", "min_trace_length_px", "simplify_tolerance_px")
+                        "tangent_skip_px", "min_trace_length_px", "simplify_tolerance_px",
+                        "link_gap_px", "link_offset_px", "link_skip_px", "border_extend_px")
         for name in positive:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and value > 0 and not np.isnan(value)):
@@ -134,7 +163,7 @@ class ExtractParams:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and np.isfinite(value) and value >= 0):
                 raise ValueError(f"params.{name} must be a finite number >= 0, got {value!r}")
-        for name in ("max_turn_deg", "bridge_angle_deg"):
+        for name in ("max_turn_deg", "bridge_angle_deg", "link_turn_deg"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and 0 <= value <= 90):
                 raise ValueError(f"params.{name} must be an angle in 0-90 degrees, got {value!r}")
@@ -366,7 +395,7 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     """
     import cv2
 
-    from . import enhance, ridges, segment, skeleton_graph, vectorize
+    from . import enhance, link, ridges, segment, skeleton_graph, vectorize
 
     params = ExtractParams() if params is None else params
     if not isinstance(params, ExtractParams):
@@ -461,9 +490,17 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     bridged = skeleton_graph.bridge_gaps(repaired, max_distance_px=params.bridge_distance_px,
                                          max_angle_deg=params.bridge_angle_deg, **tangent)
     clock.lap("bridge")
-    chains = skeleton_graph.chain_traces(bridged, max_turn_deg=params.max_turn_deg,
-                                         min_length_px=params.min_trace_length_px, **tangent)
+    chains = skeleton_graph.chain_traces(bridged, max_turn_deg=params.max_turn_deg, **tangent)
     clock.lap("chain")
+    chains = link.link_traces(chains, max_gap_px=params.link_gap_px,
+                              max_turn_deg=params.link_turn_deg, max_offset_px=params.link_offset_px,
+                              max_overlap_px=max(width_work, 1.0), skip_px=params.link_skip_px,
+                              reach_px=params.link_reach_px)
+    if params.border_extend_px > 0:
+        chains = link.extend_to_border(chains, work_shape, max_distance_px=params.border_extend_px,
+                                       skip_px=params.link_skip_px, reach_px=params.link_reach_px)
+    chains = [c for c in chains if link.polyline_length_px(c) >= params.min_trace_length_px]
+    clock.lap("link")
     chains_in = [np.column_stack([(c[:, 0] + 0.5) / row_factor - 0.5,
                                   (c[:, 1] + 0.5) / col_factor - 0.5]) for c in chains]
     traces = vectorize.to_trace_map(chains_in, height_px=h, m_per_px=scale, window_uv_m=window,

@@ -411,13 +411,15 @@ def repair_crossings(graph: SkeletonGraph, *, max_link_px: float, max_turn_deg: 
         others = [e for e in table[a] + table[b] if e[0] != link]
         if len(others) != 4 or len({e[0] for e in others}) != 4:
             continue
-        dirs = [dir_of[e] for e in others]
-        pairs = _best_pairing(dirs, max_turn_deg)
-        if len(pairs) != 2:
+        # each straight line must cross the link: one branch from each Y node; of the two ways
+        # to pair them so, take the straighter and accept it when both lines turn little
+        at_a = [dir_of[e] for e in others if e in table[a]]
+        at_b = [dir_of[e] for e in others if e not in table[a]]
+        if len(at_a) != 2:
             continue
-        # each straight line must cross the link: one branch from each Y node
-        side_of = [0 if e in table[a] else 1 for e in others]
-        if any(side_of[i] == side_of[j] for i, j in pairs):
+        turn = min(max(_deviation_deg(at_a[0], at_b[k]), _deviation_deg(at_a[1], at_b[1 - k]))
+                   for k in (0, 1))
+        if turn > max_turn_deg:
             continue
         work.alive[link] = False
         work.nodes[a] = 0.5 * (work.nodes[a] + work.nodes[b])
