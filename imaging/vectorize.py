@@ -51,6 +51,11 @@ def simplify_polylines(polylines_rc_px, tolerance_px: float) -> list[np.ndarray]
 def axial_angle_deg(trace_map) -> np.ndarray:
     r"""Orientation of each trace, 0–180° counter-clockwise from +x (u on a face), length-weighted.
 
+    The angle every trace-map statistic uses, :func:`rockmass.dfn.sets2d.trace_angles_deg` with
+    ``method="segments"``: :math:`\theta = \tfrac12 \arg \sum_j \ell_j e^{2 i \phi_j}` over the pieces
+    j of the trace (length :math:`\ell_j`, direction :math:`\phi_j`), so a straight trace gets its
+    direction and a wiggly one its overall trend.
+
     Parameters
     ----------
     trace_map : TraceMap
@@ -58,10 +63,7 @@ def axial_angle_deg(trace_map) -> np.ndarray:
     Returns
     -------
     (n_traces,) float64 ndarray
-        :math:`\theta = \tfrac12 \operatorname{atan2}(\sum_j \ell_j \sin 2\phi_j,
-        \sum_j \ell_j \cos 2\phi_j) \bmod 180°` over the pieces j of the trace (length
-        :math:`\ell_j`, direction :math:`\phi_j`): the axial mean, so a straight trace gets its
-        direction and a wiggly one its overall trend. NaN for a zero-length trace.
+        Degrees in [0, 180); NaN only for a trace without a direction (zero length).
 
     Examples
     --------
@@ -69,16 +71,9 @@ def axial_angle_deg(trace_map) -> np.ndarray:
     >>> axial_angle_deg(TraceMap.from_segments([[0, 0, 1, 1], [0, 0, -1, 0]])).tolist()
     [45.0, 0.0]
     """
-    seg = trace_map.segments()
-    dx, dy = seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]
-    length = np.hypot(dx, dy)
-    phi2 = 2.0 * np.arctan2(dy, dx)
-    index = trace_map.segment_trace_index()
-    c = np.bincount(index, weights=length * np.cos(phi2), minlength=trace_map.n_traces)
-    s = np.bincount(index, weights=length * np.sin(phi2), minlength=trace_map.n_traces)
-    angle = np.degrees(0.5 * np.arctan2(s, c)) % 180.0
-    angle[np.hypot(c, s) == 0] = np.nan
-    return np.round(angle, 12) % 180.0
+    from ..dfn.sets2d import trace_angles_deg
+
+    return trace_angles_deg(trace_map, method="segments")
 
 
 def image_window_uv_m(shape_px, m_per_px: float) -> np.ndarray:
