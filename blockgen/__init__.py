@@ -7,6 +7,8 @@ Public names
     (:mod:`rockmass.blockgen.builder`).
 :class:`BlockModel`, :data:`CONTACT_KINDS`, :func:`polygon_properties`
     The model handed to the DEM (:mod:`rockmass.blockgen.model`).
+:class:`Cracks`, :data:`CRACK_PATTERNS`, :data:`SOURCE_CRACK`
+    Potential-crack subdivision of intact blocks (:mod:`rockmass.blockgen.cracks`).
 :class:`JointSet`
     UDEC-style joint set (:mod:`rockmass.blockgen.joints`).
 :class:`Excavation`, :func:`circle`, :func:`horseshoe`, :func:`arched_cavern`, :func:`rectangle`,
@@ -25,17 +27,19 @@ Public names
 from .blockio import from_json_dict, read_json, to_json_dict, write_json, write_vtu
 from .builder import DANGLING_CHOICES, build
 from .checks import check_model
+from .cracks import CRACK_PATTERNS, Cracks
 from .excavations import (DEFAULT_CIRCLE_SIDES, Excavation, arched_cavern, circle,
                           circle_perimeter_m, horseshoe, polygon_excavation, rectangle)
 from .joints import SPACING_DISTRIBUTIONS, JointSet
-from .model import CONTACT_KINDS, BlockModel, polygon_properties
+from .model import CONTACT_KINDS, SOURCE_CONVEX_CUT, SOURCE_CRACK, BlockModel, polygon_properties
 from .tolerances import Tolerances, model_tolerances
 
 __all__ = ["build", "DANGLING_CHOICES", "BlockModel", "CONTACT_KINDS", "polygon_properties",
            "JointSet", "SPACING_DISTRIBUTIONS", "Excavation", "circle", "horseshoe", "arched_cavern",
            "rectangle", "polygon_excavation", "circle_perimeter_m", "DEFAULT_CIRCLE_SIDES",
            "Tolerances", "model_tolerances", "check_model", "to_json_dict", "from_json_dict",
-           "write_json", "read_json", "write_vtu", "plot_blocks"]
+           "write_json", "read_json", "write_vtu", "plot_blocks", "Cracks", "CRACK_PATTERNS",
+           "SOURCE_CONVEX_CUT", "SOURCE_CRACK"]
 
 
 def __getattr__(name):  # matplotlib only when a plot is drawn

@@ -19,7 +19,14 @@ Steps (each change is listed in ``model.quality``, nothing is moved silently):
    edges and both blocks are reported.
 6. **Convex decomposition** of concave blocks by bisector cuts (:mod:`rockmass.blockgen.convex`),
    the cuts becoming glued contacts (source ``-2``); reported per block.
-7. **Contacts**: block edges matched by coordinates; consecutive edges of one pair and label are
+7. **Potential cracks** (optional, ``cracks``): the chosen convex rock blocks are subdivided into
+   convex sub-blocks (Voronoi or triangular, :mod:`rockmass.blockgen.cracks`) whose internal edges
+   are glued contacts with source ``-3`` (:data:`~rockmass.blockgen.model.SOURCE_CRACK`); counts
+   in ``quality["cracks"]``.
+8. **Short edges** (``snap_edges``): a block edge shorter than the minimum edge ``2d`` collapses
+   onto one node in all the blocks that use it, if they stay convex and every region keeps its area
+   (:mod:`rockmass.blockgen.snapping`); each collapse is listed in ``quality["edges_snapped"]``.
+9. **Contacts**: block edges matched by coordinates; consecutive edges of one pair and label are
    summed into one contact.
 """
 
@@ -31,13 +38,15 @@ import numpy as np
 import shapely
 
 from .convex import convex_cuts, reflex_vertices
+from .cracks import Cracks, crack_segments, select_parents
 from .excavations import Excavation, _as_ring
 from .joints import JointSet, set_segments
 from .model import (CONTACT_KINDS, KIND_DOMAIN, KIND_EXCAVATION, KIND_GLUED, KIND_JOINT, KIND_TRACE,
-                    SOURCE_CONVEX_CUT, BlockModel)
+                    SOURCE_CONVEX_CUT, SOURCE_CRACK, BlockModel)
 from .network import (Sources, dangling_extensions, label_segments, node, polygonize_segments,
                       ring_segments, segment_keys, snap_to_grid, collapse_short)
-from .tolerances import model_tolerances
+from .snapping import snap_short_edges
+from .tolerances import CRACK_EDGE_FRACTION, model_tolerances
 
 __all__ = ["build", "DANGLING_CHOICES"]
 
@@ -158,7 +167,8 @@ def _regions(faces, excavations):
 
 
 def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="glued", seed=0,
-          rounding_m=None, min_edge_m=None, merge_slivers=True, convex=True) -> BlockModel:
+          rounding_m=None, min_edge_m=None, merge_slivers=True, convex=True,
+          cracks: Cracks | None = None, snap_edges: bool = True) -> BlockModel:
     """Cut a 2D domain into blocks.
 
     Parameters
@@ -179,6 +189,11 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
         The solver's corner rounding d (default 1 % of the median edge) and minimum edge (default 2d).
     merge_slivers, convex : bool, default True
         Run steps 5 and 6 of the module docstring.
+    cracks : Cracks, optional
+        Subdivide intact blocks by potential cracks (step 7); needs ``convex=True``. The cracks
+        draw from child ``len(joint_sets)`` of ``SeedSequence(seed)``.
+    snap_edges : bool, default True
+        Collapse block edges shorter than ``min_edge_m`` (step 8, :mod:`rockmass.blockgen.snapping`).
 
     Returns
     -------
@@ -250,8 +265,16 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
         n_traces_in = int(len(np.unique(src)))
         sources.add(segs, KIND_TRACE, src)
         all_segs.append(segs)
-    if not joint_sets and traces is None and not excavations:
+    if not joint_sets and traces is None and not excavations and cracks is None:
         raise ValueError("joint_sets, traces or excavations: nothing cuts the domain")
+    if cracks is not None:
+        if not isinstance(cracks, Cracks):
+            raise TypeError(f"cracks must be a Cracks, got {type(cracks).__name__}")
+        if not convex:
+            raise ValueError("cracks: the potential-crack subdivision needs convex=True (it cuts "
+                             "convex blocks into convex pieces)")
+        if cracks.within_m is not None and not excavations:
+            raise ValueError("cracks.within_m: the model has no excavations to measure from")
 
     report = {"dangling": {"rule": dangling}, "slivers_merged": [], "convex_splits": [],
               "snapped_cuts": 0,
@@ -293,6 +316,8 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
     # tolerances from the cut blocks
     edges = _ring_edges(faces)[0]
     typical = float(np.median(np.hypot(*(edges[:, 1] - edges[:, 0]).T)))
+    if cracks is not None:  # the solver's blocks will be the sub-blocks
+        typical = min(typical, CRACK_EDGE_FRACTION * cracks.size_m)
     tol = model_tolerances(size, typical, rounding_m, min_edge_m)
     width = 2 * shapely.area(faces) / shapely.length(faces)
     if tol.min_edge_m > np.median(width):
@@ -304,7 +329,7 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
     if merge_slivers:
         noded, faces, region = _merge_slivers(noded, faces, region, tol, report, excavations)
     # 6. convex decomposition
-    if convex:
+    def make_convex(noded, faces, region):
         # a cut of one face can end on a vertex shared with a neighbour and leave that neighbour
         # with a new reflex vertex: repeat until every face is convex (reported rounds)
         n_concave = int(_concave_mask(faces, tol.reflex_sin).sum())
@@ -314,11 +339,96 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
             noded, faces, region = _make_convex(noded, faces, region, tol, report, sources,
                                                 excavations, label_m, collapse)
             n_concave = int(_concave_mask(faces, tol.reflex_sin).sum())
-        report["convex_rounds"] = rounds
-        report["concave_blocks_left"] = int(_concave_mask(faces, tol.reflex_sin).sum())
+        report["convex_rounds"] = report.get("convex_rounds", 0) + rounds
+        report["concave_blocks_left"] = n_concave
+        return noded, faces, region
+
+    if convex:
+        noded, faces, region = make_convex(noded, faces, region)
+    # 7. potential cracks
+    if cracks is not None:
+        crack_seq = np.random.SeedSequence(root.entropy, spawn_key=(*root.spawn_key, len(joint_sets)))
+        noded, faces, region = _add_cracks(noded, faces, region, cracks, crack_seq, tol, report,
+                                           sources, excavations, collapse)
+        noded, faces, region = make_convex(noded, faces, region)
+    # 8. edges shorter than the minimum edge
+    if snap_edges:
+        kind, src = label_segments(noded, sources, label_m)
+        noded, kind, src, faces, region, moved, changes, left = snap_short_edges(
+            noded, kind, src, faces, region, tol.min_edge_m, tol.grid_m, tol.reflex_sin)
+        for (k, s_), idx in _groups(kind[moved], src[moved]):
+            sources.add(noded[moved][idx], k, s_, priority=_label_priority(k, s_))
+        report["edges_snapped"] = {
+            "rule": "block edges shorter than min_edge_m collapse onto one node in every block "
+                    "that uses it, when all those blocks stay convex and the area of each region "
+                    "is unchanged; domain and excavation outlines only slide along themselves "
+                    "(rockmass.blockgen.snapping)",
+            "count": len(changes), "not_snapped": int(left), "changes": changes}
+        if convex and changes:
+            noded, faces, region = make_convex(noded, faces, region)
     kind, src = label_segments(noded, sources, label_m)
-    return _assemble(faces, region, noded, kind, src, tol, report, domain_xy, excavations,
-                     set_names, domain, n_traces_in)
+    model = _assemble(faces, region, noded, kind, src, tol, report, domain_xy, excavations,
+                      set_names, domain, n_traces_in)
+    if cracks is not None:
+        _crack_summary(model, cracks)
+    return model
+
+
+def _groups(kind, src):
+    """((kind, source), indices) for each distinct label."""
+    table = np.column_stack([kind, src])
+    if not len(table):
+        return []
+    labels, inv = np.unique(table, axis=0, return_inverse=True)
+    inv = inv.ravel()
+    return [((int(k), int(s)), np.flatnonzero(inv == i)) for i, (k, s) in enumerate(labels)]
+
+
+def _label_priority(kind, source):
+    """The label priority of :mod:`rockmass.blockgen.network` for a (kind, source) pair."""
+    if kind in (KIND_DOMAIN, KIND_EXCAVATION):
+        return kind == KIND_EXCAVATION and 1 or 0
+    if kind == KIND_GLUED:
+        return {SOURCE_CONVEX_CUT: 4, SOURCE_CRACK: 5}.get(source, 3)
+    return 2
+
+
+def _add_cracks(noded, faces, region, cracks, seq, tol, report, sources, excavations, collapse):
+    parents = select_parents(faces, region, cracks, excavations)
+    segs, stats = crack_segments(faces, parents, cracks, np.random.default_rng(seq),
+                                 tol.sliver_width_m, tol.min_edge_m, 16 * tol.snap_m)
+    report["cracks"] = {
+        "rule": "convex sub-blocks of the selected intact blocks; internal edges are glued contacts "
+                "with contact_source -3 (potential cracks, intact-rock strength)",
+        "pattern": cracks.pattern, "size_m": float(cracks.size_m),
+        "target_area_m2": float(cracks.size_m) ** 2, **stats}
+    if not len(segs):
+        return noded, faces, region
+    segs = snap_to_grid(segs, tol.grid_m)
+    segs = segs[np.any(segs[:, 0] != segs[:, 1], axis=1)]
+    sources.add(segs, KIND_GLUED, SOURCE_CRACK, priority=5)
+    bseg = _ring_edges(faces[parents])[0]
+    touched = _rows_in(segment_keys(noded, tol.grid_m), segment_keys(bseg, tol.grid_m))
+    renoded = node(np.concatenate([noded[touched], segs]), tol.grid_m)
+    noded = collapse(np.concatenate([noded[~touched], renoded]))
+    faces = polygonize_segments(noded)
+    return noded, faces, _regions(faces, excavations)
+
+
+def _crack_summary(model, cracks):
+    """Counts of the finished model in ``quality["cracks"]``: crack contacts, their total length,
+    and the area of the blocks bounded by at least one crack (against the target ``size_m²``)."""
+    is_crack = (model.contact_kind == KIND_GLUED) & (model.contact_source == SOURCE_CRACK)
+    blocks = np.unique(model.contact_blocks[is_crack].ravel())
+    blocks = blocks[blocks >= 0]
+    area = model.area_m2[blocks]
+    summary = model.quality["cracks"]
+    summary["n_crack_contacts"] = int(is_crack.sum())
+    summary["crack_length_m"] = float(model.contact_length_m[is_crack].sum())
+    summary["n_crack_blocks"] = int(len(blocks))
+    if len(blocks):
+        summary["crack_block_area_m2"] = {"mean": float(area.mean()), "median": float(np.median(area)),
+                                          "min": float(area.min()), "max": float(area.max())}
 
 
 def _merge_slivers(noded, faces, region, tol, report, excavations):
@@ -472,8 +582,8 @@ def _assemble(faces, region, noded, kind, src, tol, report, domain_xy, excavatio
         "aspect_ratio": {"median": float(np.median(aspect)), "max": float(np.max(aspect))},
         "smallest_edge_m": float(edge_len.min()),
         "tiny_edges": {"count": int(len(tiny)), "rule": "edges shorter than min_edge_m that remain "
-                       "(collinear vertices shared with a neighbour, or joint intersections closer "
-                       "than min_edge_m) are listed, not moved",
+                       "(no collapse allowed by the snapping rule, see edges_snapped, or "
+                       "snap_edges off) are listed",
                        "blocks": sorted(set(block_of_vertex[tiny].tolist()))[:100]},
         "area_balance": {"domain_m2": float(domain_area), "blocks_m2": total,
                          "excavated_m2": excavated, "rock_m2": total - excavated,

@@ -5,7 +5,9 @@ Blocks are convex polygons (counter-clockwise, open rings) stored as one vertex 
 shared boundary; a contact with the domain boundary has ``blocks[:, 1] == -1``. Each contact has a
 ``kind`` (index into :data:`CONTACT_KINDS`) and a ``source``: the joint-set index for ``joint``, the
 trace index for ``trace``, the excavation stage (region) for ``excavation``, the set / trace index
-extended for ``glued`` (``-2`` for a convex-decomposition cut), ``-1`` for ``domain``.
+extended for ``glued`` (``-2`` = :data:`SOURCE_CONVEX_CUT` for a convex-decomposition cut, ``-3`` =
+:data:`SOURCE_CRACK` for a potential crack of the sub-block subdivision,
+:mod:`rockmass.blockgen.cracks`), ``-1`` for ``domain``.
 """
 
 from __future__ import annotations
@@ -15,11 +17,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = ["BlockModel", "CONTACT_KINDS", "KIND_JOINT", "KIND_TRACE", "KIND_GLUED",
-           "KIND_EXCAVATION", "KIND_DOMAIN", "SOURCE_CONVEX_CUT", "polygon_properties"]
+           "KIND_EXCAVATION", "KIND_DOMAIN", "SOURCE_CONVEX_CUT", "SOURCE_CRACK",
+           "polygon_properties"]
 
 CONTACT_KINDS = ("joint", "trace", "glued", "excavation", "domain")
 KIND_JOINT, KIND_TRACE, KIND_GLUED, KIND_EXCAVATION, KIND_DOMAIN = range(5)
 SOURCE_CONVEX_CUT = -2
+SOURCE_CRACK = -3
 
 
 def polygon_properties(xy_m: np.ndarray, offsets: np.ndarray):

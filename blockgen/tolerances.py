@@ -30,6 +30,12 @@ name                          value                       why
                                                           vertices left by noding (turn 0) stay convex.
 ``rounding_m``                ``0.01 ·`` median edge      the solver's corner rounding ``d``
                               (or given)                  (REFERENCE.md §5, UDEC's default ratio).
+                                                          With potential cracks of size ``s`` the
+                                                          typical edge is at most ``0.5 · s`` (the
+                                                          median edge of a Voronoi subdivision of
+                                                          cells of area s²; a regular hexagon of
+                                                          that area has side 0.62 s), since the
+                                                          solver's blocks are then the sub-blocks.
 ``min_edge_m``                ``2 · rounding_m``          the solver needs every edge >= 2d; a convex
                                                           cut ending nearer than this to a vertex is
                                                           snapped onto the vertex, and shorter edges
@@ -49,7 +55,7 @@ import math
 from dataclasses import asdict, dataclass
 
 __all__ = ["Tolerances", "model_tolerances", "ROUNDING_FRACTION", "SNAP_FRACTION", "GRID_FRACTION", "LABEL_FRACTION",
-           "REFLEX_SIN", "AREA_BALANCE_RTOL"]
+           "REFLEX_SIN", "AREA_BALANCE_RTOL", "CRACK_EDGE_FRACTION"]
 
 #: d / typical edge (REFERENCE.md §5).
 ROUNDING_FRACTION = 0.01
@@ -61,6 +67,8 @@ GRID_FRACTION = 1e-12
 LABEL_FRACTION = 1e-7
 #: sine of the turn below which (negated) a vertex is reflex.
 REFLEX_SIN = 1e-9
+#: typical edge / potential-crack size (an upper bound used for the rounding d with cracks).
+CRACK_EDGE_FRACTION = 0.5
 #: relative area balance accepted as exact.
 AREA_BALANCE_RTOL = 1e-9
 

@@ -66,7 +66,8 @@ def compute(args):
         t1 = time.perf_counter()
         model = build(cfg.domain.xy_m(), joint_sets, traces, excavations, dangling=cfg.dangling,
                       seed=cfg.seed, rounding_m=cfg.rounding_m, min_edge_m=cfg.min_edge_m,
-                      merge_slivers=cfg.merge_slivers, convex=cfg.convex)
+                      merge_slivers=cfg.merge_slivers, convex=cfg.convex, snap_edges=cfg.snap_edges,
+                      cracks=None if cfg.cracks is None else cfg.cracks.to_cracks())
     except InputError:
         raise
     except ValueError as exc:
@@ -101,7 +102,8 @@ def run(args) -> int:
         plot_blocks(model, paths["blocks.png"])
         manifest = build_manifest(command=args.argv, config=document, inputs=inputs,
                                   seeds={"root": document.blocks.seed,
-                                         "rule": "joint set i: SeedSequence(root).spawn(n)[i]"},
+                                         "rule": "joint set i: SeedSequence(root).spawn(n)[i]; "
+                                                 "cracks: child n"},
                                   timings_s=timings, extra={"invariants": invariants})
         atomic_write_json(paths["manifest.json"], manifest)
     q = model.quality
@@ -111,5 +113,8 @@ def run(args) -> int:
         print(f"{model.n_blocks} blocks ({', '.join(f'{k}: {v}' for k, v in q['n_blocks_by_region'].items())}), "
               f"{model.n_contacts} contacts; area balance {q['area_balance']['relative_error']:.2e}; "
               f"{len(q['slivers_merged'])} slivers merged, {len(q['convex_splits'])} concave blocks "
-              f"split; smallest edge {q['smallest_edge_m']:.3g} m")
+              f"split, {q['edges_snapped']['count'] if 'edges_snapped' in q else 0} short edges "
+              f"snapped; smallest edge {q['smallest_edge_m']:.3g} m"
+              + (f"; {q['cracks']['n_crack_contacts']} potential cracks in "
+                 f"{q['cracks']['n_subdivided']} blocks" if "cracks" in q else ""))
     return 0

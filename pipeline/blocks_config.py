@@ -17,6 +17,9 @@ Example::
     center_xy_m = [0.61, 0.305]
     radius_m = 0.076
 
+``[blocks.cracks]`` (``size_m``, ``pattern`` = "voronoi" or "triangular", ...) subdivides intact
+blocks by potential cracks (:class:`CracksConfig`).
+
 ``[blocks.two_sets]`` (``alpha_deg``, ``theta_deg``, ``spacing_m``) is the seed-000 parametrisation:
 set 1 at α from the horizontal, set 2 at α + θ. The section is the ``blocks`` field of
 :class:`rockmass.config.RockmassConfig` (what ``rockmass blocks`` loads, so one file can hold several
@@ -33,6 +36,7 @@ from pydantic import Field, model_validator
 from .strict import StrictModel, field_problem
 
 __all__ = ["BlocksConfig", "BlocksDocument", "DomainSection", "JointSetConfig", "TwoSetsConfig",
+           "CracksConfig",
            "CircleConfig", "HorseshoeConfig", "ArchedCavernConfig", "RectangleConfig",
            "PolygonConfig"]
 
@@ -196,6 +200,46 @@ class PolygonConfig(StrictModel):
         return polygon_excavation([tuple(p) for p in self.xy_m], self.name)
 
 
+class CracksConfig(StrictModel):
+    """``[blocks.cracks]``: potential cracks (:class:`rockmass.blockgen.Cracks`, same field names).
+
+    Intact blocks are subdivided into convex sub-blocks of area ≈ ``size_m²`` whose internal edges
+    are glued contacts (``contact_source`` -3) with intact-rock strength (seed 000, expanded DEM).
+
+    Parameters
+    ----------
+    size_m : float
+        Target sub-block size (> 0).
+    pattern : {"voronoi", "triangular"}, default "voronoi"
+    jitter : float, default 0.3
+        Voronoi seed displacement / lattice spacing, 0 <= jitter <= 0.5.
+    angle_deg : float, default 0
+        Orientation of the seed lattice or of the triangles.
+    within_m : float, optional
+        Only blocks within this distance of an excavation outline (>= 0).
+    zone_xy_m : list of [x, y], optional
+        Only blocks whose representative point lies inside this polygon.
+    include_excavated : bool, default false
+        Subdivide the blocks of excavation stages too.
+    """
+
+    size_m: Length
+    pattern: Literal["voronoi", "triangular"] = "voronoi"
+    jitter: float = Field(0.3, ge=0, le=0.5)
+    angle_deg: Angle = 0.0
+    within_m: float | None = Field(None, ge=0, le=1e6)
+    zone_xy_m: Annotated[list[Point], Field(min_length=3, max_length=10000)] | None = None
+    include_excavated: bool = False
+
+    def to_cracks(self):
+        from .blockgen import Cracks
+
+        zone = None if self.zone_xy_m is None else [tuple(p) for p in self.zone_xy_m]
+        return Cracks(size_m=self.size_m, pattern=self.pattern, jitter=self.jitter,
+                      angle_deg=self.angle_deg, within_m=self.within_m, zone_xy_m=zone,
+                      include_excavated=self.include_excavated)
+
+
 ExcavationConfig = Annotated[CircleConfig | HorseshoeConfig | ArchedCavernConfig | RectangleConfig
                              | PolygonConfig, Field(discriminator="shape")]
 
@@ -217,7 +261,10 @@ class BlocksConfig(StrictModel):
     seed : int, default 0 (0 <= seed < 2**63)
     rounding_m, min_edge_m : float, optional
         Solver corner rounding d and minimum edge (defaults: 1 % of the median edge, 2d).
-    merge_slivers, convex : bool, default true
+    merge_slivers, convex, snap_edges : bool, default true
+        Merge slivers, split concave blocks, collapse edges shorter than the minimum edge.
+    cracks : CracksConfig, optional
+        ``[blocks.cracks]``: subdivide intact blocks by potential cracks (needs ``convex``).
     """
 
     domain: DomainSection
@@ -231,15 +278,25 @@ class BlocksConfig(StrictModel):
     min_edge_m: Length | None = None
     merge_slivers: bool = True
     convex: bool = True
+    snap_edges: bool = True
+    cracks: CracksConfig | None = None
 
     @model_validator(mode="after")
     def _something_cuts(self):
-        if not self.sets and self.two_sets is None and self.traces is None and not self.excavations:
+        if (not self.sets and self.two_sets is None and self.traces is None and not self.excavations
+                and self.cracks is None):
             raise field_problem(self, "sets", "nothing cuts the domain: give sets, two_sets, traces "
                                 "or excavations", [])
         names = [e.name for e in self.excavations]
         if len(set(names)) != len(names):
             raise field_problem(self, "excavations", f"stage names must be unique, got {names}", names)
+        if self.cracks is not None and not self.convex:
+            raise field_problem(self, "cracks", "potential cracks subdivide convex blocks: set "
+                                "convex = true (or remove [blocks.cracks])", None)
+        if self.cracks is not None and self.cracks.within_m is not None and not self.excavations:
+            raise field_problem(self, "cracks", "within_m is measured from the excavations, but "
+                                "there are none (remove within_m or add [[blocks.excavations]])",
+                                self.cracks.within_m)
         return self
 
     def joint_sets(self):

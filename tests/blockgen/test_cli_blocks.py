@@ -3,6 +3,7 @@
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from rockmass.blockgen import check_model, read_json
@@ -12,7 +13,7 @@ SAMPLES = Path(__file__).resolve().parents[2] / "samples"
 
 
 @pytest.mark.parametrize("name", ["blocks_shaketable.toml", "blocks_cavern.toml",
-                                  "blocks_dfn_horseshoe.toml"])
+                                  "blocks_dfn_horseshoe.toml", "blocks_cavern_cracks.toml"])
 def test_sample_configs_build_models_that_pass_the_invariants(name, tmp_path, capsys):
     assert main(["blocks", str(SAMPLES / name), "--out", str(tmp_path)]) == 0
     names = sorted(p.name for p in tmp_path.iterdir())
@@ -87,3 +88,33 @@ def test_dfn_sample_labels_contacts_by_trace(tmp_path):
     kinds = set(model.contact_kind.tolist())
     assert {1, 2, 3, 4} <= kinds  # trace, glued (extended dangling ends), excavation, domain
     assert model.quality["dangling"]["n_extended"] > 0
+
+
+def test_cracks_sample_has_glued_crack_contacts_only_near_the_cavern(tmp_path, capsys):
+    from rockmass.blockgen import SOURCE_CRACK
+    from rockmass.blockgen.model import KIND_GLUED
+
+    assert main(["blocks", str(SAMPLES / "blocks_cavern_cracks.toml"), "--out", str(tmp_path)]) == 0
+    assert "potential cracks" in capsys.readouterr().out
+    model = read_json(tmp_path / "blocks.json")
+    crack = model.contact_source == SOURCE_CRACK
+    assert crack.sum() > 500 and (model.contact_kind[crack] == KIND_GLUED).all()
+    # every cracked block lies in a joint block (parallelogram of heights 6 and 8 m at 60°: sides
+    # 8/sin 60° and 6/sin 60°, diagonal < 16.2 m) within within_m = 20 m of the excavation (inside
+    # the 24 x 36 m box x in [-12, 12], y in [-20, 16])
+    c = model.centroid_xy_m[model.contact_blocks[crack].ravel()]
+    dx = np.maximum(np.abs(c[:, 0]) - 12, 0)
+    dy = np.maximum(np.maximum(c[:, 1] - 16, -20 - c[:, 1]), 0)
+    assert (np.hypot(dx, dy) < 20 + 16.2).all()
+
+
+@pytest.mark.parametrize("line, field", [("size_m = 0.0", "blocks.cracks.size_m"),
+                                         ("size_m = 1.0\njitter = 0.7", "blocks.cracks.jitter"),
+                                         ("size_m = 1.0\npattern = \"hex\"", "blocks.cracks.pattern"),
+                                         ("size_m = 1.0\nwithin_m = 1.0", "blocks.cracks")])
+def test_bad_crack_section_exits_2_naming_the_field(tmp_path, capsys, line, field):
+    path = _write(tmp_path, _BASE.format(spacing="0.25") + "[blocks.cracks]\n" + line + "\n")
+    assert main(["blocks", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert f"{field}:" in err
+    assert not (tmp_path / "out").exists()

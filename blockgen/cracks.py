@@ -1,0 +1,345 @@
+"""Potential cracks (expanded DEM, seed 000 §3.1): subdivide intact blocks into glued convex sub-blocks.
+
+In the expanded DEM of Jiang et al. (seed 000) the intact rock between joints is itself made of
+smaller blocks bonded by *potential cracks*: glued contacts with the strength of intact rock (c, φ,
+T) that fail by Mohr–Coulomb or tension and from then on behave as joints (REFERENCE.md §5). This
+module draws those cracks inside the already convex blocks of a model; the builder adds them to its
+cut network as ``glued`` contacts with ``contact_source == SOURCE_CRACK`` (``-3``).
+
+Patterns (sub-block area ≈ ``size_m²`` for both, away from the parent block's boundary)
+---------------------------------------------------------------------------------------
+``"voronoi"``
+    Voronoi cells of seed points (GEOS ``voronoi_polygons``) clipped to each parent block. The seeds
+    are a hexagonal lattice of spacing ``a = size_m·√(2/√3)`` (hexagon area ``(√3/2)a² = size_m²``),
+    rotated by ``angle_deg``, with a seeded random origin, each point moved uniformly inside a disk
+    of radius ``jitter·a`` (``jitter`` 0 gives regular hexagons; ``jitter`` <= 0.5 keeps seeds apart
+    by ``(1 − 2·jitter)·a``). The Voronoi cells of any point set are convex, so every piece
+    (cell ∩ convex parent) is convex. **Slivers**: while a piece's mean width ``2·area/perimeter``
+    is below ``sliver_width_m`` (the builder's sliver rule), the seed of the thinnest such piece is
+    removed and the parent re-tessellated (likewise when an edge the cracks created is shorter than
+    the minimum edge ``2d``) — the remaining cells are still Voronoi cells, hence
+    convex, and cover the parent.
+``"triangular"``
+    Equilateral triangles of side ``t = size_m·√(4/√3)`` (area ``(√3/4)t² = size_m²``): three
+    families of lines at ``angle_deg``, ``+60°``, ``+120°`` through the lattice nodes, seeded random
+    origin. **Slivers**: the thinnest piece below ``sliver_width_m`` is merged with the adjacent
+    piece of the same parent whose union with it is convex (longest shared edge first). Two clipped
+    lattice triangles always have a convex union (the angles at the ends of their shared edge add to
+    120° at a lattice node, 180° on the parent's boundary), so every sliver with a neighbour is
+    resolved; one without a convex union is kept and reported. A piece with a new edge shorter than
+    the minimum edge (a lattice line passing near a corner of the parent) is merged the same way.
+
+Which blocks are subdivided: rock blocks (region 0; excavated stages too with
+``include_excavated``), optionally only those within ``within_m`` of an excavation outline and/or
+whose representative point (``shapely.point_on_surface``) lies inside ``zone_xy_m``.
+
+Reproducibility: the seed points and the lattice origin are drawn from one generator, so the same
+``seed`` gives the same cracks; the builder passes ``SeedSequence(seed)`` child number
+``len(joint_sets)`` (the joint sets use children 0 .. n − 1).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import shapely
+
+__all__ = ["Cracks", "CRACK_PATTERNS", "crack_segments", "select_parents"]
+
+CRACK_PATTERNS = ("voronoi", "triangular")
+#: a union of two pieces is convex when its convex hull is larger by at most this fraction of its area
+_HULL_RTOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Cracks:
+    """Settings of the potential-crack subdivision (see the module docstring).
+
+    Parameters
+    ----------
+    size_m : float
+        Target sub-block size: pieces of area ≈ ``size_m²`` (> 0).
+    pattern : {"voronoi", "triangular"}, default "voronoi"
+    jitter : float, default 0.3
+        Voronoi only: seed displacement radius / lattice spacing, 0 <= jitter <= 0.5.
+    angle_deg : float, default 0.0
+        Orientation of the seed lattice / of the first family of triangle sides.
+    within_m : float, optional
+        Only blocks within this distance (>= 0) of an excavation outline.
+    zone_xy_m : (k, 2) array_like, optional
+        Only blocks whose representative point lies inside this polygon.
+    include_excavated : bool, default False
+        Subdivide the blocks of excavation stages too (they are removed by the solver later).
+    """
+
+    size_m: float
+    pattern: str = "voronoi"
+    jitter: float = 0.3
+    angle_deg: float = 0.0
+    within_m: float | None = None
+    zone_xy_m: tuple | None = field(default=None)
+    include_excavated: bool = False
+
+    def __post_init__(self):
+        if not (isinstance(self.size_m, (int, float)) and math.isfinite(self.size_m)
+                and self.size_m > 0):
+            raise ValueError(f"cracks.size_m must be > 0 and finite, got {self.size_m!r}")
+        if self.pattern not in CRACK_PATTERNS:
+            raise ValueError(f"cracks.pattern must be one of {CRACK_PATTERNS}, got {self.pattern!r}")
+        if not (math.isfinite(self.jitter) and 0 <= self.jitter <= 0.5):
+            raise ValueError(f"cracks.jitter must be within [0, 0.5], got {self.jitter!r}")
+        if not math.isfinite(self.angle_deg):
+            raise ValueError(f"cracks.angle_deg must be finite, got {self.angle_deg!r}")
+        if self.within_m is not None and not (math.isfinite(self.within_m) and self.within_m >= 0):
+            raise ValueError(f"cracks.within_m must be >= 0 and finite, got {self.within_m!r}")
+        if self.zone_xy_m is not None:
+            zone = np.asarray(self.zone_xy_m, dtype=float)
+            if zone.ndim != 2 or zone.shape[1] != 2 or len(zone) < 3 or not np.isfinite(zone).all():
+                raise ValueError("cracks.zone_xy_m must be >= 3 finite (x, y) points")
+            poly = shapely.Polygon(zone)
+            if not poly.is_valid or poly.area <= 0:
+                raise ValueError("cracks.zone_xy_m must be a simple polygon with positive area")
+            object.__setattr__(self, "zone_xy_m", tuple(map(tuple, zone.tolist())))
+
+
+def select_parents(faces, region, cracks: Cracks, excavations) -> np.ndarray:
+    """Indices of the faces to subdivide (see the module docstring)."""
+    ok = np.ones(len(faces), bool) if cracks.include_excavated else region == 0
+    if cracks.within_m is not None:
+        if not excavations:
+            raise ValueError("cracks.within_m: the model has no excavations to measure from")
+        opening = shapely.union_all([e.polygon() for e in excavations])
+        ok &= shapely.distance(faces, opening) <= cracks.within_m
+    if cracks.zone_xy_m is not None:
+        ok &= shapely.contains(shapely.Polygon(cracks.zone_xy_m), shapely.point_on_surface(faces))
+    return np.flatnonzero(ok)
+
+
+def _rotation(angle_deg):
+    c, s = math.cos(math.radians(angle_deg)), math.sin(math.radians(angle_deg))
+    return np.array([[c, -s], [s, c]])
+
+
+def _hex_seeds(bounds, cracks: Cracks, rng) -> np.ndarray:
+    """Jittered hexagonal lattice covering ``bounds`` (minx, miny, maxx, maxy), rotated."""
+    a = cracks.size_m * math.sqrt(2 / math.sqrt(3))
+    minx, miny, maxx, maxy = bounds
+    centre = np.array([(minx + maxx) / 2, (miny + maxy) / 2])
+    half = 0.5 * math.hypot(maxx - minx, maxy - miny) + 2 * a
+    rows = np.arange(-math.ceil(half / (a * math.sqrt(3) / 2)), math.ceil(half / (a * math.sqrt(3) / 2)) + 1)
+    cols = np.arange(-math.ceil(half / a) - 1, math.ceil(half / a) + 2)
+    r, c = np.meshgrid(rows, cols, indexing="ij")
+    origin = rng.random(2) * [a, a * math.sqrt(3) / 2]
+    local = np.column_stack([(c + 0.5 * (r % 2)).ravel() * a, r.ravel() * a * math.sqrt(3) / 2]) + origin
+    n = len(local)
+    rad = cracks.jitter * a * np.sqrt(rng.random(n))
+    phi = 2 * math.pi * rng.random(n)
+    local = local + np.column_stack([rad * np.cos(phi), rad * np.sin(phi)])
+    pts = local @ _rotation(cracks.angle_deg).T + centre
+    keep = ((pts[:, 0] >= minx - a) & (pts[:, 0] <= maxx + a) & (pts[:, 1] >= miny - a)
+            & (pts[:, 1] <= maxy + a))
+    return pts[keep]
+
+
+def _width(polys):
+    return 2 * shapely.area(polys) / shapely.length(polys)
+
+
+def _badness(pieces, parent, sliver_width_m, min_edge_m, near_m):
+    """min(width / sliver_width_m, shortest new edge / min_edge_m) per piece: < 1 is a bad piece.
+
+    A *new* edge has an end that is not a vertex of the parent (within ``near_m``): an edge the
+    cracks created. The parent's own short edges are not the cracks' doing and are not counted.
+    """
+    pieces = np.atleast_1d(pieces)
+    score = _width(pieces) / sliver_width_m
+    coords, index = shapely.get_coordinates(shapely.get_exterior_ring(pieces), return_index=True)
+    same = index[1:] == index[:-1]
+    a, b, owner = coords[:-1][same], coords[1:][same], index[:-1][same]
+    corners = np.asarray(parent.exterior.coords)[:-1]
+    d_a = np.min(np.hypot(*(a[:, None, :] - corners[None]).transpose(2, 0, 1)), axis=1)
+    d_b = np.min(np.hypot(*(b[:, None, :] - corners[None]).transpose(2, 0, 1)), axis=1)
+    new = (d_a > near_m) | (d_b > near_m)
+    ratio = np.hypot(*(b - a).T) / min_edge_m
+    edge_score = np.full(len(pieces), np.inf)
+    np.minimum.at(edge_score, owner[new], ratio[new])
+    return np.minimum(score, edge_score)
+
+
+def _lines_to_segments(geoms) -> np.ndarray:
+    """2-point segments of (multi)line geometries, zero-length ones dropped."""
+    parts = shapely.get_parts(geoms)
+    parts = parts[shapely.get_type_id(parts) == 1]
+    if not len(parts):
+        return np.empty((0, 2, 2))
+    coords, index = shapely.get_coordinates(parts, return_index=True)
+    same = index[1:] == index[:-1]
+    out = np.stack([coords[:-1][same], coords[1:][same]], axis=1)
+    return out[np.any(out[:, 0] != out[:, 1], axis=1)]
+
+
+def _voronoi_parent(poly, pts, tol, stats):
+    """Crack segments of one parent from its seed points (seeds of bad pieces removed)."""
+    while len(pts) >= 2:
+        cells = shapely.get_parts(shapely.voronoi_polygons(shapely.multipoints(pts), extend_to=poly,
+                                                           ordered=True))
+        pieces = shapely.intersection(cells, poly)
+        bad = _badness(pieces, poly, *tol)
+        worst = int(np.argmin(bad))
+        if bad[worst] >= 1:
+            break
+        pts = np.delete(pts, worst, axis=0)
+        stats["seeds_removed"] += 1
+    if len(pts) < 2:
+        return np.empty((0, 2, 2)), 1
+    edges = shapely.voronoi_polygons(shapely.multipoints(pts), extend_to=poly, only_edges=True)
+    return _lines_to_segments(shapely.intersection(edges, poly)), len(pts)
+
+
+def _triangular_parent(poly, cracks, origin, tol, stats):
+    """Crack segments of one parent cut by the triangular lattice (bad pieces merged)."""
+    t = cracks.size_m * math.sqrt(4 / math.sqrt(3))
+    rot = _rotation(cracks.angle_deg)
+    e1 = rot @ np.array([t, 0.0])
+    e2 = rot @ np.array([t / 2, t * math.sqrt(3) / 2])
+    basis = np.column_stack([e1, e2])
+    uv = np.linalg.solve(basis, (np.asarray(poly.exterior.coords) - origin).T).T
+    i0, j0 = np.floor(uv.min(axis=0)).astype(int) - 1
+    i1, j1 = np.ceil(uv.max(axis=0)).astype(int) + 1
+    ii, jj = np.meshgrid(np.arange(i0, i1 + 1), np.arange(j0, j1 + 1), indexing="ij")
+    ii, jj = ii.ravel(), jj.ravel()
+
+    def node(i, j):
+        return origin + np.outer(i, e1) + np.outer(j, e2)
+
+    up = np.stack([node(ii, jj), node(ii + 1, jj), node(ii, jj + 1)], axis=1)
+    down = np.stack([node(ii + 1, jj), node(ii + 1, jj + 1), node(ii, jj + 1)], axis=1)
+    tri = np.concatenate([up, down])
+    n_cells = len(ii)
+    key = {(int(i), int(j), k): k * n_cells + m for k in (0, 1)
+           for m, (i, j) in enumerate(zip(ii.tolist(), jj.tolist()))}
+    pieces = shapely.intersection(shapely.polygons(tri), poly)
+    area = shapely.area(pieces)
+    nonempty = area > 0
+    # lattice edges between an up and a down triangle: (up id, down id, end a, end b)
+    pairs, ends = [], []
+    for m, (i, j) in enumerate(zip(ii.tolist(), jj.tolist())):
+        for (di, dj), (pa, pb) in (((0, 0), ((i + 1, j), (i, j + 1))),
+                                    ((-1, 0), ((i, j), (i, j + 1))),
+                                    ((0, -1), ((i, j), (i + 1, j)))):
+            other = key.get((i + di, j + dj, 1))
+            if other is not None and nonempty[m] and nonempty[other]:
+                pairs.append((m, other))
+                ends.append((pa, pb))
+    if not pairs:
+        return np.empty((0, 2, 2)), int(nonempty.sum())
+    pairs = np.array(pairs)
+    ends = np.array(ends, float)
+    seg_xy = np.stack([node(ends[:, 0, 0], ends[:, 0, 1]), node(ends[:, 1, 0], ends[:, 1, 1])], axis=1)
+    clipped = shapely.intersection(shapely.linestrings(seg_xy), poly)
+    shared = shapely.length(clipped)
+    live = shared > 0
+    pairs, clipped, shared = pairs[live], clipped[live], shared[live]
+    # union-find over pieces; merge slivers into a neighbour with a convex union
+    group = np.arange(len(tri))
+    members = {int(g): [int(g)] for g in np.flatnonzero(nonempty)}
+    geom = {g: pieces[g] for g in members}
+    blocked = set()
+
+    while True:
+        if len(members) < 2:
+            break
+        ids = [g for g in members if g not in blocked]
+        if not ids:
+            break
+        bad = _badness(np.array([geom[g] for g in ids], dtype=object), poly, *tol)
+        if bad.min() >= 1:
+            break
+        g = ids[int(np.argmin(bad))]
+        ga, gb = group[pairs[:, 0]], group[pairs[:, 1]]
+        across = (ga != gb) & ((ga == g) | (gb == g))
+        lengths = {}
+        for a_, b_, s in zip(ga[across].tolist(), gb[across].tolist(), shared[across].tolist()):
+            o = b_ if a_ == g else a_
+            lengths[o] = lengths.get(o, 0.0) + s
+        best = None
+        for o in sorted(lengths, key=lambda k: -lengths[k]):
+            # the ends of the removed crack stay as vertices on straight edges: drop them
+            union = shapely.simplify(shapely.union(geom[g], geom[o]), tol[2])
+            # convex up to round-off: the hull adds no area (robust to the ulp-scale double
+            # vertices that clipping leaves where both pieces meet the parent's boundary)
+            if (union.geom_type == "Polygon"
+                    and shapely.convex_hull(union).area - union.area <= _HULL_RTOL * union.area):
+                best = (o, union)
+                break
+        if best is None:
+            blocked.add(g)
+            stats["slivers_kept"] += 1
+            continue
+        o, union = best
+        group[group == o] = g
+        members[g] += members.pop(o)
+        geom[g] = union
+        geom.pop(o)
+        stats["pieces_merged"] += 1
+    keep = group[pairs[:, 0]] != group[pairs[:, 1]]
+    return _lines_to_segments(clipped[keep]), len(members)
+
+
+def crack_segments(faces, parents, cracks: Cracks, rng, sliver_width_m: float, min_edge_m: float,
+                   near_m: float):
+    """Crack segments inside the faces ``faces[parents]`` (convex polygons).
+
+    A piece is *bad* when its mean width ``2·area/perimeter`` is below ``sliver_width_m`` or when an
+    edge the cracks created (one end not a vertex of the parent, farther than ``near_m``) is
+    shorter than ``min_edge_m``; bad pieces are removed as the module docstring describes (seed
+    removed, or merged into a neighbour with a convex union).
+
+    Returns
+    -------
+    segments : (n, 2, 2) float64
+        2-point crack segments, each inside one parent and ending on its boundary or on another
+        crack.
+    stats : dict
+        ``n_parents``, ``n_subdivided`` (parents cut into >= 2 pieces), ``n_pieces`` (pieces of the
+        subdivided parents before noding), ``seeds_removed`` (voronoi) or ``pieces_merged`` /
+        ``slivers_kept`` (triangular).
+    """
+    stats = {"n_parents": int(len(parents)), "n_subdivided": 0, "n_pieces": 0}
+    tol = (sliver_width_m, min_edge_m, near_m)
+    out = []
+    if not len(parents):
+        return np.empty((0, 2, 2)), stats
+    polys = faces[parents]
+    if cracks.pattern == "voronoi":
+        stats["seeds_removed"] = 0
+        seeds = _hex_seeds(shapely.total_bounds(polys), cracks, rng)
+        tree = shapely.STRtree(shapely.points(seeds))
+        f, p = tree.query(polys, predicate="contains_properly")
+        order = np.argsort(f, kind="stable")
+        f, p = f[order], p[order]
+        split = np.flatnonzero(np.diff(f)) + 1
+        for fs, ps in zip(np.split(f, split), np.split(p, split)):
+            if len(ps) < 2:
+                continue
+            segs, n = _voronoi_parent(polys[fs[0]], seeds[ps], tol, stats)
+            if len(segs):
+                out.append(segs)
+                stats["n_subdivided"] += 1
+                stats["n_pieces"] += int(n)
+    else:
+        stats["pieces_merged"] = 0
+        stats["slivers_kept"] = 0
+        minx, miny, _, _ = shapely.total_bounds(polys)
+        t = cracks.size_m * math.sqrt(4 / math.sqrt(3))
+        origin = np.array([minx, miny]) + rng.random(2) * t
+        for poly in polys:
+            segs, n = _triangular_parent(poly, cracks, origin, tol, stats)
+            if len(segs):
+                out.append(segs)
+                stats["n_subdivided"] += 1
+                stats["n_pieces"] += int(n)
+    segs = np.concatenate(out) if out else np.empty((0, 2, 2))
+    return segs, stats

@@ -1,0 +1,94 @@
+"""Edges shorter than the minimum edge 2d collapse consistently, keep convexity and exact areas."""
+
+import math
+
+import numpy as np
+import pytest
+import shapely
+
+from rockmass.blockgen import Cracks, JointSet, build, check_model, circle
+from rockmass.blockgen.model import KIND_EXCAVATION, KIND_TRACE
+
+from ._fixtures import square
+
+EPS = 0.002  # the tiny edge, well below min_edge = 2 · rounding_m = 0.01
+ROUNDING = 0.005
+
+
+def _edges(model):
+    """Lengths of every block edge (an independent recomputation from the vertices)."""
+    out = []
+    for i in range(model.n_blocks):
+        xy = model.polygon(i)
+        out.append(np.hypot(*(np.roll(xy, -1, axis=0) - xy).T))
+    return np.concatenate(out)
+
+
+def _near_concurrent_traces():
+    # x = 0.5, y = 0.5 and a 60° line crossing y = 0.5 at x = 0.5 + EPS: nodes EPS apart
+    t = math.tan(math.radians(60))
+    return np.array([[[0.5, 0], [0.5, 1]], [[0, 0.5], [1, 0.5]],
+                     [[0.5 + EPS - 0.5 / t, 0.0], [0.5 + EPS + 0.5 / t, 1.0]]])
+
+
+def test_without_snapping_the_short_edge_is_there_and_listed():
+    m = build(square(), traces=_near_concurrent_traces(), rounding_m=ROUNDING, snap_edges=False)
+    assert _edges(m).min() == pytest.approx(EPS, rel=1e-6)
+    assert m.quality["tiny_edges"]["count"] > 0 and "edges_snapped" not in m.quality
+
+
+def test_short_edges_collapse_and_the_model_stays_valid():
+    m = build(square(), traces=_near_concurrent_traces(), rounding_m=ROUNDING)
+    inv = check_model(m)
+    assert inv["ok"] and inv["n_concave"] == 0
+    assert _edges(m).min() >= 2 * ROUNDING
+    report = m.quality["edges_snapped"]
+    assert report["count"] >= 1 and report["not_snapped"] == 0
+    assert m.quality["tiny_edges"]["count"] == 0
+    first = report["changes"][0]
+    assert first["edge_m"] == pytest.approx(EPS, rel=1e-6)
+    # every node moved by less than the edge it collapsed
+    for change in report["changes"]:
+        for xy in change["from_xy_m"]:
+            assert math.dist(xy, change["to_xy_m"]) <= change["edge_m"] + 1e-12
+    # the traces keep their label: every interior contact is still a trace contact
+    interior = m.contact_blocks[:, 1] >= 0
+    assert (m.contact_kind[interior] == KIND_TRACE).all()
+
+
+def test_a_node_near_a_domain_corner_moves_onto_the_corner_and_the_outline_is_unchanged():
+    traces = np.array([[[EPS, 0.0], [0.6, 1.0]], [[0.0, 0.5], [1.0, 0.5]]])
+    m = build(square(), traces=traces, rounding_m=ROUNDING)
+    assert check_model(m)["ok"]
+    change = m.quality["edges_snapped"]["changes"][0]
+    assert change["to_xy_m"] == [0.0, 0.0]
+    assert _edges(m).min() >= 2 * ROUNDING
+    # the blocks still cover the unit square exactly
+    union = shapely.union_all(m.to_shapely())
+    assert union.symmetric_difference(shapely.Polygon(square())).area <= 1e-12
+
+
+def test_excavation_stage_area_is_exact_after_snapping():
+    # a 36-gon of radius r has area (n/2) r² sin(2π/n); joints at 0.05 m pass near its vertices
+    m = build(square(), [JointSet(0, 0.05, origin_xy_m=(0, 0.0003)),
+                         JointSet(90, 0.05, origin_xy_m=(0.0007, 0))],
+              excavations=[circle((0.5, 0.5), 0.2, "tunnel", 36)], rounding_m=0.0025)
+    assert check_model(m)["ok"]
+    assert m.quality["edges_snapped"]["count"] > 0
+    exact = 36 / 2 * 0.2 ** 2 * math.sin(2 * math.pi / 36)
+    assert m.area_m2[m.region == 1].sum() == pytest.approx(exact, rel=1e-9)
+    assert m.contact_length_m[m.contact_kind == KIND_EXCAVATION].sum() == pytest.approx(
+        36 * 2 * 0.2 * math.sin(math.pi / 36), rel=1e-9)
+
+
+@pytest.mark.parametrize("pattern, seed", [("voronoi", 2), ("triangular", 3)])
+def test_cracked_models_have_no_edge_below_the_minimum_unless_listed(pattern, seed):
+    m = build(square(10.0), [JointSet(30, 1.7), JointSet(100, 2.3)],
+              excavations=[circle((5, 5), 1.5)], cracks=Cracks(0.5, pattern=pattern), seed=seed)
+    assert check_model(m)["ok"]
+    min_edge = m.quality["tolerances"]["min_edge_m"]
+    n_short = int((_edges(m) < min_edge).sum())
+    # the report counts short edges per block (a shared edge twice), and every one left is an edge
+    # the snapping rule refused (listed as not_snapped)
+    assert n_short == m.quality["tiny_edges"]["count"]
+    assert n_short <= 2 * m.quality["edges_snapped"]["not_snapped"]
