@@ -1,6 +1,40 @@
-"""The distinct element (DEM) core: rigid polygonal blocks on joint contacts.
+"""The distinct element (DEM) core: rigid polygonal blocks on joint contacts (2D, unit thickness).
 
-Planned content (issue "The DEM core"). Nothing is public yet.
+Public names
+------------
+:func:`run`
+    ``run(model, settings) -> Result``: the stages of a run (:mod:`rockmass.solver.runner`).
+:class:`Settings`, :class:`Stage`, :class:`Material`, :class:`Coulomb`,
+:class:`ContinuouslyYielding`, :class:`InSituStress`, :class:`Fix`, :class:`BoundaryStress`,
+:class:`VelocityInput`, :class:`Sine`, :class:`Ricker`, :class:`TableHistory`,
+:class:`QuietBoundary`, :class:`Monitor`
+    What a run needs besides the blocks (:mod:`rockmass.solver.settings`).
+:class:`Result`, :class:`StageResult`, :class:`Frame`
+    What it returns (:mod:`rockmass.solver.result`).
+:class:`Engine`
+    The mutable state and its operations, for tests and custom drivers (:mod:`rockmass.solver.engine`).
+
+The numba kernels (:mod:`rockmass.solver._kernels`) load on first use of :func:`run` or
+:class:`Engine`; importing this package does not compile anything.
 """
 
-__all__: list[str] = []
+from .result import Frame, Result, StageResult
+from .settings import (BoundaryStress, ContinuouslyYielding, Coulomb, Fix, InSituStress, Material,
+                       Monitor, QuietBoundary, Ricker, Settings, Sine, Stage, TableHistory,
+                       VelocityInput)
+
+__all__ = ["run", "Engine", "Settings", "Stage", "Material", "Coulomb", "ContinuouslyYielding",
+           "InSituStress", "Fix", "BoundaryStress", "VelocityInput", "Sine", "Ricker",
+           "TableHistory", "QuietBoundary", "Monitor", "Result", "StageResult", "Frame"]
+
+
+def __getattr__(name):  # numba only when a run starts
+    if name == "run":
+        from .runner import run
+
+        return run
+    if name == "Engine":
+        from .engine import Engine
+
+        return Engine
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

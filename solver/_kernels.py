@@ -1,0 +1,656 @@
+"""Numba kernels of the DEM: world vertices, broad phase, narrow phase, joint laws, stepping.
+
+All kernels take plain C-contiguous arrays (float64 values, int64 indices), write into arrays the
+caller allocated and do no checks; :mod:`rockmass.solver.engine` is the typed wrapper that owns the
+arrays. One file, because numba's on-disk cache does not see edits to jitted helpers in other files.
+
+Data layout
+-----------
+Blocks ``b``: vertices ``loc[off[b]:off[b+1]]`` relative to the centroid (CCW), centroid ``pos[b]``,
+rotation ``rot[b]``, velocities ``vel[b]``, ``omg[b]``; per degree of freedom (x, y, rotation)
+``mode[b, d]`` 0 free, 1 fixed, 2 prescribed (velocity from ``presc_val[step, dof_input[b, d]]``).
+
+Pairs ``p`` (candidate contacts from the broad phase): blocks ``pa[p] < pb[p]``, joint model row
+``pprop[p]``, reference side ``pref[p]`` (0: an edge of ``pa`` carries the normal, 1: of ``pb``),
+index of the block-model contact ``pinit[p]`` (-1 if the two blocks were not neighbours). Each pair
+has two *slots* (the two ends of an edge-to-edge contact, UDEC's two vertex-edge sub-contacts; a
+corner contact uses one) with state ``S[p, slot, column]`` (columns below).
+
+The contact normal ``n`` points from ``pa`` to ``pb``, the tangent is ``t = (−n_y, n_x)``. Forces:
+on ``pa`` −F_n n + F_s t, on ``pb`` +F_n n − F_s t, at the contact point; F_n = σ_n l, F_s = τ l with
+l the slot's contact length, σ_n compression positive and τ increasing with the shear displacement of
+``pb`` relative to ``pa`` along ``t``.
+"""
+
+import math
+
+import numpy as np
+from numba import njit
+
+# --- slot state columns -------------------------------------------------------------------------
+ACT, U0, DIL, TAU, PHIM, RREV, DIR, COORD, BRK, LEN, FN, FS, SLIP, OVL, PX, PY, NX, NY, USP = range(19)
+N_SLOT_COLUMNS = 19
+
+# --- joint model table columns ------------------------------------------------------------------
+(P_MODEL, P_KN, P_KS, P_TANPHI, P_COH, P_TEN, P_TANPSI, P_TANPHIR, P_MAXDIL,
+ P_EN, P_ES, P_PHIM0, P_PHIB, P_ROUGH) = range(14)
+N_PROP_COLUMNS = 14
+MODEL_COULOMB, MODEL_CY = 0, 1
+
+# --- energy accumulator entries -----------------------------------------------------------------
+(E_GRAVITY, E_EXTERNAL, E_LOCAL_DAMP, E_VISCOUS, E_QUIET, E_CONTACT_FREE, E_CONTACT_PRESC,
+ E_SLIP, E_BROKEN, E_NEW_BROKEN) = range(10)
+N_ENERGY = 10
+
+# --- return codes of advance() ------------------------------------------------------------------
+RC_DONE, RC_REBUILD, RC_CONVERGED, RC_OVERLAP, RC_NONFINITE = range(5)
+
+_CY_SLIP_F = 0.05  # a CY slot with F below this counts as slipping in the reports
+
+
+@njit(cache=True)
+def world_vertices(loc, off, pos, rot, active, wv):
+    """wv[k] = pos[b] + R(rot[b]) loc[k] for the vertices of active blocks."""
+    for b in range(len(off) - 1):
+        if not active[b]:
+            continue
+        c = math.cos(rot[b])
+        s = math.sin(rot[b])
+        for k in range(off[b], off[b + 1]):
+            wv[k, 0] = pos[b, 0] + c * loc[k, 0] - s * loc[k, 1]
+            wv[k, 1] = pos[b, 1] + s * loc[k, 0] + c * loc[k, 1]
+
+
+@njit(cache=True)
+def broad_phase(wv, off, active, movable, margin):
+    """Candidate pairs (a < b) whose bounding boxes, grown by ``margin``, overlap (sweep and prune
+    along x). Pairs of two blocks that cannot move are left out. Returns sorted (pa, pb)."""
+    nb = len(off) - 1
+    lo = np.empty((nb, 2))
+    hi = np.empty((nb, 2))
+    ids = np.empty(nb, np.int64)
+    m = 0
+    for b in range(nb):
+        if not active[b]:
+            continue
+        x0 = np.inf
+        y0 = np.inf
+        x1 = -np.inf
+        y1 = -np.inf
+        for k in range(off[b], off[b + 1]):
+            x0 = min(x0, wv[k, 0])
+            x1 = max(x1, wv[k, 0])
+            y0 = min(y0, wv[k, 1])
+            y1 = max(y1, wv[k, 1])
+        lo[b, 0] = x0 - margin
+        lo[b, 1] = y0 - margin
+        hi[b, 0] = x1 + margin
+        hi[b, 1] = y1 + margin
+        ids[m] = b
+        m += 1
+    ids = ids[:m]
+    order = ids[np.argsort(lo[ids, 0], kind="mergesort")]
+    cap = 8 * m + 16
+    pa = np.empty(cap, np.int64)
+    pb = np.empty(cap, np.int64)
+    n = 0
+    for i in range(m):
+        a = order[i]
+        for j in range(i + 1, m):
+            b = order[j]
+            if lo[b, 0] > hi[a, 0]:
+                break
+            if lo[b, 1] > hi[a, 1] or lo[a, 1] > hi[b, 1]:
+                continue
+            if not movable[a] and not movable[b]:
+                continue
+            if n == cap:
+                cap *= 2
+                pa2 = np.empty(cap, np.int64)
+                pb2 = np.empty(cap, np.int64)
+                pa2[:n] = pa[:n]
+                pb2[:n] = pb[:n]
+                pa = pa2
+                pb = pb2
+            pa[n] = min(a, b)
+            pb[n] = max(a, b)
+            n += 1
+    key = pa[:n] * nb + pb[:n]
+    srt = np.argsort(key, kind="mergesort")
+    return pa[:n][srt].copy(), pb[:n][srt].copy()
+
+
+@njit(cache=True)
+def _edge(wv, off, b, i):
+    """Start, unit direction, length and outward unit normal of edge i (global vertex index)."""
+    j = i + 1
+    if j == off[b + 1]:
+        j = off[b]
+    ex = wv[j, 0] - wv[i, 0]
+    ey = wv[j, 1] - wv[i, 1]
+    length = math.sqrt(ex * ex + ey * ey)
+    ux = ex / length
+    uy = ey / length
+    return wv[i, 0], wv[i, 1], ux, uy, length, uy, -ux, j
+
+
+@njit(cache=True)
+def _max_separation(wv, off, a, b, stop):
+    """Largest over the edges of block a of the smallest signed distance of b's vertices to the
+    edge's line (separating-axis test); stops early once above ``stop``. Returns (sep, edge)."""
+    best = -np.inf
+    best_edge = -1
+    for i in range(off[a], off[a + 1]):
+        x0, y0, ux, uy, length, nx, ny, j = _edge(wv, off, a, i)
+        low = np.inf
+        for k in range(off[b], off[b + 1]):
+            d = (wv[k, 0] - x0) * nx + (wv[k, 1] - y0) * ny
+            if d < low:
+                low = d
+        if low > best:
+            best = low
+            best_edge = i
+            if best > stop:
+                break
+    return best, best_edge
+
+
+@njit(cache=True)
+def _cy_normal_stress(an, en, un):
+    """σ_n(u_n) for k_n = a_n σ_n^e_n integrated from σ = 0 at u = 0: ((1 − e) a u)^(1/(1 − e))."""
+    if un <= 0.0:
+        return 0.0
+    if en == 0.0:
+        return an * un
+    return ((1.0 - en) * an * un) ** (1.0 / (1.0 - en))
+
+
+@njit(cache=True)
+def _update_slot(S, p, k, prop, delta, dus, length, E):
+    """Advance the joint law of slot k of pair p by one step: geometric overlap ``delta`` (m),
+    shear displacement increment ``dus`` (m). Writes σ_n, τ and the flags; adds dissipation to E."""
+    S[p, k, LEN] = length
+    S[p, k, OVL] = delta
+    S[p, k, SLIP] = 0.0
+    un = delta + S[p, k, U0] + S[p, k, DIL]
+    intact = S[p, k, BRK] == 0.0
+    if prop[P_MODEL] == MODEL_COULOMB:
+        kn = prop[P_KN]
+        ks = prop[P_KS]
+        sig = kn * un
+        ten = prop[P_TEN] if intact else 0.0
+        if sig < -ten:
+            released = 0.5 * S[p, k, TAU] ** 2 / ks * length
+            if intact and ten > 0.0:
+                S[p, k, BRK] = 1.0
+                E[E_NEW_BROKEN] += 1.0
+                E[E_BROKEN] += 0.5 * sig * sig / kn * length + released
+            else:
+                E[E_SLIP] += released  # shear spring unloaded as the joint opens
+            S[p, k, FN] = 0.0
+            S[p, k, FS] = 0.0
+            S[p, k, TAU] = 0.0
+            return
+        tanphi = prop[P_TANPHI] if intact else prop[P_TANPHIR]
+        coh = prop[P_COH] if intact else 0.0
+        tmax = max(coh + sig * tanphi, 0.0)
+        tau_old = S[p, k, TAU]
+        tau = tau_old + ks * dus
+        if abs(tau) > tmax:
+            if intact and (prop[P_COH] > 0.0 or prop[P_TEN] > 0.0):
+                S[p, k, BRK] = 1.0
+                E[E_NEW_BROKEN] += 1.0
+                tmax = max(sig * prop[P_TANPHIR], 0.0)
+            sgn = 1.0 if tau > 0 else -1.0
+            dup = (abs(tau) - tmax) / ks
+            tau = sgn * tmax
+            # dissipation = work of the mean shear stress over the step − change of elastic energy
+            released = 0.5 * (tau_old + tau) * dus - 0.5 * (tau * tau - tau_old * tau_old) / ks
+            ddil = 0.0
+            if prop[P_TANPSI] > 0.0 and S[p, k, DIL] < prop[P_MAXDIL]:
+                ddil = min(prop[P_TANPSI] * dup, prop[P_MAXDIL] - S[p, k, DIL])
+                S[p, k, DIL] += ddil
+            S[p, k, USP] += dup
+            S[p, k, SLIP] = 1.0
+            E[E_SLIP] += (released - sig * ddil) * length
+        S[p, k, TAU] = tau
+        S[p, k, FN] = sig * length
+        S[p, k, FS] = tau * length
+        return
+    # continuously yielding
+    sig = _cy_normal_stress(prop[P_KN], prop[P_EN], un)
+    if sig <= 0.0:
+        S[p, k, FN] = 0.0
+        S[p, k, FS] = 0.0
+        S[p, k, TAU] = 0.0
+        S[p, k, RREV] = 0.0
+        S[p, k, DIR] = 0.0
+        return
+    ks = prop[P_KS] * sig ** prop[P_ES] if prop[P_ES] != 0.0 else prop[P_KS]
+    tau = S[p, k, TAU]
+    tau_old = tau
+    if dus != 0.0:
+        d = 1.0 if dus > 0.0 else -1.0
+        phim = S[p, k, PHIM]
+        tm = sig * math.tan(phim)
+        if S[p, k, DIR] != 0.0 and S[p, k, DIR] != d:
+            S[p, k, RREV] = tau * d / tm
+        S[p, k, DIR] = d
+        r = min(S[p, k, RREV], 0.999999)
+        f = (1.0 - tau * d / tm) / (1.0 - r)
+        f = min(max(f, 0.0), 1.0)
+        tau += f * ks * dus
+        if tau * d > tm:
+            tau = d * tm
+        dup = (1.0 - f) * abs(dus)
+        if dup > 0.0:
+            phib = prop[P_PHIB]
+            S[p, k, PHIM] = phib + (phim - phib) * math.exp(-dup / prop[P_ROUGH])
+            ang = math.atan(abs(tau) / sig) - phib
+            ddil = math.tan(ang) * dup if ang > 0.0 else 0.0
+            S[p, k, DIL] += ddil
+            S[p, k, USP] += dup
+            released = 0.5 * (tau_old + tau) * dus - 0.5 * (tau * tau - tau_old * tau_old) / ks
+            E[E_SLIP] += (released - sig * ddil) * length
+        if f < _CY_SLIP_F:
+            S[p, k, SLIP] = 1.0
+    S[p, k, TAU] = tau
+    S[p, k, FN] = sig * length
+    S[p, k, FS] = tau * length
+
+
+@njit(cache=True)
+def _open_slot(S, p, k):
+    S[p, k, ACT] = 0.0
+    S[p, k, FN] = 0.0
+    S[p, k, FS] = 0.0
+    S[p, k, TAU] = 0.0
+    S[p, k, U0] = 0.0
+    S[p, k, DIL] = 0.0
+    S[p, k, SLIP] = 0.0
+    S[p, k, OVL] = 0.0
+
+
+@njit(cache=True)
+def _activate_slot(S, p, k, prop, broken):
+    S[p, k, ACT] = 1.0
+    S[p, k, U0] = 0.0
+    S[p, k, DIL] = 0.0
+    S[p, k, TAU] = 0.0
+    S[p, k, RREV] = 0.0
+    S[p, k, DIR] = 0.0
+    S[p, k, PHIM] = prop[P_PHIM0]
+    S[p, k, BRK] = broken
+
+
+@njit(cache=True)
+def contact_forces(wv, off, pos, vel, omg, pa, pb, pprop, pref, pinit, init_brk, props, S,
+                   dt, ctol, hyst, rounding, beta, fpair, E):
+    """Narrow phase and joint laws for every pair; writes per-pair force/moment on both blocks
+    (``fpair[p] = fx_a, fy_a, m_a, fx_b, fy_b, m_b``) and returns (max overlap, its pair).
+
+    Narrow phase: separating-axis test on both polygons; the edge of least penetration is the
+    reference (switching side only when the other is better by ``hyst``: no flicker on coincident
+    edges); the most anti-parallel edge of the other block is clipped to the reference edge's
+    extent (Box2D-style manifold) giving one or two points within the detection gap, each a slot of
+    length half the clipped overlap (at least ``rounding``). ``beta`` > 0 adds the stiffness-
+    proportional Rayleigh dashpots β K v_rel.
+    """
+    max_ovl = 0.0
+    max_pair = -1
+    cx = np.empty(2)  # scratch for the two clipped points, allocated once
+    cy = np.empty(2)
+    csep = np.empty(2)
+    ptx = np.empty(2)
+    pty = np.empty(2)
+    pco = np.empty(2)
+    pdel = np.empty(2)
+    keep = np.empty(2, np.int64)
+    slot_of = np.empty(2, np.int64)
+    for p in range(len(pa)):
+        a = pa[p]
+        b = pb[p]
+        prop = props[pprop[p]]
+        for q in range(6):
+            fpair[p, q] = 0.0
+        extra = 0.0
+        for k in range(2):
+            if S[p, k, ACT] != 0.0:
+                extra = max(extra, S[p, k, U0] + S[p, k, DIL])
+        tol = ctol + extra
+        sep_a, e_a = _max_separation(wv, off, a, b, tol)
+        sep_b = np.inf
+        e_b = -1
+        if sep_a <= tol:
+            sep_b, e_b = _max_separation(wv, off, b, a, tol)
+        if sep_a > tol or sep_b > tol:
+            for k in range(2):
+                if S[p, k, ACT] != 0.0:
+                    _open_slot(S, p, k)
+            continue
+        ref = pref[p]
+        if ref == 0 and sep_b > sep_a + hyst:
+            ref = 1
+        elif ref == 1 and sep_a > sep_b + hyst:
+            ref = 0
+        pref[p] = ref
+        rb = a if ref == 0 else b
+        ib = b if ref == 0 else a
+        e = e_a if ref == 0 else e_b
+        x0, y0, ux, uy, lref, nrx, nry, _j = _edge(wv, off, rb, e)
+        # incident edge: most anti-parallel outward normal on the other block
+        best = np.inf
+        inc = -1
+        for i in range(off[ib], off[ib + 1]):
+            _x, _y, _ux, _uy, _l, nx, ny, _jj = _edge(wv, off, ib, i)
+            d = nx * nrx + ny * nry
+            if d < best:
+                best = d
+                inc = i
+        ix0, iy0, _iux, _iuy, _il, _inx, _iny, ij = _edge(wv, off, ib, inc)
+        ix1 = wv[ij, 0]
+        iy1 = wv[ij, 1]
+        t0 = (ix0 - x0) * ux + (iy0 - y0) * uy
+        t1 = (ix1 - x0) * ux + (iy1 - y0) * uy
+        tlo = max(0.0, min(t0, t1))
+        thi = min(lref, max(t0, t1))
+        if thi < tlo:
+            for k in range(2):
+                if S[p, k, ACT] != 0.0:
+                    _open_slot(S, p, k)
+            continue
+        # the two clipped points
+        for m in range(2):
+            tt = tlo if m == 0 else thi
+            if abs(t1 - t0) > 1e-300:
+                lam = (tt - t0) / (t1 - t0)
+            else:
+                lam = 0.0
+            px = ix0 + lam * (ix1 - ix0)
+            py = iy0 + lam * (iy1 - iy0)
+            cx[m] = px
+            cy[m] = py
+            csep[m] = (px - x0) * nrx + (py - y0) * nry
+        nkeep = 0
+        for m in range(2):
+            if csep[m] <= tol:
+                keep[nkeep] = m
+                nkeep += 1
+        if nkeep == 2 and thi - tlo <= 1e-12 * lref:
+            nkeep = 1  # both points coincide: one corner contact
+            if csep[1] < csep[0]:
+                keep[0] = 1
+        if nkeep == 0:
+            for k in range(2):
+                if S[p, k, ACT] != 0.0:
+                    _open_slot(S, p, k)
+            continue
+        length = max(0.5 * (thi - tlo), rounding)
+        # contact normal from a to b, tangent
+        nx = nrx if ref == 0 else -nrx
+        ny = nry if ref == 0 else -nry
+        tx = -ny
+        ty = nx
+        # slot assignment by the tangential coordinate about block a's centroid
+        for q in range(nkeep):
+            m = keep[q]
+            ptx[q] = cx[m] - 0.5 * csep[m] * nrx
+            pty[q] = cy[m] - 0.5 * csep[m] * nry
+            pco[q] = (ptx[q] - pos[a, 0]) * tx + (pty[q] - pos[a, 1]) * ty
+            pdel[q] = -csep[m]
+        if nkeep == 2:
+            if pco[0] <= pco[1]:
+                slot_of[0] = 0
+                slot_of[1] = 1
+            else:
+                slot_of[0] = 1
+                slot_of[1] = 0
+        else:
+            act0 = S[p, 0, ACT] != 0.0
+            act1 = S[p, 1, ACT] != 0.0
+            if act0 and act1:
+                slot_of[0] = 0 if abs(pco[0] - S[p, 0, COORD]) <= abs(pco[0] - S[p, 1, COORD]) else 1
+            elif act1:
+                slot_of[0] = 1
+            else:
+                slot_of[0] = 0
+        used0 = False
+        used1 = False
+        for q in range(nkeep):
+            if slot_of[q] == 0:
+                used0 = True
+            else:
+                used1 = True
+        if not used0 and S[p, 0, ACT] != 0.0:
+            _open_slot(S, p, 0)
+        if not used1 and S[p, 1, ACT] != 0.0:
+            _open_slot(S, p, 1)
+        broken = init_brk[pinit[p]] if pinit[p] >= 0 else 0.0
+        for q in range(nkeep):
+            k = slot_of[q]
+            if S[p, k, ACT] == 0.0:
+                _activate_slot(S, p, k, prop, broken)
+            px = ptx[q]
+            py = pty[q]
+            rax = px - pos[a, 0]
+            ray = py - pos[a, 1]
+            rbx = px - pos[b, 0]
+            rby = py - pos[b, 1]
+            vrx = vel[b, 0] - omg[b] * rby - vel[a, 0] + omg[a] * ray
+            vry = vel[b, 1] + omg[b] * rbx - vel[a, 1] - omg[a] * rax
+            dus = (vrx * tx + vry * ty) * dt
+            _update_slot(S, p, k, prop, pdel[q], dus, length, E)
+            S[p, k, COORD] = pco[q]
+            S[p, k, PX] = px
+            S[p, k, PY] = py
+            S[p, k, NX] = nx
+            S[p, k, NY] = ny
+            fn = S[p, k, FN]
+            fs = S[p, k, FS]
+            if beta > 0.0 and fn > 0.0:
+                vn = vrx * nx + vry * ny
+                vt = vrx * tx + vry * ty
+                fn -= beta * prop[P_KN] * length * vn
+                fs += beta * prop[P_KS] * length * vt
+                E[E_VISCOUS] -= beta * length * (prop[P_KN] * vn * vn + prop[P_KS] * vt * vt) * dt
+            fx = -fn * nx + fs * tx
+            fy = -fn * ny + fs * ty
+            fpair[p, 0] += fx
+            fpair[p, 1] += fy
+            fpair[p, 2] += rax * fy - ray * fx
+            fpair[p, 3] -= fx
+            fpair[p, 4] -= fy
+            fpair[p, 5] -= rbx * fy - rby * fx
+            if pdel[q] > max_ovl:
+                max_ovl = pdel[q]
+                max_pair = p
+    return max_ovl, max_pair
+
+
+@njit(cache=True)
+def block_pair_index(pa, pb, nb):
+    """CSR of the pairs of each block: entries ``2 p + role`` (role 0: block is pa, 1: pb)."""
+    cnt = np.zeros(nb + 1, np.int64)
+    for p in range(len(pa)):
+        cnt[pa[p] + 1] += 1
+        cnt[pb[p] + 1] += 1
+    for b in range(nb):
+        cnt[b + 1] += cnt[b]
+    fill = cnt[:-1].copy()
+    idx = np.empty(2 * len(pa), np.int64)
+    for p in range(len(pa)):
+        idx[fill[pa[p]]] = 2 * p
+        fill[pa[p]] += 1
+        idx[fill[pb[p]]] = 2 * p + 1
+        fill[pb[p]] += 1
+    return cnt, idx
+
+
+@njit(cache=True)
+def remap_pairs(old_pa, old_pb, old_S, old_pref, old_pinit, new_pa, new_pb, nb, S, pref, pinit,
+                pprop, init_key, init_prop, default_prop, init_brk):
+    """Carry slot state of surviving pairs into the new pair list; new pairs get the joint model of
+    their block-model contact (binary search in sorted ``init_key``) or ``default_prop``. Broken
+    slots of pairs that leave the list are remembered in ``init_brk``."""
+    i = 0
+    n_old = len(old_pa)
+    for p in range(len(new_pa)):
+        key = new_pa[p] * nb + new_pb[p]
+        while i < n_old and old_pa[i] * nb + old_pb[i] < key:
+            if old_pinit[i] >= 0 and (old_S[i, 0, BRK] != 0.0 or old_S[i, 1, BRK] != 0.0):
+                init_brk[old_pinit[i]] = 1.0
+            i += 1
+        if i < n_old and old_pa[i] * nb + old_pb[i] == key:
+            S[p] = old_S[i]
+            pref[p] = old_pref[i]
+            pinit[p] = old_pinit[i]
+            i += 1
+        else:
+            j = np.searchsorted(init_key, key)
+            if j < len(init_key) and init_key[j] == key:
+                pinit[p] = j
+            else:
+                pinit[p] = -1
+            pref[p] = 0
+        pprop[p] = init_prop[pinit[p]] if pinit[p] >= 0 else default_prop
+    while i < n_old:
+        if old_pinit[i] >= 0 and (old_S[i, 0, BRK] != 0.0 or old_S[i, 1, BRK] != 0.0):
+            init_brk[old_pinit[i]] = 1.0
+        i += 1
+
+
+@njit(cache=True)
+def quiet_forces(edges, pos, vel, omg, rot, qf):
+    """Viscous boundary forces. ``edges[e] = block, rx, ry (local midpoint), nx, ny (outward),
+    length, ρC_p, ρC_s``; adds −L(ρC_p v_n n + ρC_s v_s t) at the edge midpoint into qf."""
+    for e in range(len(edges)):
+        b = int(edges[e, 0])
+        c = math.cos(rot[b])
+        s = math.sin(rot[b])
+        rx = c * edges[e, 1] - s * edges[e, 2]
+        ry = s * edges[e, 1] + c * edges[e, 2]
+        nx = c * edges[e, 3] - s * edges[e, 4]
+        ny = s * edges[e, 3] + c * edges[e, 4]
+        vx = vel[b, 0] - omg[b] * ry
+        vy = vel[b, 1] + omg[b] * rx
+        vn = vx * nx + vy * ny
+        vt = -vx * ny + vy * nx
+        fx = -edges[e, 5] * (edges[e, 6] * vn * nx - edges[e, 7] * vt * ny)
+        fy = -edges[e, 5] * (edges[e, 6] * vn * ny + edges[e, 7] * vt * nx)
+        qf[b, 0] += fx
+        qf[b, 1] += fy
+        qf[b, 2] += rx * fy - ry * fx
+
+
+@njit(cache=True)
+def advance(n_steps, loc, off, pos, rot, vel, omg, inv_mass, mass, mode, dof_input, presc_val,
+            active, movable, gravity, ext_f, ext_a, ext_b, quiet_edges, pa, pb, pprop, pref, pinit,
+            init_brk, props, S, ref_pos, ref_rot, radius, dt, ctol, hyst, rounding, ovl_limit,
+            margin, alpha_local, alpha_mass, beta, tol_ratio, check_every, wv, fpair, bp_ptr,
+            bp_idx, E, out):
+    """Central-difference steps (REFERENCE.md §5). Stops early with a return code: converged
+    (static, unbalanced ratio < ``tol_ratio``), rebuild needed (a block moved > margin/2 since the
+    last broad phase), overlap above the limit, or a non-finite value. ``out`` receives
+    [steps done, unbalanced ratio, max overlap, pair of max overlap, max velocity].
+
+    Forces on block b: contacts (gathered over its pairs in a fixed order: deterministic), gravity
+    m g, external forces ``ext_f`` with moment cos θ·ext_a + sin θ·ext_b (constant tractions on
+    edges that rotate with the block), quiet-boundary dashpots, mass-proportional Rayleigh damping
+    −α_M m v, local non-viscous damping −α|F|sign(v) per degree of freedom.
+    """
+    nb = len(off) - 1
+    qf = np.zeros((nb, 3))
+    fc = np.zeros(3)
+    fg = np.zeros(3)
+    fe = np.zeros(3)
+    ratio = np.inf
+    for step in range(n_steps):
+        world_vertices(loc, off, pos, rot, active, wv)
+        max_ovl, max_pair = contact_forces(wv, off, pos, vel, omg, pa, pb, pprop, pref, pinit,
+                                           init_brk, props, S, dt, ctol, hyst, rounding, beta,
+                                           fpair, E)
+        if max_ovl > ovl_limit:
+            out[0] = step
+            out[2] = max_ovl
+            out[3] = max_pair
+            return RC_OVERLAP
+        if len(quiet_edges):
+            qf[:] = 0.0
+            quiet_forces(quiet_edges, pos, vel, omg, rot, qf)
+        sum_unb = 0.0
+        sum_app = 0.0
+        moved = False
+        vmax = 0.0
+        for b in range(nb):
+            if not active[b] or not movable[b]:
+                continue
+            fc[:] = 0.0
+            fabs = 0.0
+            for q in range(bp_ptr[b], bp_ptr[b + 1]):
+                e = bp_idx[q]
+                p = e >> 1
+                o = 3 * (e & 1)
+                fc[0] += fpair[p, o]
+                fc[1] += fpair[p, o + 1]
+                fc[2] += fpair[p, o + 2]
+                fabs += math.sqrt(fpair[p, o] ** 2 + fpair[p, o + 1] ** 2)
+            c = math.cos(rot[b])
+            s = math.sin(rot[b])
+            fg[0] = mass[b, 0] * gravity[0]
+            fg[1] = mass[b, 1] * gravity[1]
+            fg[2] = 0.0
+            fe[0] = ext_f[b, 0]
+            fe[1] = ext_f[b, 1]
+            fe[2] = c * ext_a[b] + s * ext_b[b]
+            unb = 0.0
+            for d in range(3):
+                v_old = vel[b, d] if d < 2 else omg[b]
+                if mode[b, d] == 1:
+                    continue
+                if mode[b, d] == 2:
+                    v_new = presc_val[step, dof_input[b, d]]
+                    E[E_CONTACT_PRESC] += fc[d] * 0.5 * (v_old + v_new) * dt
+                else:
+                    fv = -alpha_mass * mass[b, d] * v_old
+                    f = fc[d] + fg[d] + fe[d] + qf[b, d] + fv
+                    if d < 2:
+                        unb += f * f
+                    fd = 0.0
+                    if alpha_local > 0.0 and v_old != 0.0:
+                        fd = -alpha_local * abs(f) * (1.0 if v_old > 0 else -1.0)
+                    v_new = v_old + (f + fd) * inv_mass[b, d] * dt
+                    w = 0.5 * (v_old + v_new) * dt
+                    E[E_CONTACT_FREE] += fc[d] * w
+                    E[E_GRAVITY] += fg[d] * w
+                    E[E_EXTERNAL] += fe[d] * w
+                    E[E_QUIET] += qf[b, d] * w
+                    E[E_VISCOUS] += fv * w
+                    E[E_LOCAL_DAMP] += fd * w
+                if d < 2:
+                    vel[b, d] = v_new
+                    pos[b, d] += v_new * dt
+                    if abs(v_new) > vmax:
+                        vmax = abs(v_new)
+                else:
+                    omg[b] = v_new
+                    rot[b] += v_new * dt
+            sum_unb += math.sqrt(unb)
+            sum_app += fabs + math.sqrt(fg[0] ** 2 + fg[1] ** 2) + math.sqrt(fe[0] ** 2 + fe[1] ** 2)
+            dx = pos[b, 0] - ref_pos[b, 0]
+            dy = pos[b, 1] - ref_pos[b, 1]
+            if math.sqrt(dx * dx + dy * dy) + radius[b] * abs(rot[b] - ref_rot[b]) > 0.5 * margin:
+                moved = True
+        ratio = sum_unb / sum_app if sum_app > 0.0 else 0.0
+        if not math.isfinite(ratio) or not math.isfinite(vmax):
+            out[0] = step + 1
+            return RC_NONFINITE
+        out[0] = step + 1
+        out[1] = ratio
+        out[4] = vmax
+        if moved:
+            return RC_REBUILD
+        if tol_ratio > 0.0 and (step + 1) % check_every == 0 and ratio < tol_ratio:
+            return RC_CONVERGED
+    out[0] = n_steps
+    out[1] = ratio
+    return RC_DONE

@@ -1,0 +1,324 @@
+"""The DEM state and its operations: set-up from a BlockModel, contact search, time step, in-situ
+stress, excavation and stepping. :func:`rockmass.solver.run` drives it stage by stage.
+
+The arrays follow the layout of :mod:`rockmass.solver._kernels`; this class owns them and is the
+only place that calls the kernels.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import _kernels as K
+from .selectors import domain_edges, select_blocks
+from .settings import ContinuouslyYielding, Coulomb, Settings
+
+__all__ = ["Engine", "joint_table", "strip_collinear"]
+
+_DOF = {"x": 0, "y": 1, "r": 2}
+FREE, FIXED, PRESCRIBED = 0, 1, 2
+
+
+def joint_table(models: list) -> np.ndarray:
+    """Rows of the kernel's joint-model table (columns ``P_*`` of :mod:`._kernels`)."""
+    table = np.zeros((len(models), K.N_PROP_COLUMNS))
+    for row, m in zip(table, models):
+        if isinstance(m, Coulomb):
+            row[K.P_MODEL] = K.MODEL_COULOMB
+            row[K.P_KN], row[K.P_KS] = m.kn_pa_m, m.ks_pa_m
+            row[K.P_TANPHI] = math.tan(math.radians(m.friction_deg))
+            row[K.P_COH], row[K.P_TEN] = m.cohesion_pa, m.tension_pa
+            row[K.P_TANPSI] = math.tan(math.radians(m.dilation_deg))
+            row[K.P_TANPHIR] = math.tan(math.radians(m.residual_deg))
+            row[K.P_MAXDIL] = m.max_dilation_m if math.isfinite(m.max_dilation_m) else 1e300
+        elif isinstance(m, ContinuouslyYielding):
+            row[K.P_MODEL] = K.MODEL_CY
+            row[K.P_KN], row[K.P_KS] = m.an_pa_m, m.as_pa_m
+            row[K.P_EN], row[K.P_ES] = m.en, m.es
+            row[K.P_PHIM0] = math.radians(m.initial_friction_deg)
+            row[K.P_PHIB] = math.radians(m.basic_friction_deg)
+            row[K.P_ROUGH] = m.roughness_m
+            row[K.P_TANPHI] = math.tan(math.radians(m.initial_friction_deg))
+        else:  # pragma: no cover - Settings checks the types
+            raise TypeError(f"unknown joint model {m!r}")
+    return table
+
+
+def strip_collinear(xy: np.ndarray, offsets: np.ndarray, rel_tol: float = 1e-9):
+    """Drop vertices where a block's boundary runs straight on (|sin of the turn| < ``rel_tol``).
+
+    blockgen keeps such vertices where a neighbour's corner meets an edge (T-junctions), so that
+    contacts match edge by edge; for the rigid-block narrow phase they would split one face into
+    collinear pieces, and the separating-axis test could pick a piece that does not face the
+    neighbour. The shape (area, centroid, inertia) is unchanged.
+    """
+    n = len(offsets) - 1
+    block = np.repeat(np.arange(n), np.diff(offsets))
+    idx = np.arange(len(xy))
+    nxt = idx + 1
+    nxt[offsets[1:] - 1] = offsets[:-1]
+    prv = idx - 1
+    prv[offsets[:-1]] = offsets[1:] - 1
+    e0 = xy - xy[prv]
+    e1 = xy[nxt] - xy
+    cross = e0[:, 0] * e1[:, 1] - e0[:, 1] * e1[:, 0]
+    keep = np.abs(cross) > rel_tol * np.hypot(*e0.T) * np.hypot(*e1.T)
+    counts = np.bincount(block[keep], minlength=n)
+    if (counts < 3).any():  # degenerate block: keep it as given
+        bad = counts < 3
+        keep |= bad[block]
+        counts = np.bincount(block[keep], minlength=n)
+    return np.ascontiguousarray(xy[keep]), np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+
+
+class Engine:
+    """Mutable DEM state of one model under one :class:`~rockmass.solver.Settings`."""
+
+    def __init__(self, model, settings: Settings):
+        from rockmass.blockgen.model import CONTACT_KINDS, KIND_JOINT
+
+        self.model = model
+        self.settings = settings
+        nb = model.n_blocks
+        self.nb = nb
+        xy, self.off = strip_collinear(model.xy_m, np.asarray(model.offsets, np.int64))
+        block_of_vertex = np.repeat(np.arange(nb), np.diff(self.off))
+        self.loc = np.ascontiguousarray(xy - model.centroid_xy_m[block_of_vertex])
+        self.pos = np.ascontiguousarray(model.centroid_xy_m.copy())
+        self.pos0 = self.pos.copy()
+        self.rot = np.zeros(nb)
+        self.vel = np.zeros((nb, 2))
+        self.omg = np.zeros(nb)
+        rho = settings.material.density_kg_m3
+        area = model.area_m2
+        polar = model.second_moment_m4[:, 0] + model.second_moment_m4[:, 1]
+        self.mass = np.ascontiguousarray(np.column_stack([rho * area, rho * area, rho * polar]))
+        self.active = np.ones(nb, np.bool_)
+        self.radius = np.sqrt(np.maximum.reduceat((self.loc ** 2).sum(1), self.off[:-1]))
+        self.wv = np.empty_like(self.loc)
+
+        edge = np.roll(model.xy_m, -1, axis=0) - model.xy_m
+        last = self.off[1:] - 1
+        edge[last] = model.xy_m[self.off[:-1]] - model.xy_m[last]
+        edge_len = np.hypot(edge[:, 0], edge[:, 1])
+        self.median_edge_m = float(np.median(edge_len))
+        self.rounding_m = settings.rounding_m or 0.01 * self.median_edge_m
+        self.ctol_m = settings.contact_tolerance_m or self.rounding_m
+        self.overlap_limit_m = 0.5 * self.rounding_m
+        self.hysteresis_m = 0.01 * self.rounding_m
+
+        # joint models by contact label
+        labels = list(settings.joints)
+        self.props = joint_table([settings.joints[k] for k in labels])
+        self.default_prop = labels.index("default")
+
+        def label_row(kind, source):
+            name = CONTACT_KINDS[kind]
+            if kind == KIND_JOINT and 0 <= source < len(model.set_names):
+                if model.set_names[source] in settings.joints:
+                    return labels.index(model.set_names[source])
+            return labels.index(name) if name in settings.joints else self.default_prop
+
+        inner = model.contact_blocks[:, 1] >= 0
+        cb = np.sort(model.contact_blocks[inner], axis=1)
+        key = cb[:, 0] * nb + cb[:, 1]
+        rows = np.array([label_row(k, s) for k, s in zip(model.contact_kind[inner],
+                                                          model.contact_source[inner])], np.int64)
+        order = np.lexsort((-model.contact_length_m[inner], key))  # longest label of a pair first
+        key, rows = key[order], rows[order]
+        first = np.ones(len(key), bool)
+        first[1:] = key[1:] != key[:-1]
+        self.init_key = np.ascontiguousarray(key[first])
+        self.init_prop = np.ascontiguousarray(rows[first])
+        self.init_brk = np.zeros(len(self.init_key))
+
+        # boundaries
+        self.edges = domain_edges(model, 1e-6 * max(self.median_edge_m, 1e-12))
+        self.base_mode = np.zeros((nb, 3), np.int8)
+        for fix in settings.fixes:
+            ids = select_blocks(model, fix.where, self.edges)
+            if not len(ids):
+                raise ValueError(f"fix {fix.where!r} selects no block")
+            for d in fix.dofs:
+                self.base_mode[ids, _DOF[d]] = FIXED
+        self.dof_input = np.full((nb, 3), -1, np.int64)
+        for i, inp in enumerate(settings.velocity_inputs):
+            ids = select_blocks(model, inp.where, self.edges)
+            if not len(ids):
+                raise ValueError(f"velocity input {inp.where!r} selects no block")
+            self.dof_input[ids, _DOF[inp.component]] = i
+        self.mode = self.base_mode.copy()
+        self.ext_f = np.zeros((nb, 2))
+        self.ext_a = np.zeros(nb)
+        self.ext_b = np.zeros(nb)
+        self.quiet_edges = np.zeros((0, 8))
+        self.gravity = np.array(settings.gravity_m_s2, float)
+
+        # pairs
+        self.pa = np.empty(0, np.int64)
+        self.pb = np.empty(0, np.int64)
+        self.pprop = np.empty(0, np.int64)
+        self.pref = np.empty(0, np.int8)
+        self.pinit = np.empty(0, np.int64)
+        self.S = np.zeros((0, 2, K.N_SLOT_COLUMNS))
+        self.fpair = np.zeros((0, 6))
+        self.E = np.zeros(K.N_ENERGY)
+        self.time_s = 0.0
+        self.set_stage_modes(dynamic=False)
+        self.rebuild()
+
+    # ----------------------------------------------------------------- modes and boundaries --
+    def set_stage_modes(self, dynamic: bool):
+        """Fixed dofs from the fixes; velocity-input dofs prescribed in dynamic stages, held fixed
+        in static ones; excavated blocks are inactive."""
+        self.mode = self.base_mode.copy()
+        inp = self.dof_input >= 0
+        self.mode[inp] = PRESCRIBED if dynamic else FIXED
+        self.inv_mass = np.where(self.mode == FREE, 1.0 / self.mass, 0.0)
+        self.movable = (self.mode != FIXED).any(axis=1) & self.active
+
+    @property
+    def margin_m(self) -> float:
+        extra = 0.0
+        if len(self.S):
+            act = self.S[:, :, K.ACT] != 0
+            if act.any():
+                extra = float(np.max((self.S[:, :, K.U0] + self.S[:, :, K.DIL])[act], initial=0.0))
+        return max(2.0 * (self.ctol_m + extra), 0.02 * self.median_edge_m)
+
+    def rebuild(self):
+        """Broad phase and pair remap (state of surviving pairs kept)."""
+        K.world_vertices(self.loc, self.off, self.pos, self.rot, self.active, self.wv)
+        margin = self.margin_m
+        pa, pb = K.broad_phase(self.wv, self.off, self.active, self.movable, margin)
+        n = len(pa)
+        S = np.zeros((n, 2, K.N_SLOT_COLUMNS))
+        pref = np.zeros(n, np.int8)
+        pinit = np.zeros(n, np.int64)
+        pprop = np.zeros(n, np.int64)
+        K.remap_pairs(self.pa, self.pb, self.S, self.pref, self.pinit, pa, pb, self.nb, S, pref,
+                      pinit, pprop, self.init_key, self.init_prop, self.default_prop, self.init_brk)
+        self.pa, self.pb, self.S, self.pref, self.pinit, self.pprop = pa, pb, S, pref, pinit, pprop
+        self.fpair = np.zeros((n, 6))
+        self.bp_ptr, self.bp_idx = K.block_pair_index(pa, pb, self.nb)
+        self.ref_pos = self.pos.copy()
+        self.ref_rot = self.rot.copy()
+        self.margin = margin
+        self.n_rebuilds = getattr(self, "n_rebuilds", -1) + 1
+
+    def detect(self):
+        """Run the narrow phase once without motion: establishes the contact slots."""
+        K.world_vertices(self.loc, self.off, self.pos, self.rot, self.active, self.wv)
+        K.contact_forces(self.wv, self.off, self.pos, self.vel, self.omg, self.pa, self.pb,
+                         self.pprop, self.pref, self.pinit, self.init_brk, self.props, self.S, 0.0,
+                         self.ctol_m, self.hysteresis_m, self.rounding_m, 0.0, self.fpair,
+                         np.zeros(K.N_ENERGY))
+
+    def excavate(self, regions):
+        """Remove the blocks of the given excavation stages (regions) and rebuild the contacts."""
+        if not len(regions):
+            return
+        gone = np.isin(self.model.region, np.asarray(regions))
+        self.active[gone] = False
+        self.vel[gone] = 0.0
+        self.omg[gone] = 0.0
+        self.movable &= self.active
+        self.rebuild()
+
+    # ------------------------------------------------------------------------- time step --
+    def stable_time_step(self, beta: float = 0.0) -> float:
+        """Critical time step 2/ω_max from a Gershgorin bound on M^(-1/2) K M^(-1/2).
+
+        Each active slot adds K g gᵀ (K = k_n l or k_s l, g the slot's relative-displacement row
+        over the 6 dofs of its two blocks). Row sums of |M^(-1/2) K M^(-1/2)| bound the largest
+        eigenvalue, so 2/√(max row sum) ≤ 2/ω_max: a rigorous (conservative) limit for the present
+        contacts. With stiffness-proportional damping β: Δt ≤ (2/ω)(√(1 + ξ²) − ξ), ξ = βω/2
+        (REFERENCE.md §5).
+        """
+        act = self.S[:, :, K.ACT] != 0
+        p, k = np.nonzero(act)
+        if not len(p):
+            return math.inf
+        slot = self.S[p, k]
+        length = slot[:, K.LEN]
+        props = self.props[self.pprop[p]]
+        kn = props[:, K.P_KN] * length
+        ks = props[:, K.P_KS] * length
+        cy = props[:, K.P_MODEL] == K.MODEL_CY
+        if cy.any():  # tangent stiffness a σ^e at twice the present stress (e > 0 only)
+            sig = np.maximum(2 * slot[:, K.FN] / np.maximum(length, 1e-300), 1.0)
+            kn = np.where(cy, kn * sig ** props[:, K.P_EN], kn)
+            ks = np.where(cy, ks * sig ** props[:, K.P_ES], ks)
+        a, b = self.pa[p], self.pb[p]
+        n = slot[:, [K.NX, K.NY]]
+        t = np.column_stack([-n[:, 1], n[:, 0]])
+        pt = slot[:, [K.PX, K.PY]]
+        ra = pt - self.pos[a]
+        rb = pt - self.pos[b]
+        scale = np.sqrt(self.inv_mass)  # 0 for dofs that do not move
+        rows = np.zeros((self.nb, 3))
+        for stiff, d in ((kn, n), (ks, t)):
+            ga = np.column_stack([-d[:, 0], -d[:, 1], -(ra[:, 0] * d[:, 1] - ra[:, 1] * d[:, 0])])
+            gb = np.column_stack([d[:, 0], d[:, 1], rb[:, 0] * d[:, 1] - rb[:, 1] * d[:, 0]])
+            ga = np.abs(ga) * scale[a]
+            gb = np.abs(gb) * scale[b]
+            s = ga.sum(1) + gb.sum(1)
+            np.add.at(rows, a, (stiff * s)[:, None] * ga)
+            np.add.at(rows, b, (stiff * s)[:, None] * gb)
+        lam = rows.max()
+        if lam <= 0:
+            return math.inf
+        omega = math.sqrt(lam)
+        xi = 0.5 * beta * omega
+        return 2.0 / omega * (math.sqrt(1.0 + xi * xi) - xi)
+
+    # ---------------------------------------------------------------------- state summaries --
+    def strain_energy(self) -> float:
+        """Elastic energy in the contacts: Σ l(∫σ du_n + τ²/2k_s) over active slots (J per m)."""
+        act = self.S[:, :, K.ACT] != 0
+        p, k = np.nonzero(act)
+        if not len(p):
+            return 0.0
+        slot = self.S[p, k]
+        props = self.props[self.pprop[p]]
+        length = slot[:, K.LEN]
+        sig = slot[:, K.FN] / np.maximum(length, 1e-300)
+        tau = slot[:, K.TAU]
+        kn, ks, en = props[:, K.P_KN], props[:, K.P_KS], props[:, K.P_EN]
+        cy = props[:, K.P_MODEL] == K.MODEL_CY
+        es = np.where(cy, props[:, K.P_ES], 0.0)
+        ks_t = ks * np.where(es > 0, np.maximum(sig, 0.0) ** es, 1.0)
+        normal = np.where(cy, np.maximum(sig, 0.0) ** (2 - en) / (kn * (2 - en)), 0.5 * sig ** 2 / kn)
+        shear = np.where(ks_t > 0, 0.5 * tau ** 2 / np.maximum(ks_t, 1e-300), 0.0)
+        return float(np.sum(length * (normal + shear)))
+
+    def kinetic_energy(self) -> float:
+        m = self.mass
+        free = self.active[:, None] & (self.mode == FREE)  # prescribed dofs are the boundary's
+        v2 = np.column_stack([self.vel ** 2, self.omg ** 2])
+        return float(0.5 * np.sum(np.where(free, m * v2, 0.0)))
+
+    def vertex_displacement(self, ref_pos, ref_rot) -> np.ndarray:
+        """Largest vertex displacement of each block from a reference placement (m)."""
+        out = np.zeros(self.nb)
+        c, s = np.cos(self.rot), np.sin(self.rot)
+        c0, s0 = np.cos(ref_rot), np.sin(ref_rot)
+        b = np.repeat(np.arange(self.nb), np.diff(self.off))
+        x, y = self.loc[:, 0], self.loc[:, 1]
+        dx = self.pos[b, 0] + c[b] * x - s[b] * y - (ref_pos[b, 0] + c0[b] * x - s0[b] * y)
+        dy = self.pos[b, 1] + s[b] * x + c[b] * y - (ref_pos[b, 1] + s0[b] * x + c0[b] * y)
+        np.maximum.at(out, b, np.hypot(dx, dy))
+        return out
+
+    def snapshot(self) -> tuple:
+        return tuple(a.copy() for a in (self.pos, self.rot, self.vel, self.omg, self.S, self.E,
+                                        self.init_brk)) + (self.time_s,)
+
+    def restore(self, snap):
+        (self.pos, self.rot, self.vel, self.omg, S, self.E, self.init_brk, self.time_s) = \
+            tuple(a.copy() if isinstance(a, np.ndarray) else a for a in snap)
+        if S.shape == self.S.shape:
+            self.S = S
+        self.rebuild()

@@ -1,0 +1,133 @@
+"""Initial stress, boundary tractions and quiet boundaries turned into the engine's arrays.
+
+Stress fields are linear in y at most (uniform, or gravity with K₀), so forces on a straight edge of
+length L between points P₀, P₁ with tractions t₀, t₁ are lumped *consistently* (linear element):
+F₀ = L(2t₀ + t₁)/6 at P₀ and F₁ = L(t₀ + 2t₁)/6 at P₁, which keeps the resultant and its moment
+exact — so a block under an equilibrium stress field starts in equilibrium (REFERENCE.md §5,
+problem 10).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import _kernels as K
+from .settings import BoundaryStress, InSituStress, QuietBoundary
+
+__all__ = ["stress_at", "apply_insitu", "apply_boundary_stress", "quiet_edge_table"]
+
+
+def stress_at(insitu: InSituStress, points: np.ndarray, unit_weight: float, y_ref: float):
+    """Compression-positive (σ_xx, σ_yy, σ_xy) at the points (see :class:`InSituStress`)."""
+    y = points[:, 1]
+    syy = np.full(len(points), insitu.syy_pa, float)
+    sxx = np.full(len(points), insitu.sxx_pa, float)
+    if insitu.gravity_gradient:
+        gravity_part = unit_weight * (y_ref - y)
+        syy = syy + gravity_part
+        sxx = sxx + insitu.k0 * gravity_part
+    return sxx, syy, np.full(len(points), insitu.sxy_pa, float)
+
+
+def _y_ref(engine, insitu: InSituStress) -> float:
+    return float(engine.model.domain_xy_m[:, 1].max()) if insitu.y_ref_m is None else insitu.y_ref_m
+
+
+def _unit_weight(engine) -> float:
+    return engine.settings.material.density_kg_m3 * float(np.hypot(*engine.gravity))
+
+
+def _lumped(t0, t1, length):
+    return length * (2 * t0 + t1) / 6.0, length * (t0 + 2 * t1) / 6.0
+
+
+def apply_insitu(engine, insitu: InSituStress):
+    """Write the in-situ stress into the active contact slots: σ_n = n·σ·n, τ = −t·σ·n
+    (compression-positive σ), lumped over each pair's contact face; the normal offset U0 makes the
+    joint law return exactly that σ_n at the present overlap."""
+    S = engine.S
+    act = S[:, :, K.ACT] != 0
+    if not act.any():
+        return
+    pts = S[:, :, [K.PX, K.PY]].reshape(-1, 2)
+    sxx, syy, sxy = stress_at(insitu, pts, _unit_weight(engine), _y_ref(engine, insitu))
+    n = S[:, :, [K.NX, K.NY]].reshape(-1, 2)
+    t = np.column_stack([-n[:, 1], n[:, 0]])
+    sn = n[:, 0] ** 2 * sxx + 2 * n[:, 0] * n[:, 1] * sxy + n[:, 1] ** 2 * syy
+    tn = -(t[:, 0] * (sxx * n[:, 0] + sxy * n[:, 1]) + t[:, 1] * (sxy * n[:, 0] + syy * n[:, 1]))
+    sn = sn.reshape(-1, 2)
+    tn = tn.reshape(-1, 2)
+    both = act.all(axis=1)
+    length = S[:, :, K.LEN]
+    face = length.sum(axis=1)
+    sig = sn.copy()
+    tau = tn.copy()
+    f0, f1 = _lumped(sn[both, 0], sn[both, 1], face[both])
+    sig[both, 0], sig[both, 1] = f0 / length[both, 0], f1 / length[both, 1]
+    f0, f1 = _lumped(tn[both, 0], tn[both, 1], face[both])
+    tau[both, 0], tau[both, 1] = f0 / length[both, 0], f1 / length[both, 1]
+    props = engine.props[engine.pprop]
+    for k in range(2):
+        rows = np.flatnonzero(act[:, k])
+        pr = props[rows]
+        s = sig[rows, k]
+        cy = pr[:, K.P_MODEL] == K.MODEL_CY
+        en = pr[:, K.P_EN]
+        un = np.where(cy, np.maximum(s, 0.0) ** (1 - en) / ((1 - en) * pr[:, K.P_KN]), s / pr[:, K.P_KN])
+        S[rows, k, K.U0] = un - S[rows, k, K.OVL]
+        S[rows, k, K.TAU] = tau[rows, k]
+        S[rows, k, K.FN] = s * S[rows, k, K.LEN]
+        S[rows, k, K.FS] = tau[rows, k] * S[rows, k, K.LEN]
+    engine.rebuild()  # the margin grows with the stored closure
+
+
+def apply_boundary_stress(engine, loads: tuple[BoundaryStress, ...], insitu: InSituStress | None):
+    """Constant tractions −σ·n_out on the domain edges of the chosen sides (force and the moment
+    terms that rotate with the block, see :func:`rockmass.solver._kernels.advance`)."""
+    engine.ext_f[:] = 0.0
+    engine.ext_a[:] = 0.0
+    engine.ext_b[:] = 0.0
+    edges = engine.edges
+    for load in loads:
+        on = np.flatnonzero(edges.on(load.sides))
+        if not len(on):
+            raise ValueError(f"boundary stress on {load.sides}: no block edge lies on these sides")
+        blocks = edges.block[on]
+        p0, p1, nrm = edges.p0[on], edges.p1[on], edges.normal[on]
+        length = np.hypot(*(p1 - p0).T)
+        if load.from_insitu:
+            if insitu is None:
+                raise ValueError("boundary stress from_insitu needs an in-situ stress")
+            uw, yr = _unit_weight(engine), _y_ref(engine, insitu)
+            s0 = stress_at(insitu, p0, uw, yr)
+            s1 = stress_at(insitu, p1, uw, yr)
+        else:
+            const = tuple(np.full(len(on), v) for v in (load.sxx_pa, load.syy_pa, load.sxy_pa))
+            s0 = s1 = const
+        trac = []
+        for sxx, syy, sxy in (s0, s1):
+            trac.append(-np.column_stack([sxx * nrm[:, 0] + sxy * nrm[:, 1],
+                                          sxy * nrm[:, 0] + syy * nrm[:, 1]]))
+        f0, f1 = _lumped(trac[0], trac[1], length[:, None])
+        for f, p in ((f0, p0), (f1, p1)):
+            r = p - engine.pos0[blocks]
+            np.add.at(engine.ext_f, blocks, f)
+            np.add.at(engine.ext_a, blocks, r[:, 0] * f[:, 1] - r[:, 1] * f[:, 0])
+            np.add.at(engine.ext_b, blocks, -(r[:, 0] * f[:, 0] + r[:, 1] * f[:, 1]))
+
+
+def quiet_edge_table(engine, quiet: QuietBoundary) -> np.ndarray:
+    """Rows ``block, local midpoint (2), local outward normal (2), length, ρC_p, ρC_s`` for the
+    quiet sides (:func:`rockmass.solver._kernels.quiet_forces`)."""
+    cp, cs = engine.settings.material.wave_speeds()
+    rho = engine.settings.material.density_kg_m3
+    edges = engine.edges
+    on = np.flatnonzero(edges.on(quiet.sides))
+    if not len(on):
+        raise ValueError(f"quiet boundary on {quiet.sides}: no block edge lies on these sides")
+    blocks = edges.block[on]
+    mid = 0.5 * (edges.p0[on] + edges.p1[on]) - engine.pos0[blocks]
+    length = np.hypot(*(edges.p1[on] - edges.p0[on]).T)
+    return np.ascontiguousarray(np.column_stack([blocks, mid, edges.normal[on], length,
+                                                 np.full(len(on), rho * cp),
+                                                 np.full(len(on), rho * cs)]))

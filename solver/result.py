@@ -1,0 +1,118 @@
+"""What a DEM run returns: per-stage reports, final state, histories, frames, block energies."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+__all__ = ["StageResult", "Frame", "Result", "STATUS_OK", "FAILED_STATUSES"]
+
+STATUS_OK = "ok"
+FAILED_STATUSES = ("overlap", "unstable")
+
+
+@dataclass
+class StageResult:
+    """Report of one stage (every number finite; ``status`` says how the stage ended:
+    ``converged`` / ``max_steps`` (static), ``completed`` (dynamic), ``overlap`` / ``unstable``)."""
+
+    name: str
+    kind: str
+    status: str
+    steps: int
+    time_step_s: float
+    stable_time_step_s: float
+    simulated_time_s: float
+    converged: bool | None
+    unbalanced_ratio: float
+    max_displacement_m: float
+    max_displacement_boundary_m: float
+    max_displacement_stage_m: float
+    slipping_contacts: int
+    open_contacts: int
+    newly_broken_contacts: int
+    broken_contacts: int
+    detached_blocks: int
+    blocks_removed: int
+    energy: dict
+    wall_time_s: float
+    contact_rebuilds: int
+    diagnostic: str | None = None
+
+
+@dataclass
+class Frame:
+    """Block placement at one instant (for blocks_NNNN.vtu)."""
+
+    stage: str
+    step: int
+    time_s: float
+    position_m: np.ndarray
+    rotation_rad: np.ndarray
+    velocity_m_s: np.ndarray
+    active: np.ndarray
+
+
+@dataclass
+class Result:
+    """Result of :func:`rockmass.solver.run`.
+
+    ``displacement_m`` / ``rotation_rad`` / ``velocity_m_s``: final state of every block (excavated
+    blocks keep their last values and ``active`` False). ``history``: columns of the monitored
+    blocks (``time_s``, ``stage``, ``<name>_ux_m``, ``<name>_uy_m``, ``<name>_vx_m_s``, …).
+    ``block_energy``: per block volume (area × 1 m), mass, peak velocity and peak kinetic energy
+    over the dynamic stages (seed 001 Fig. 7). ``status`` is ``ok`` or the failure of the last stage.
+    """
+
+    stages: list
+    displacement_m: np.ndarray
+    rotation_rad: np.ndarray
+    velocity_m_s: np.ndarray
+    active: np.ndarray
+    history: dict
+    frames: list
+    block_energy: dict
+    status: str = STATUS_OK
+    diagnostic: str | None = None
+    info: dict = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        return self.status == STATUS_OK
+
+    def stage(self, name: str) -> StageResult:
+        for s in self.stages:
+            if s.name == name:
+                return s
+        raise KeyError(f"no stage named {name!r} (stages: {[s.name for s in self.stages]})")
+
+    def energy_table(self, n_bins: int = 8) -> list[dict]:
+        """Blocks binned by volume (log bins): count, mean and max peak kinetic energy and speed."""
+        vol = self.block_energy["volume_m3"]
+        ke = self.block_energy["peak_kinetic_energy_j"]
+        v = self.block_energy["peak_velocity_m_s"]
+        keep = vol > 0
+        if not keep.any():
+            return []
+        edges = np.geomspace(vol[keep].min(), vol[keep].max() * (1 + 1e-12), n_bins + 1)
+        idx = np.clip(np.searchsorted(edges, vol, side="right") - 1, 0, n_bins - 1)
+        rows = []
+        for i in range(n_bins):
+            sel = keep & (idx == i)
+            if not sel.any():
+                continue
+            rows.append({"volume_min_m3": float(edges[i]), "volume_max_m3": float(edges[i + 1]),
+                         "blocks": int(sel.sum()),
+                         "mean_peak_kinetic_energy_j": float(ke[sel].mean()),
+                         "max_peak_kinetic_energy_j": float(ke[sel].max()),
+                         "mean_peak_velocity_m_s": float(v[sel].mean()),
+                         "max_peak_velocity_m_s": float(v[sel].max())})
+        return rows
+
+    def to_json_dict(self) -> dict:
+        return {"status": self.status, "diagnostic": self.diagnostic,
+                "stages": [asdict(s) for s in self.stages],
+                "max_displacement_m": float(np.max(np.hypot(*self.displacement_m.T), initial=0.0)),
+                "block_energy_vs_volume": self.energy_table(),
+                "info": self.info}

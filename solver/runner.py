@@ -1,0 +1,305 @@
+"""``run(model, settings) -> Result``: the stages of a DEM run, one after the other.
+
+Per stage: remove the excavated blocks, set the degrees of freedom (velocity inputs are held fixed
+in static stages and prescribed in dynamic ones), choose the time step (automatic: safety × the
+Gershgorin bound of :meth:`Engine.stable_time_step`; a user value above the bound is refused),
+then step in chunks (the kernel returns for a contact rebuild, convergence, an overlap above the
+limit or a non-finite value). Between chunks the monitors, frames and peak block velocities are
+recorded. A failed stage (overlap, non-finite state) ends the run; the state of the last good chunk
+is kept and every report is written with a ``status`` and a diagnostic.
+
+Energy ledger per stage (J per metre of thickness): work in = gravity work + boundary work
+(tractions, and work done by prescribed blocks through their contacts); it must equal
+Δ kinetic + Δ strain + slip dissipation + breakage + damping dissipation; the residual is reported.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from . import _kernels as K
+from .engine import FIXED, Engine
+from .loading import apply_boundary_stress, apply_insitu, quiet_edge_table
+from .result import Frame, Result, StageResult
+from .selectors import block_at_point
+from .settings import Settings, Stage
+
+__all__ = ["run"]
+
+_CHECK_EVERY = 10         # static convergence test interval (steps)
+_STATIC_CHUNK = 500       # steps between records in static stages
+_DYNAMIC_RECORDS = 400    # records per dynamic stage (history rows) when history_every == 0
+
+
+def _rayleigh(stage: Stage) -> tuple[float, float]:
+    """(α, β) of C = αM + βK from ξ at f: α = ξω, β = ξ/ω (REFERENCE.md §5)."""
+    if stage.kind != "dynamic" or stage.rayleigh_ratio <= 0:
+        return 0.0, 0.0
+    omega = 2 * math.pi * stage.rayleigh_frequency_hz
+    return stage.rayleigh_ratio * omega, stage.rayleigh_ratio / omega
+
+
+def _overlap_diagnostic(eng: Engine, pair: int, overlap: float, dt: float) -> str:
+    a, b = int(eng.pa[pair]), int(eng.pb[pair])
+    slot = eng.S[pair, 0] if eng.S[pair, 0, K.OVL] >= eng.S[pair, 1, K.OVL] else eng.S[pair, 1]
+    x, y = slot[K.PX], slot[K.PY]
+    prop = eng.props[eng.pprop[pair]]
+    sig = slot[K.FN] / max(slot[K.LEN], 1e-300)
+    speed = float(np.hypot(*(eng.vel[b] - eng.vel[a])))
+    causes = []
+    if sig > 0 and sig / prop[K.P_KN] > 0.25 * eng.overlap_limit_m:
+        causes.append(f"the joint normal stiffness is low for the load: σ_n/k_n = "
+                      f"{sig / prop[K.P_KN]:.3g} m — raise k_n or lower the load")
+    if speed * dt > 0.1 * eng.overlap_limit_m:
+        causes.append(f"the blocks approach at {speed:.3g} m/s, {speed * dt:.3g} m a step — lower "
+                      "the time step or the input velocity")
+    if not causes:
+        causes.append("a block passing a corner of a small neighbour (sliver) — increase "
+                      "rounding_m or merge small blocks in blockgen")
+    return (f"overlap {overlap:.4g} m between blocks {a} and {b} at ({x:.4g}, {y:.4g}) m exceeds the "
+            f"limit {eng.overlap_limit_m:.4g} m (half the rounding length); likely cause: "
+            + "; ".join(causes))
+
+
+class _Recorder:
+    """Histories of monitored blocks, frames and peak block velocities."""
+
+    def __init__(self, eng: Engine, settings: Settings):
+        self.eng = eng
+        self.monitors = []
+        for m in settings.monitors:
+            block = m.block if m.block is not None else block_at_point(eng.model, m.point_xy_m)
+            if not 0 <= block < eng.nb:
+                raise ValueError(f"monitor {m.name!r}: block {block} out of range")
+            self.monitors.append((m.name, block))
+        self.rows = []
+        self.frames = []
+        self.peak_v = np.zeros(eng.nb)
+
+    def record(self, stage: str, ratio: float):
+        e = self.eng
+        row = {"time_s": e.time_s, "stage": stage, "unbalanced_ratio": ratio,
+               "kinetic_energy_j": e.kinetic_energy()}
+        for name, b in self.monitors:
+            row[f"{name}_ux_m"] = e.pos[b, 0] - e.pos0[b, 0]
+            row[f"{name}_uy_m"] = e.pos[b, 1] - e.pos0[b, 1]
+            row[f"{name}_rotation_rad"] = e.rot[b]
+            row[f"{name}_vx_m_s"] = e.vel[b, 0]
+            row[f"{name}_vy_m_s"] = e.vel[b, 1]
+        self.rows.append(row)
+
+    def frame(self, stage: str, step: int):
+        e = self.eng
+        self.frames.append(Frame(stage, step, e.time_s, e.pos.copy(), e.rot.copy(), e.vel.copy(),
+                                 e.active.copy()))
+
+    def track_peaks(self):
+        e = self.eng
+        speed = np.hypot(e.vel[:, 0], e.vel[:, 1]) + np.abs(e.omg) * e.radius
+        np.maximum(self.peak_v, np.where(e.active, speed, 0.0), out=self.peak_v)
+
+    def history(self) -> dict:
+        if not self.rows:
+            return {}
+        return {k: np.array([r[k] for r in self.rows]) for k in self.rows[0]}
+
+
+def _contact_counts(eng: Engine):
+    S = eng.S
+    act = S[:, :, K.ACT] != 0
+    slipping = int((act & (S[:, :, K.SLIP] != 0)).sum())
+    closed = np.zeros(len(eng.init_key), bool)
+    has = eng.pinit >= 0
+    closed[eng.pinit[has]] = (act & (S[:, :, K.FN] > 0)).any(axis=1)[has]
+    a, b = np.divmod(eng.init_key, eng.nb)
+    live = eng.active[a] & eng.active[b]
+    broken = eng.init_brk.copy()
+    broken[eng.pinit[has]] = np.maximum(broken[eng.pinit[has]], S[has, :, K.BRK].max(axis=1))
+    return slipping, int((live & ~closed).sum()), int((broken > 0).sum())
+
+
+def _boundary_blocks(eng: Engine, removed: np.ndarray) -> np.ndarray:
+    """Active blocks that shared a contact with an excavated block."""
+    cb = eng.model.contact_blocks
+    inner = cb[:, 1] >= 0
+    a, b = cb[inner, 0], cb[inner, 1]
+    mask = np.zeros(eng.nb, bool)
+    mask[a[removed[b]]] = True
+    mask[b[removed[a]]] = True
+    return mask & eng.active
+
+
+def _detached(eng: Engine, removed: np.ndarray) -> int:
+    """Active blocks whose centroid now lies inside the excavated space."""
+    if not removed.any():
+        return 0
+    import shapely
+
+    polys = eng.model.to_shapely()[removed]
+    opening = shapely.union_all(polys)
+    inside = shapely.contains_xy(opening, eng.pos[:, 0], eng.pos[:, 1])
+    return int((inside & eng.active).sum())
+
+
+def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, ref) -> StageResult:
+    wall0 = time.perf_counter()
+    eng.excavate(list(stage.excavate))
+    dynamic = stage.kind == "dynamic"
+    eng.set_stage_modes(dynamic)
+    eng.rebuild()
+    eng.detect()
+    alpha_mass, beta = _rayleigh(stage)
+    limit = eng.stable_time_step(beta)
+    if stage.time_step_s is not None:
+        if stage.time_step_s > limit:
+            raise ValueError(f"stage {stage.name!r}: time_step_s = {stage.time_step_s:.6g} s exceeds "
+                             f"the stable limit {limit:.6g} s (2/ω_max of the contact stiffnesses"
+                             f"{' with Rayleigh damping' if beta else ''}); use at most that")
+        dt = stage.time_step_s
+    elif math.isfinite(limit):
+        dt = settings.time_step_safety * limit
+    else:  # no contact at all: free flight, the step only limits the record interval
+        dt = (stage.duration_s or 1.0) / 1000.0
+    n_steps = math.ceil(stage.duration_s / dt) if dynamic else stage.max_steps
+    eng.quiet_edges = (quiet_edge_table(eng, settings.quiet) if dynamic and settings.quiet
+                       else np.zeros((0, 8)))
+    inputs = settings.velocity_inputs if dynamic else ()
+    if stage.history_every:
+        chunk = stage.history_every
+    else:
+        chunk = max(1, n_steps // _DYNAMIC_RECORDS) if dynamic else _STATIC_CHUNK
+    frame_every = max(1, n_steps // stage.frames) if (dynamic and stage.frames) else 0
+
+    stage_pos, stage_rot = eng.pos.copy(), eng.rot.copy()
+    eng.E[:] = 0.0
+    ke0, se0 = eng.kinetic_energy(), eng.strain_energy()
+    out = np.zeros(5)
+    done = 0
+    status = "max_steps" if not dynamic else "completed"
+    diagnostic = None
+    ratio = math.inf
+    rebuilds0 = eng.n_rebuilds
+    rec.record(stage.name, 0.0)  # ratio unknown before the first step
+    if stage.frames:
+        rec.frame(stage.name, 0)
+    tol = stage.tolerance if not dynamic else 0.0
+    alpha_local = stage.local_damping if not dynamic else 0.0
+    while done < n_steps:
+        todo = min(chunk - done % chunk, n_steps - done)
+        t_half = eng.time_s + (np.arange(todo) + 0.5) * dt
+        presc = np.zeros((todo, max(1, len(inputs))))
+        for i, inp in enumerate(inputs):
+            presc[:, i] = inp.history(t_half)
+        snap = eng.snapshot()
+        rc = K.advance(todo, eng.loc, eng.off, eng.pos, eng.rot, eng.vel, eng.omg, eng.inv_mass,
+                       eng.mass, eng.mode, eng.dof_input, presc, eng.active, eng.movable,
+                       eng.gravity, eng.ext_f, eng.ext_a, eng.ext_b, eng.quiet_edges, eng.pa,
+                       eng.pb, eng.pprop, eng.pref, eng.pinit, eng.init_brk, eng.props, eng.S,
+                       eng.ref_pos, eng.ref_rot, eng.radius, dt, eng.ctol_m, eng.hysteresis_m,
+                       eng.rounding_m, eng.overlap_limit_m, eng.margin, alpha_local, alpha_mass,
+                       beta, tol, _CHECK_EVERY, eng.wv, eng.fpair, eng.bp_ptr, eng.bp_idx, eng.E,
+                       out)
+        steps = int(out[0])
+        if rc == K.RC_NONFINITE:
+            eng.restore(snap)
+            status = "unstable"
+            diagnostic = (f"a non-finite value appeared within steps {done}..{done + steps} at "
+                          f"Δt = {dt:.4g} s (stable limit {limit:.4g} s); the state of step {done} is "
+                          "kept — lower the time step or check the joint stiffnesses")
+            break
+        done += steps
+        eng.time_s += steps * dt
+        ratio = out[1]
+        if dynamic:
+            rec.track_peaks()
+        if rc == K.RC_OVERLAP:
+            status = "overlap"
+            diagnostic = _overlap_diagnostic(eng, int(out[3]), out[2], dt)
+            break
+        if rc == K.RC_REBUILD:
+            eng.rebuild()
+        if done % chunk == 0 or done == n_steps or rc == K.RC_CONVERGED:
+            rec.record(stage.name, ratio)
+        if frame_every and done % frame_every == 0 and done < n_steps:
+            rec.frame(stage.name, done)
+        if rc == K.RC_CONVERGED:
+            status = "converged"
+            break
+    if stage.frames:
+        rec.frame(stage.name, done)
+
+    removed = ~eng.active & (eng.model.region > 0)
+    disp_ref = eng.vertex_displacement(*ref)
+    disp_stage = eng.vertex_displacement(stage_pos, stage_rot)
+    live = eng.active
+    boundary = _boundary_blocks(eng, removed)
+    slipping, n_open, n_broken = _contact_counts(eng)
+    ke1, se1 = eng.kinetic_energy(), eng.strain_energy()
+    E = eng.E
+    work_in = E[K.E_GRAVITY] + E[K.E_EXTERNAL] - E[K.E_CONTACT_PRESC]
+    damping = -(E[K.E_LOCAL_DAMP] + E[K.E_VISCOUS] + E[K.E_QUIET])
+    stored = (ke1 - ke0) + (se1 - se0) + E[K.E_SLIP] + E[K.E_BROKEN] + damping
+    energy = {"work_gravity_j": E[K.E_GRAVITY],
+              "work_boundary_j": E[K.E_EXTERNAL] - E[K.E_CONTACT_PRESC],
+              "kinetic_start_j": ke0, "kinetic_end_j": ke1,
+              "strain_start_j": se0, "strain_end_j": se1,
+              "slip_dissipation_j": E[K.E_SLIP], "breakage_dissipation_j": E[K.E_BROKEN],
+              "damping_dissipation_j": damping,
+              "local_damping_j": -E[K.E_LOCAL_DAMP], "viscous_damping_j": -E[K.E_VISCOUS],
+              "quiet_boundary_j": -E[K.E_QUIET],
+              "residual_j": work_in - stored}
+    energy = {k: float(v) for k, v in energy.items()}
+    return StageResult(
+        name=stage.name, kind=stage.kind, status=status, steps=done, time_step_s=float(dt),
+        stable_time_step_s=float(limit) if math.isfinite(limit) else 0.0,
+        simulated_time_s=float(done * dt),
+        converged=(status == "converged") if not dynamic else None,
+        unbalanced_ratio=float(ratio) if math.isfinite(ratio) else 0.0,
+        max_displacement_m=float(disp_ref[live].max(initial=0.0)),
+        max_displacement_boundary_m=float(disp_ref[boundary].max(initial=0.0)),
+        max_displacement_stage_m=float(disp_stage[live].max(initial=0.0)),
+        slipping_contacts=slipping, open_contacts=n_open,
+        newly_broken_contacts=int(E[K.E_NEW_BROKEN]), broken_contacts=n_broken,
+        detached_blocks=_detached(eng, removed), blocks_removed=int(removed.sum()),
+        energy=energy, wall_time_s=time.perf_counter() - wall0,
+        contact_rebuilds=int(eng.n_rebuilds - rebuilds0), diagnostic=diagnostic)
+
+
+def run(model, settings: Settings) -> Result:
+    """Solve a :class:`~rockmass.blockgen.BlockModel` stage by stage (see the module docstring).
+
+    Raises ``ValueError`` for settings that do not fit the model (a selector choosing no block, a
+    time step above the stable limit, quiet boundaries without moduli); a run that fails while
+    stepping returns a Result with ``status`` ``overlap`` or ``unstable`` and a diagnostic.
+    """
+    eng = Engine(model, settings)
+    eng.detect()
+    if settings.insitu is not None:
+        apply_insitu(eng, settings.insitu)
+    apply_boundary_stress(eng, settings.boundary_stress, settings.insitu)
+    rec = _Recorder(eng, settings)
+    ref = (eng.pos0.copy(), np.zeros(eng.nb))
+    stages = []
+    status, diagnostic = "ok", None
+    for i, stage in enumerate(settings.stages):
+        res = _run_stage(eng, stage, settings, rec, ref)
+        stages.append(res)
+        if res.status in ("overlap", "unstable"):
+            status, diagnostic = res.status, res.diagnostic
+            break
+        if i == 0 and not stage.excavate and stage.kind == "static" and len(settings.stages) > 1:
+            ref = (eng.pos.copy(), eng.rot.copy())  # displacements after initial equilibrium
+    mass = eng.mass[:, 0]
+    block_energy = {"volume_m3": model.area_m2.copy(), "mass_kg": mass.copy(),
+                    "peak_velocity_m_s": rec.peak_v.copy(),
+                    "peak_kinetic_energy_j": 0.5 * mass * rec.peak_v ** 2}
+    info = {"blocks": eng.nb, "rounding_m": eng.rounding_m, "contact_tolerance_m": eng.ctol_m,
+            "overlap_limit_m": eng.overlap_limit_m, "pairs": int(len(eng.pa)),
+            "fixed_dofs": int((eng.base_mode == FIXED).sum())}
+    return Result(stages=stages, displacement_m=eng.pos - eng.pos0, rotation_rad=eng.rot.copy(),
+                  velocity_m_s=eng.vel.copy(), active=eng.active.copy(), history=rec.history(),
+                  frames=rec.frames, block_energy=block_energy, status=status,
+                  diagnostic=diagnostic, info=info)
