@@ -21,6 +21,15 @@ size parameters    |θ̂ − θ| <= 3 sd of the likelihood fit (:mod:`~rockmass.
 
 True and recovered sets are paired by the permutation with the smallest sum of angles between
 mean poles.
+
+:func:`compare_with_field` is the check of a realization against field data: it re-samples the
+network with the field's own scanlines and faces and compares measured and re-sampled values, each
+with a two-sample tolerance of 3 combined standard deviations:
+
+- P10 of each scanline: hit counts are Poisson, sd = √(N_field + N_sim) / L;
+- P21 of each face: sd² = Σ P21² (1 + CV²) / M over the two maps (M traces, CV of their lengths);
+- mean (clipped) trace length of each face: sd² = Σ var(l) / M (same window, so the same censoring);
+- mean pole of each set: angle <= 1.52 √(α95_field² + α95_sim²) (module table).
 """
 
 from __future__ import annotations
@@ -40,7 +49,7 @@ from .sampling import sample_line, sample_plane
 from .scanline import Scanline
 from .sizes import ExponentialSize, LognormalSize, PowerLawSize
 
-__all__ = ["ClosedLoop", "closed_loop", "virtual_face", "virtual_scanline"]
+__all__ = ["ClosedLoop", "closed_loop", "compare_fit", "compare_with_field", "virtual_face", "virtual_scanline"]
 
 #: α95 multiple of the mean-pole tolerance (module docstring): sqrt(ln 1000 / ln 20).
 POLE_TOLERANCE_FACTOR = float(np.sqrt(np.log(1000.0) / np.log(20.0)))
@@ -222,3 +231,89 @@ def closed_loop(specs: Sequence[FractureSetSpec], domain_m: ArrayLike, *, scanli
     rows = compare_fit(fit, specs, network)
     return ClosedLoop(tuple(rows), fit, network, sum(s.n_intersections for s in surveys),
                       sum(f.trace_map.n_traces for f in face_surveys))
+
+
+def _p21_stats(trace_map, area: float) -> tuple[float, float, float, float, int]:
+    """(P21, sd(P21), mean length, sd(mean length), M) of a face's clipped traces."""
+    from .intensity import clipped_lengths_m
+
+    lengths = np.asarray(clipped_lengths_m(trace_map))
+    lengths = lengths[lengths > 0]
+    m = lengths.size
+    if m == 0:
+        return 0.0, 0.0, float("nan"), float("nan"), 0
+    p21 = float(lengths.sum() / area)
+    mean = float(lengths.mean())
+    var = float(lengths.var(ddof=1)) if m > 1 else mean ** 2
+    return p21, p21 * float(np.sqrt((1.0 + var / mean ** 2) / m)), mean, float(np.sqrt(var / m)), m
+
+
+def compare_with_field(network: DiskNetwork, field_fit: FieldFit, scanlines: Sequence[Scanline],
+                       faces: Sequence[FaceSurvey]) -> list[dict]:
+    """Measured vs re-sampled P10, P21, mean trace length and set orientations (module docstring).
+
+    Parameters
+    ----------
+    network : DiskNetwork
+        A realization generated from ``field_fit``.
+    field_fit : FieldFit
+        The fit of the field data.
+    scanlines : sequence of Scanline
+        The field scanlines, each with ``start_xyz_m``.
+    faces : sequence of FaceSurvey
+        The field faces, each with ``point_m``.
+
+    Returns
+    -------
+    list of dict
+        Rows ``set`` (the scanline or face label for P10 / P21 / length rows), ``quantity``, ``true``
+        (measured), ``recovered`` (re-sampled), ``sd``, ``tolerance``, ``error`` and ``ok``.
+
+    Raises
+    ------
+    ValueError
+        A scanline without ``start_xyz_m`` or a face without ``point_m`` (their position is needed).
+    """
+    _require_network(network)
+    rows = []
+    virtual_lines = []
+    for k, line in enumerate(scanlines):
+        label = line.source or f"scanline {k}"
+        if line.start_xyz_m is None:
+            raise ValueError(f"{label}: the scanline has no start point (start_xyz_m); it is needed to "
+                             "re-sample a realization along it")
+        end = line.start_xyz_m + line.length_m * line.direction
+        sim = virtual_scanline(network, line.start_xyz_m, end)
+        virtual_lines.append(sim)
+        n_f, n_s = line.n_intersections, sim.n_intersections
+        sd = float(np.sqrt(n_f + n_s)) / line.length_m
+        rows.append(_row(label, "p10", n_f / line.length_m, n_s / line.length_m, sd, N_SIGMA * max(sd, 1 / line.length_m),
+                         (n_s - n_f) / line.length_m))
+    virtual_faces = []
+    for j, face in enumerate(faces):
+        label = face.name or f"face {j}"
+        if face.point_m is None:
+            raise ValueError(f"{label}: the face has no position (point_m); it is needed to re-sample a "
+                             "realization on it")
+        sim = virtual_face(network, face.point_m, face.normal, face.trace_map.window_xy_m, name=label)
+        virtual_faces.append(sim)
+        area = face.area_m2
+        p_f, sd_f, l_f, lsd_f, _ = _p21_stats(face.trace_map, area)
+        p_s, sd_s, l_s, lsd_s, _ = _p21_stats(sim.trace_map, area)
+        sd = float(np.hypot(sd_f, sd_s))
+        rows.append(_row(label, "p21", p_f, p_s, sd, N_SIGMA * sd, p_s - p_f))
+        sd_l = float(np.hypot(lsd_f, lsd_s))
+        rows.append(_row(label, "mean_trace_length_m", l_f, l_s, sd_l, N_SIGMA * sd_l, l_s - l_f))
+    if sum(s.n_intersections for s in virtual_lines) >= 2:
+        from .sets3d import fit_sets_3d
+
+        poles = np.concatenate([s.poles() for s in virtual_lines])
+        sim_sets = fit_sets_3d(poles, len(field_fit.sets))
+        field_poles = np.array([s.mean_pole for s in field_fit.sets])
+        for s, i in zip(field_fit.sets, _pairing(field_poles, sim_sets.mean_pole)):
+            if i is None or sim_sets.fits[i] is None:
+                continue
+            angle = float(angle_between(s.mean_pole, sim_sets.mean_pole[i]))
+            tol = POLE_TOLERANCE_FACTOR * float(np.hypot(s.alpha95_deg, sim_sets.fits[i].alpha95_deg))
+            rows.append(_row(s.name, "mean_pole_deg", 0.0, angle, None, tol, angle))
+    return rows

@@ -7,6 +7,13 @@ writes ``realization_NNNN/fractures.csv`` (``set,cx,cy,cz,nx,ny,nz,radius``),
 ``manifest.json``. Everything is computed first and written all-or-nothing. Realization i depends only
 on the root seed and i (DESIGN.md §3), so ``--first 7 --realizations 1`` reproduces realization 7 of
 any batch, on any worker.
+
+With ``[dfn.fit]`` the sets are first fitted from the field data the config names (scanlines and face
+trace maps, :func:`rockmass.dfn.fit_field`): ``fitted.json`` holds every fitted parameter with its
+standard deviation and the size candidates compared by AIC. With ``validate = true`` each realization
+is re-sampled with the field geometry and ``realization_NNNN/validation.json`` compares measured and
+re-sampled P10, P21, mean trace length and set orientations, each with a Poisson-based tolerance
+(:func:`rockmass.dfn.validation.compare_with_field`).
 """
 
 from __future__ import annotations
@@ -17,7 +24,7 @@ import time
 from .errors import InputError
 from .outputs import output_folder
 
-__all__ = ["add_parser", "run", "compute", "realization_summary"]
+__all__ = ["add_parser", "compute", "realization_summary", "run"]
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -55,11 +62,65 @@ def realization_summary(network, specs, seed: int, index: int) -> dict:
                       "p30": network.p30(), "count": network.n_fractures}}
 
 
+def _read_field_data(config_path, fit_cfg):
+    """Scanlines and FaceSurveys named by ``[dfn.fit]``; bad files -> InputError naming file and key."""
+    from .dfn.field_fit import FaceSurvey
+    from .dfn.scanline import read_scanline
+    from .dfn.traceio import read_traces
+
+    scanlines, faces = [], []
+    for k, name in enumerate(fit_cfg.scanlines):
+        path = fit_cfg.path(name, config_path)
+        try:
+            scanlines.append(read_scanline(path))
+        except (OSError, ValueError) as exc:
+            raise InputError(f"{config_path}: dfn.fit.scanlines[{k}]: {path}: {exc}") from exc
+        if fit_cfg.validate_ and scanlines[-1].start_xyz_m is None:
+            raise InputError(f"{config_path}: dfn.fit.validate: {path} has no start point (start_xyz_m in its "
+                             "header); validate re-samples realizations along each scanline")
+    for k, face in enumerate(fit_cfg.faces):
+        path = fit_cfg.path(face.file, config_path)
+        try:
+            trace_map = read_traces(path)
+            faces.append(FaceSurvey.from_dip(trace_map, face.dip_deg, face.dip_direction_deg, face.point_m,
+                                              name=str(face.file)))
+        except (OSError, ValueError) as exc:
+            raise InputError(f"{config_path}: dfn.fit.faces[{k}].file: {path}: {exc}") from exc
+        if fit_cfg.validate_ and face.point_m is None:
+            raise InputError(f"{config_path}: dfn.fit.faces[{k}].point_m: required with validate = true "
+                             "(the world position of the face frame's origin)")
+    return scanlines, faces
+
+
+def _fit_sets(config_path, cfg):
+    """(specs, FieldFit, scanlines, faces) from ``[dfn.fit]``."""
+    from .dfn.field_fit import fit_field
+    from .dfn_config import size_from_config
+
+    fit_cfg = cfg.fit
+    scanlines, faces = _read_field_data(config_path, fit_cfg)
+    try:
+        fit = fit_field(scanlines, faces, n_sets=fit_cfg.n_sets, size_family=fit_cfg.size_family,
+                        r_max_m=fit_cfg.r_max_m, tolerance_m=fit_cfg.boundary_tolerance_m, seed=cfg.seed)
+    except ValueError as exc:
+        raise InputError(f"{config_path}: dfn.fit: {exc}") from exc
+    size = None if fit_cfg.size is None else size_from_config(fit_cfg.size)
+    try:
+        specs = fit.specs([size] * len(fit.sets))
+    except ValueError as exc:
+        raise InputError(f"{config_path}: dfn.fit: {exc} (give dfn.fit.size or faces with traces of every "
+                         "set)") from exc
+    return specs, fit, scanlines, faces
+
+
 def compute(args):
-    """Load, validate and generate; return (config, specs, seed, [(index, network, summary)], timings)."""
+    """Load, fit if asked, generate, validate if asked.
+
+    Returns (config, specs, seed, [(index, network, summary, validation rows or None)], timings, fit).
+    """
     from .config import load_config
-    from .dfn_config import DFNDocument
     from .dfn.generation import generate
+    from .dfn_config import DFNDocument
 
     _check_flag(args.seed, "--seed", 0)
     _check_flag(args.realizations, "--realizations", 1)
@@ -67,7 +128,9 @@ def compute(args):
     t0 = time.perf_counter()
     document = load_config(args.config, model=DFNDocument)
     cfg = document.dfn
-    specs = []
+    specs, fit, field = [], None, None
+    if cfg.fit is not None:
+        specs, fit, *field = _fit_sets(args.config, cfg)
     for j, set_cfg in enumerate(cfg.sets):
         try:
             specs.append(set_cfg.to_spec())
@@ -84,9 +147,26 @@ def compute(args):
                                max_fractures=cfg.max_fractures)
         except ValueError as exc:
             raise InputError(f"{args.config}: dfn.max_fractures: {exc}") from exc
-        results.append((i, network, realization_summary(network, specs, seed, i)))
+        rows = None
+        if fit is not None and cfg.fit.validate_:
+            from .dfn.validation import compare_with_field
+
+            rows = compare_with_field(network, fit, *field)
+        results.append((i, network, realization_summary(network, specs, seed, i), rows))
     t2 = time.perf_counter()
-    return document, specs, seed, results, {"load_s": t1 - t0, "generate_s": t2 - t1}
+    return document, specs, seed, results, {"load_s": t1 - t0, "generate_s": t2 - t1}, fit
+
+
+def validation_document(rows: list[dict], index: int) -> dict:
+    """``validation.json``: measured vs re-sampled rows (no NaN) and the overall pass flag."""
+    import math
+
+    def clean(v):
+        return None if isinstance(v, float) and not math.isfinite(v) else v
+
+    return {"realization": index, "ok": all(r["ok"] for r in rows), "n_failed": sum(not r["ok"] for r in rows),
+            "tolerance": "3 combined standard deviations (Poisson counts); mean pole 1.52 x alpha95",
+            "rows": [{k: clean(v) for k, v in r.items()} for r in rows]}
 
 
 def run(args) -> int:
@@ -97,16 +177,20 @@ def run(args) -> int:
     from .dfn.network_io import write_fractures_csv, write_fractures_vtu
     from .manifest import build_manifest
 
-    document, specs, seed, results, timings = compute(args)
+    document, specs, seed, results, timings, fit = compute(args)
     t0 = time.perf_counter()
     with output_folder(args.out) as out, ExitStack() as stack:
-        for index, network, summary in results:
+        if fit is not None:
+            atomic_write_json(stack.enter_context(atomic_path(out / "fitted.json")), fit.as_dict())
+        for index, network, summary, rows in results:
             folder = out / f"realization_{index:04d}"
-            paths = {name: stack.enter_context(atomic_path(folder / name))
-                     for name in ("fractures.csv", "fractures.vtu", "summary.json")}
+            names = ["fractures.csv", "fractures.vtu", "summary.json"] + (["validation.json"] if rows else [])
+            paths = {name: stack.enter_context(atomic_path(folder / name)) for name in names}
             write_fractures_csv(network, paths["fractures.csv"])
             write_fractures_vtu(network, paths["fractures.vtu"], n_vertices=[s.n_vertices for s in specs])
             atomic_write_json(paths["summary.json"], summary)
+            if rows:
+                atomic_write_json(paths["validation.json"], validation_document(rows, index))
         manifest_path = stack.enter_context(atomic_path(out / "manifest.json"))
         timings["write_s"] = time.perf_counter() - t0
         manifest = build_manifest(
@@ -114,10 +198,16 @@ def run(args) -> int:
             seeds={"root": seed, "realizations": [r[0] for r in results],
                    "rule": "realization i: SeedSequence(root, spawn_key=(i,)); set j: spawn_key (i, j)"},
             timings_s=timings,
-            extra={"counts": {f"realization_{i:04d}": s["total"]["count"] for i, _, s in results}})
+            extra={"counts": {f"realization_{i:04d}": s["total"]["count"] for i, _, s, _ in results}})
         atomic_write_json(manifest_path, manifest)
-    for index, _, summary in results:
+    if fit is not None:
+        for s in fit.sets:
+            size = "no size law" if s.size is None or not s.size.ok else s.size.family
+            print(f"fitted {s.name}: dip {s.mean_dip_deg:.1f}/{s.mean_dip_direction_deg:05.1f}, kappa "
+                  f"{s.kappa:.3g}, P32 {s.p32:.4g} ± {s.p32_sd:.2g} m²/m³, {size}")
+    for index, _, summary, rows in results:
         total = summary["total"]
+        check = "" if not rows else f"; validation {sum(r['ok'] for r in rows)}/{len(rows)} within tolerance"
         print(f"realization {index}: {total['count']} fractures, P32 {total['achieved_p32']:.4g} "
-              f"(target {total['target_p32']:.4g}) m²/m³")
+              f"(target {total['target_p32']:.4g}) m²/m³{check}")
     return 0

@@ -26,11 +26,29 @@ Orientation ``distribution``: ``fisher`` (``dip_deg`` 0-90, ``dip_direction_deg`
 ``P21`` (m/m², with the sampling plane's ``dip_deg`` and ``dip_direction_deg``); P10 and P21 are
 converted to P32 with the set's C13 / C23.
 
+Instead of ``[[dfn.sets]]``, ``[dfn.fit]`` fits the sets from field data (:func:`rockmass.dfn.fit_field`)::
+
+    [dfn.fit]
+    scanlines = ["scanline_seed001.csv"]   # relative to this file; trend / plunge / length in each
+    n_sets = 3                             # optional: default by BIC
+    size_family = "best"                   # power_law | lognormal | exponential | best (AIC)
+    r_max_m = 40.0                         # power-law upper truncation of the fitted radii
+    validate = true                        # re-sample every realization like the field data
+
+    [[dfn.fit.faces]]
+    file = "face_seed001.geojson"          # traces in the face frame (u right, v up) with a window
+    dip_deg = 90.0                         # the face plane; the viewer looks against its upper normal
+    dip_direction_deg = 180.0
+    point_m = [25.0, 0.0, 3.0]             # world position of (u, v) = (0, 0); needed by validate
+
+Without faces the sets need ``size = {...}`` in ``[dfn.fit]`` (a size table as above).
+
 Load a file that holds only this section with ``load_config(path, model=DFNDocument)``.
 """
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Annotated, Literal
 
 import numpy as np
@@ -38,7 +56,7 @@ from pydantic import Field, model_validator
 
 from .strict import StrictModel, field_problem
 
-__all__ = ["DFNConfig", "DFNDocument", "DomainConfig", "FractureSetConfig"]
+__all__ = ["DFNConfig", "DFNDocument", "DomainConfig", "FaceConfig", "FitConfig", "FractureSetConfig"]
 
 Dip = Annotated[float, Field(ge=0, le=90)]
 Azimuth = Annotated[float, Field(ge=0, le=360)]
@@ -132,6 +150,23 @@ class ExponentialConfig(StrictModel):
         return _truncation(self, self.r_min_m, self.r_max_m)
 
 
+SizeTable = Annotated[ConstantConfig | PowerLawConfig | LognormalConfig | ExponentialConfig,
+                      Field(discriminator="distribution")]
+
+
+def size_from_config(s):
+    """The :mod:`rockmass.dfn.sizes` distribution of a size table."""
+    from .dfn import ConstantSize, ExponentialSize, LognormalSize, PowerLawSize
+
+    if isinstance(s, ConstantConfig):
+        return ConstantSize(s.radius_m)
+    if isinstance(s, PowerLawConfig):
+        return PowerLawSize(s.r_min_m, s.r_max_m, s.alpha)
+    if isinstance(s, LognormalConfig):
+        return LognormalSize(s.mean_m, s.sd_m, s.r_min_m, np.inf if s.r_max_m is None else s.r_max_m)
+    return ExponentialSize(s.scale_m, s.r_min_m, np.inf if s.r_max_m is None else s.r_max_m)
+
+
 # -- intensity -----------------------------------------------------------------------------------
 
 Intensity = Annotated[float, Field(gt=0, le=1e4)]
@@ -161,17 +196,23 @@ class FractureSetConfig(StrictModel):
 
     name: str = Field("", max_length=64)
     orientation: Annotated[FisherConfig | UniformConfig | BootstrapConfig, Field(discriminator="distribution")]
-    size: Annotated[ConstantConfig | PowerLawConfig | LognormalConfig | ExponentialConfig,
-                    Field(discriminator="distribution")]
+    size: SizeTable
     intensity: Annotated[P32Config | P10Config | P21Config, Field(discriminator="measure")]
     shape: Literal["disk"] = "disk"
     n_vertices: int = Field(16, ge=3, le=1024)
 
     def to_spec(self):
         """The :class:`rockmass.dfn.generation.FractureSetSpec` (imports numpy-level code lazily)."""
-        from .dfn import ConstantSize, ExponentialSize, LognormalSize, PowerLawSize, pole_from_dip
-        from .dfn.generation import BootstrapOrientation, FisherOrientation, FractureSetSpec, IntensityP10, \
-            IntensityP21, IntensityP32, UniformOrientation
+        from .dfn import pole_from_dip
+        from .dfn.generation import (
+            BootstrapOrientation,
+            FisherOrientation,
+            FractureSetSpec,
+            IntensityP10,
+            IntensityP21,
+            IntensityP32,
+            UniformOrientation,
+        )
 
         o = self.orientation
         if isinstance(o, FisherConfig):
@@ -181,15 +222,7 @@ class FractureSetConfig(StrictModel):
         else:
             planes = np.array(o.planes_deg, dtype=float)
             orientation = BootstrapOrientation(pole_from_dip(planes[:, 0], planes[:, 1]))
-        s = self.size
-        if isinstance(s, ConstantConfig):
-            size = ConstantSize(s.radius_m)
-        elif isinstance(s, PowerLawConfig):
-            size = PowerLawSize(s.r_min_m, s.r_max_m, s.alpha)
-        elif isinstance(s, LognormalConfig):
-            size = LognormalSize(s.mean_m, s.sd_m, s.r_min_m, np.inf if s.r_max_m is None else s.r_max_m)
-        else:
-            size = ExponentialSize(s.scale_m, s.r_min_m, np.inf if s.r_max_m is None else s.r_max_m)
+        size = size_from_config(self.size)
         i = self.intensity
         if isinstance(i, P32Config):
             intensity = IntensityP32(i.value)
@@ -199,6 +232,59 @@ class FractureSetConfig(StrictModel):
             intensity = IntensityP21(i.value, i.dip_deg, i.dip_direction_deg)
         return FractureSetSpec(orientation, size, intensity, name=self.name, shape=self.shape,
                                n_vertices=self.n_vertices)
+
+
+class FaceConfig(StrictModel):
+    """One ``[[dfn.fit.faces]]`` entry: a trace file on a face of known orientation."""
+
+    file: str = Field(min_length=1)
+    dip_deg: Dip
+    dip_direction_deg: Azimuth
+    point_m: Triple | None = None
+
+
+class FitConfig(StrictModel):
+    """``[dfn.fit]``: fit the sets from scanlines and face trace maps (:func:`rockmass.dfn.fit_field`).
+
+    Parameters
+    ----------
+    scanlines : list of str
+        1-100 scanline files (CSV with header geometry, :func:`rockmass.dfn.read_scanline`), relative
+        to the config file.
+    faces : list of FaceConfig, default []
+        Trace maps (GeoJSON / CSV with a convex window) on faces.
+    n_sets : int, optional
+        1-5 sets; default by BIC.
+    size_family : {"best", "power_law", "lognormal", "exponential"}, default "best"
+    r_max_m : float, default 100
+        Power-law upper truncation of fitted radii, metres.
+    boundary_tolerance_m : float, optional
+        Trace ends closer than this to a window edge are censored (default 1e-9 of the window size).
+    size : size table, optional
+        Radius law for every set when no face is given (or to override the fitted one).
+    validate : bool, default false
+        Re-sample every realization with the field geometry and write ``validation.json``.
+    """
+
+    scanlines: Annotated[list[Annotated[str, Field(min_length=1)]], Field(min_length=1, max_length=100)]
+    faces: Annotated[list[FaceConfig], Field(max_length=100)] = Field(default_factory=list)
+    n_sets: int | None = Field(None, ge=1, le=5)
+    size_family: Literal["best", "power_law", "lognormal", "exponential"] = "best"
+    r_max_m: Length = 100.0
+    boundary_tolerance_m: float | None = Field(None, ge=0, le=1e3)
+    size: SizeTable | None = None
+    validate_: bool = Field(False, alias="validate")
+
+    @model_validator(mode="after")
+    def _sizes_known(self) -> FitConfig:
+        if not self.faces and self.size is None:
+            raise field_problem(self, "faces", "sizes are fitted from face trace maps: give [[dfn.fit.faces]] "
+                                "or a size table `size = {...}`", [])
+        return self
+
+    def path(self, name: str, config_path) -> Path:
+        p = Path(name)
+        return p if p.is_absolute() else Path(config_path).parent / p
 
 
 class DFNConfig(StrictModel):
@@ -214,14 +300,24 @@ class DFNConfig(StrictModel):
     max_fractures : int, default 5,000,000
         Guard on the number of fractures one realization may need, 1 to 1e9.
     sets : list of FractureSetConfig
-        1-50 sets.
+        1-50 sets, or none when ``fit`` is given.
+    fit : FitConfig, optional
+        Fit the sets from field data instead (exactly one of ``sets`` and ``fit``).
     """
 
     domain: DomainConfig
     seed: int = Field(0, ge=0, le=2 ** 63 - 1)
     realizations: int = Field(1, ge=1, le=10000)
     max_fractures: int = Field(5_000_000, ge=1, le=10 ** 9)
-    sets: Annotated[list[FractureSetConfig], Field(min_length=1, max_length=50)]
+    sets: Annotated[list[FractureSetConfig], Field(max_length=50)] = Field(default_factory=list)
+    fit: FitConfig | None = None
+
+    @model_validator(mode="after")
+    def _one_source_of_sets(self) -> DFNConfig:
+        if bool(self.sets) == (self.fit is not None):
+            raise field_problem(self, "sets", "give the fracture sets either as [[dfn.sets]] or as [dfn.fit] "
+                                "(fitted from field data), exactly one of them", [])
+        return self
 
     def domain_m(self) -> np.ndarray:
         """The domain box as ``(2, 3)`` float64."""
