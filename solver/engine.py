@@ -312,6 +312,26 @@ class Engine:
         np.maximum.at(out, b, np.hypot(dx, dy))
         return out
 
+    def contact_force_on(self, block: int) -> np.ndarray:
+        """Sum of the contact forces (fx, fy, moment) on a block at the last step (N per m)."""
+        out = np.zeros(3)
+        for e in self.bp_idx[self.bp_ptr[block]:self.bp_ptr[block + 1]]:
+            out += self.fpair[e >> 1, 3 * (e & 1):3 * (e & 1) + 3]
+        return out
+
+    def contact_table(self) -> dict:
+        """Active contact slots: blocks, point, normal (a to b), length, σ_n (compression +),
+        τ, plastic slip, slipping / broken flags."""
+        p, k = np.nonzero(self.S[:, :, K.ACT] != 0)
+        slot = self.S[p, k]
+        length = np.maximum(slot[:, K.LEN], 1e-300)
+        return {"block_a": self.pa[p], "block_b": self.pb[p], "x_m": slot[:, K.PX],
+                "y_m": slot[:, K.PY], "nx": slot[:, K.NX], "ny": slot[:, K.NY],
+                "length_m": slot[:, K.LEN], "normal_stress_pa": slot[:, K.FN] / length,
+                "shear_stress_pa": slot[:, K.TAU], "plastic_slip_m": slot[:, K.USP],
+                "overlap_m": slot[:, K.OVL], "slipping": slot[:, K.SLIP] != 0,
+                "broken": slot[:, K.BRK] != 0}
+
     def snapshot(self) -> tuple:
         return tuple(a.copy() for a in (self.pos, self.rot, self.vel, self.omg, self.S, self.E,
                                         self.init_brk)) + (self.time_s,)

@@ -60,7 +60,9 @@ class Result:
 
     ``displacement_m`` / ``rotation_rad`` / ``velocity_m_s``: final state of every block (excavated
     blocks keep their last values and ``active`` False). ``history``: columns of the monitored
-    blocks (``time_s``, ``stage``, ``<name>_ux_m``, ``<name>_uy_m``, ``<name>_vx_m_s``, …).
+    blocks (``time_s``, ``stage``, ``<name>_ux_m``, ``<name>_uy_m``, ``<name>_vx_m_s``,
+    ``<name>_contact_fx_n`` (sum of contact forces on the block), …). ``contacts``: the active
+    contact slots at the end (:meth:`Engine.contact_table`).
     ``block_energy``: per block volume (area × 1 m), mass, peak velocity and peak kinetic energy
     over the dynamic stages (seed 001 Fig. 7). ``status`` is ``ok`` or the failure of the last stage.
     """
@@ -73,6 +75,7 @@ class Result:
     history: dict
     frames: list
     block_energy: dict
+    contacts: dict = field(default_factory=dict)
     status: str = STATUS_OK
     diagnostic: str | None = None
     info: dict = field(default_factory=dict)

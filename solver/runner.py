@@ -89,6 +89,9 @@ class _Recorder:
             row[f"{name}_rotation_rad"] = e.rot[b]
             row[f"{name}_vx_m_s"] = e.vel[b, 0]
             row[f"{name}_vy_m_s"] = e.vel[b, 1]
+            force = e.contact_force_on(b)
+            row[f"{name}_contact_fx_n"] = force[0]
+            row[f"{name}_contact_fy_n"] = force[1]
         self.rows.append(row)
 
     def frame(self, stage: str, step: int):
@@ -301,5 +304,6 @@ def run(model, settings: Settings) -> Result:
             "fixed_dofs": int((eng.base_mode == FIXED).sum())}
     return Result(stages=stages, displacement_m=eng.pos - eng.pos0, rotation_rad=eng.rot.copy(),
                   velocity_m_s=eng.vel.copy(), active=eng.active.copy(), history=rec.history(),
+                  contacts=eng.contact_table(),
                   frames=rec.frames, block_energy=block_energy, status=status,
                   diagnostic=diagnostic, info=info)
