@@ -130,15 +130,16 @@ def _pairs(faces, grid_m):
     return seg[a_idx], face_a, face_b
 
 
-def _is_convex(poly, reflex_sin):
+def _is_convex(poly, reflex_sin, reflex_m=0.0):
     if len(poly.interiors):
         return False
     xy = np.asarray(poly.exterior.coords)[:-1]
-    return len(reflex_vertices(xy, reflex_sin)) == 0
+    return len(reflex_vertices(xy, reflex_sin, reflex_m)) == 0
 
 
-def _concave_mask(faces, reflex_sin):
-    """Faces that have a hole or a reflex vertex (vectorised over all faces)."""
+def _concave_mask(faces, reflex_sin, reflex_m=0.0):
+    """Faces that have a hole or a reflex vertex (vectorised over all faces; the rule of
+    :func:`rockmass.blockgen.convex.reflex_vertices`)."""
     coords, index = shapely.get_coordinates(shapely.get_exterior_ring(faces), return_index=True)
     counts = np.bincount(index, minlength=len(faces))
     start = np.concatenate([[0], np.cumsum(counts)[:-1]])
@@ -154,7 +155,9 @@ def _concave_mask(faces, reflex_sin):
     e_in, e_out = xy - xy[prev], xy[nxt] - xy
     cross = e_in[:, 0] * e_out[:, 1] - e_in[:, 1] * e_out[:, 0]
     norm = np.hypot(e_in[:, 0], e_in[:, 1]) * np.hypot(e_out[:, 0], e_out[:, 1])
-    reflex = np.bincount(face, cross < -reflex_sin * norm, len(faces)) > 0
+    chord = np.hypot(*(e_in + e_out).T)
+    is_reflex = (cross < -reflex_sin * norm) & (-cross > reflex_m * chord)
+    reflex = np.bincount(face, is_reflex, len(faces)) > 0
     return reflex | (shapely.get_num_interior_rings(faces) > 0)
 
 
@@ -332,13 +335,13 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
     def make_convex(noded, faces, region):
         # a cut of one face can end on a vertex shared with a neighbour and leave that neighbour
         # with a new reflex vertex: repeat until every face is convex (reported rounds)
-        n_concave = int(_concave_mask(faces, tol.reflex_sin).sum())
+        n_concave = int(_concave_mask(faces, tol.reflex_sin, tol.reflex_m).sum())
         rounds = 0
         while n_concave and rounds < 8:
             rounds += 1
             noded, faces, region = _make_convex(noded, faces, region, tol, report, sources,
                                                 excavations, label_m, collapse)
-            n_concave = int(_concave_mask(faces, tol.reflex_sin).sum())
+            n_concave = int(_concave_mask(faces, tol.reflex_sin, tol.reflex_m).sum())
         report["convex_rounds"] = report.get("convex_rounds", 0) + rounds
         report["concave_blocks_left"] = n_concave
         return noded, faces, region
@@ -355,7 +358,8 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
     if snap_edges:
         kind, src = label_segments(noded, sources, label_m)
         noded, kind, src, faces, region, moved, changes, left = snap_short_edges(
-            noded, kind, src, faces, region, tol.min_edge_m, tol.grid_m, tol.reflex_sin)
+            noded, kind, src, faces, region, tol.min_edge_m, tol.grid_m, tol.reflex_sin,
+            tol.reflex_m)
         for (k, s_), idx in _groups(kind[moved], src[moved]):
             sources.add(noded[moved][idx], k, s_, priority=_label_priority(k, s_))
         report["edges_snapped"] = {
@@ -456,7 +460,7 @@ def _merge_slivers(noded, faces, region, tol, report, excavations):
             continue
         def score(o):
             union = shapely.union(faces[s], faces[o])
-            convex_union = union.geom_type == "Polygon" and _is_convex(union, tol.reflex_sin)
+            convex_union = union.geom_type == "Polygon" and _is_convex(union, tol.reflex_sin, tol.reflex_m)
             return (convex_union, sum(length[e] for e in shared[o]))
         best = max(shared, key=score)
         conv, shared_len = score(best)
@@ -487,13 +491,13 @@ def _rows_in(a, b):
 
 
 def _make_convex(noded, faces, region, tol, report, sources, excavations, label_m, collapse):
-    concave = np.flatnonzero(_concave_mask(faces, tol.reflex_sin)).tolist()
+    concave = np.flatnonzero(_concave_mask(faces, tol.reflex_sin, tol.reflex_m)).tolist()
     if not concave:
         return noded, faces, region
     cuts = []
     for i in concave:
         c, n_snapped, n_failed = convex_cuts(faces[i], tol.reflex_sin, tol.min_edge_m,
-                                             16 * tol.snap_m)
+                                             16 * tol.snap_m, reflex_m=tol.reflex_m)
         report["snapped_cuts"] += int(n_snapped)
         report["convex_failures"] += int(n_failed)
         report["convex_splits"].append({

@@ -2,7 +2,9 @@
 
 :func:`check_model` recomputes from the block polygons alone (with shapely): the area balance
 against the domain, pairwise overlaps, that every interior edge is shared by exactly two blocks with
-the same length, and convexity. The builder's tests and the CLI use it; a model that fails is a bug.
+the same length, and convexity (a vertex is reflex when it turns clockwise by more than
+``REFLEX_SIN`` and lies more than ``reflex_m`` = 8 noding-grid cells inside the chord of its
+neighbours, :mod:`rockmass.blockgen.tolerances`). The builder's tests and the CLI use it; a model that fails is a bug.
 """
 
 from __future__ import annotations
@@ -11,7 +13,7 @@ import numpy as np
 import shapely
 
 from .convex import reflex_vertices
-from .tolerances import AREA_BALANCE_RTOL, REFLEX_SIN
+from .tolerances import AREA_BALANCE_RTOL, REFLEX_SIN, model_tolerances
 
 __all__ = ["check_model"]
 
@@ -48,8 +50,11 @@ def check_model(model) -> dict:
         mismatch = max(mismatch, abs(pair_len.pop((p, q), 0.0) - c))
     for length in pair_len.values():  # contacts between blocks that do not touch
         mismatch = max(mismatch, length)
+    # reflex beyond round-off: the sine rule and the height above the noding grid's reach
+    lo, hi = model.domain_xy_m.min(axis=0), model.domain_xy_m.max(axis=0)
+    reflex_m = model_tolerances(float(np.hypot(*(hi - lo))), 1.0).reflex_m
     n_concave = sum(1 for k in range(model.n_blocks)
-                    if len(reflex_vertices(model.polygon(k), REFLEX_SIN)))
+                    if len(reflex_vertices(model.polygon(k), REFLEX_SIN, reflex_m)))
     scale = float(np.sqrt(domain.area))
     ok = (area_rel <= AREA_BALANCE_RTOL and float(overlap.max(initial=0.0)) <= 1e-9 * domain.area
           and mismatch <= 1e-9 * scale and n_concave == 0)

@@ -19,13 +19,20 @@ import shapely
 __all__ = ["reflex_vertices", "convex_cuts"]
 
 
-def reflex_vertices(xy: np.ndarray, reflex_sin: float) -> np.ndarray:
-    """Indices of reflex vertices of a counter-clockwise open ring ``xy`` ((k, 2))."""
+def reflex_vertices(xy: np.ndarray, reflex_sin: float, reflex_m: float = 0.0) -> np.ndarray:
+    """Indices of reflex vertices of a counter-clockwise open ring ``xy`` ((k, 2)).
+
+    Vertex v (neighbours a, b) is reflex when it turns clockwise, ``e_in × e_out < −reflex_sin ·
+    |e_in||e_out|``, and lies more than ``reflex_m`` inside the chord a→b: the height
+    ``h = −(e_in × e_out) / |b − a|`` (:mod:`rockmass.blockgen.tolerances`: a collinear vertex moved
+    off its line by snap-rounding is not reflex).
+    """
     e_in = xy - np.roll(xy, 1, axis=0)
     e_out = np.roll(xy, -1, axis=0) - xy
     cross = e_in[:, 0] * e_out[:, 1] - e_in[:, 1] * e_out[:, 0]
     norm = np.hypot(*e_in.T) * np.hypot(*e_out.T)
-    return np.flatnonzero(cross < -reflex_sin * norm)
+    chord = np.hypot(*(e_in + e_out).T)
+    return np.flatnonzero((cross < -reflex_sin * norm) & (-cross > reflex_m * chord))
 
 
 def _bisector(xy, i, ccw_interior=True):
@@ -75,7 +82,8 @@ def _pieces(piece, cuts, eps):
             if g.area > 0 and shapely.within(g.representative_point(), piece)]
 
 
-def convex_cuts(face, reflex_sin: float, min_edge_m: float, eps_m: float, max_cuts: int = 10000):
+def convex_cuts(face, reflex_sin: float, min_edge_m: float, eps_m: float, max_cuts: int = 10000,
+                reflex_m: float = 0.0):
     """Cut segments that decompose polygon ``face`` into convex pieces.
 
     Each cut is lengthened by ``eps_m`` at both ends so that noding always meets the boundary it
@@ -124,7 +132,7 @@ def convex_cuts(face, reflex_sin: float, min_edge_m: float, eps_m: float, max_cu
             todo.extend(parts)
             continue
         xy = np.asarray(piece.exterior.coords)[:-1]
-        reflex = reflex_vertices(xy, reflex_sin)
+        reflex = reflex_vertices(xy, reflex_sin, reflex_m)
         if not len(reflex):
             continue
         i = int(reflex[0])

@@ -1,4 +1,5 @@
-"""``blocks.png``: blocks coloured by region, contacts coloured by joint set, excavation outlines."""
+"""``blocks.png``: blocks coloured by region, contacts coloured by joint set, potential cracks in
+grey, excavation outlines."""
 
 from __future__ import annotations
 
@@ -6,14 +7,15 @@ from pathlib import Path
 
 import numpy as np
 
-from .model import CONTACT_KINDS, BlockModel
+from .model import CONTACT_KINDS, KIND_GLUED, SOURCE_CRACK, BlockModel
 
 __all__ = ["plot_blocks"]
 
 
 def plot_blocks(model: BlockModel, path, title: str | None = None, dpi: int = 150) -> Path:
     """Draw ``model`` to ``path`` (PNG, written atomically). Block edges take the colour of the
-    joint set of the block's longest joint contact; glued contacts are not distinguished here."""
+    joint set of the block's longest joint contact; potential cracks (glued, source -3) are drawn
+    over them as thin grey lines."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -36,6 +38,7 @@ def plot_blocks(model: BlockModel, path, title: str | None = None, dpi: int = 15
     try:
         ax.add_collection(PolyCollection(polys, facecolors=face, edgecolors=edge,
                                          linewidths=0.3 if model.n_blocks > 2000 else 0.6))
+        _draw_cracks(ax, model)
         d = np.vstack([model.domain_xy_m, model.domain_xy_m[:1]])
         ax.plot(d[:, 0], d[:, 1], color="k", lw=1.0)
         for k in range(1, len(model.region_names)):
@@ -62,3 +65,21 @@ def plot_blocks(model: BlockModel, path, title: str | None = None, dpi: int = 15
     finally:
         plt.close(fig)
     return Path(path)
+
+
+def _draw_cracks(ax, model: BlockModel) -> None:
+    """Potential-crack contacts as grey lines (the common boundary of the two blocks)."""
+    crack = (model.contact_kind == KIND_GLUED) & (model.contact_source == SOURCE_CRACK)
+    if not crack.any():
+        return
+    import shapely
+    from matplotlib.collections import LineCollection
+
+    polys = model.to_shapely()
+    a, b = model.contact_blocks[crack].T
+    common = shapely.intersection(shapely.boundary(polys[a]), shapely.boundary(polys[b]))
+    coords, index = shapely.get_coordinates(shapely.get_parts(common), return_index=True)
+    same = index[1:] == index[:-1]
+    segs = np.stack([coords[:-1][same], coords[1:][same]], axis=1)
+    ax.add_collection(LineCollection(segs, colors=(0.35, 0.35, 0.35, 1.0),
+                                     linewidths=0.25 if len(segs) > 2000 else 0.4))

@@ -12,7 +12,7 @@ Rule for one edge ``(u, v)`` of length < ``min_edge_m`` (shortest first):
    the outline turns is a corner and never moves). Candidate targets, in order: the midpoint (when
    neither end is pinned), ``u``, ``v``.
 2. **Accepted** when, for every block touching ``u`` or ``v``: the new ring is convex (no reflex
-   vertex beyond ``reflex_sin``) with positive area, or has collapsed to nothing (a triangle on the
+   vertex beyond ``reflex_sin`` and ``reflex_m``) with positive area, or has collapsed to nothing (a triangle on the
    edge, its area passing to its neighbours); and the area of these blocks, summed per region, is
    unchanged (to 1e-12 relative) — so the domain and every excavation stage keep their areas
    exactly, and no block overlaps another. Otherwise the next candidate is tried; an edge with no
@@ -44,7 +44,7 @@ def _signed_area(xy):
 
 
 def snap_short_edges(noded, kind, src, faces, region, min_edge_m, grid_m, reflex_sin,
-                     max_passes=8):
+                     reflex_m=0.0, max_passes=8):
     """Collapse every block edge shorter than ``min_edge_m`` that the rule allows.
 
     The blocks are updated in place of a new polygonisation: only the blocks around a collapsed
@@ -59,7 +59,8 @@ def snap_short_edges(noded, kind, src, faces, region, min_edge_m, grid_m, reflex
     faces : array of shapely Polygons
         The blocks (counter-clockwise, polygonised from ``noded``).
     region : (n_faces,) int64
-    min_edge_m, grid_m, reflex_sin : float
+    min_edge_m, grid_m, reflex_sin, reflex_m : float
+        Tolerances (:mod:`rockmass.blockgen.tolerances`).
 
     Returns
     -------
@@ -80,7 +81,7 @@ def snap_short_edges(noded, kind, src, faces, region, min_edge_m, grid_m, reflex
     region = np.asarray(region)
     for _ in range(max_passes):
         out = _one_pass(noded, kind, src, moved, faces, region, min_edge_m, grid_m, reflex_sin,
-                        changes)
+                        reflex_m, changes)
         if out is None:
             break
         noded, kind, src, moved, faces, region, n_new, left = out
@@ -94,7 +95,8 @@ def _hash(q):
     return q[:, 0] * np.int64(0x9E3779B1) ^ q[:, 1]
 
 
-def _one_pass(noded, kind, src, moved, faces, region, min_edge_m, grid_m, reflex_sin, changes):
+def _one_pass(noded, kind, src, moved, faces, region, min_edge_m, grid_m, reflex_sin, reflex_m,
+              changes):
     import shapely
 
     coords, index = shapely.get_coordinates(shapely.get_exterior_ring(faces), return_index=True)
@@ -171,7 +173,7 @@ def _one_pass(noded, kind, src, moved, faces, region, min_edge_m, grid_m, reflex
             targets.append(xy[v])  # u moves onto v
         for p in targets:
             rings = _try(p, u, v, [ring(f) for f in touched], [int(region[f]) for f in touched],
-                         reflex_sin)
+                         reflex_sin, reflex_m)
             if rings is not None:
                 moves[u] = moves[v] = p
                 busy.update(touched)
@@ -231,7 +233,7 @@ def _collinear_on_outline(target, mover, xy, pinned_dirs, reflex_sin):
     return all(abs(d[0] * e[1] - d[1] * e[0]) <= reflex_sin for e in pinned_dirs[mover])
 
 
-def _try(p, u, v, rings, regions, reflex_sin):
+def _try(p, u, v, rings, regions, reflex_sin, reflex_m):
     """New rings (None: the block vanishes) of the blocks ``rings`` = [(coords, node ids)] if u and
     v go to ``p``; None if the rule refuses the move."""
     before: dict[int, float] = {}
@@ -250,7 +252,7 @@ def _try(p, u, v, rings, regions, reflex_sin):
         new_xy[merged] = p
         new_xy = new_xy[keep]
         area = _signed_area(new_xy)
-        if area <= 0 or len(reflex_vertices(new_xy, reflex_sin)):
+        if area <= 0 or len(reflex_vertices(new_xy, reflex_sin, reflex_m)):
             return None
         after[reg] = after.get(reg, 0.0) + area
         out.append(new_xy)

@@ -28,6 +28,15 @@ name                          value                       why
 ``reflex_sin``                ``1e-9``                    a vertex is reflex (concave) when the sine of
                                                           its turn is below ``-reflex_sin``: collinear
                                                           vertices left by noding (turn 0) stay convex.
+``reflex_m``                  ``8 · grid_m``              ... and it lies more than ``reflex_m`` inside
+                                                          the chord of its two neighbours.
+                                                          Snap-rounding puts every node on the grid,
+                                                          up to grid·√2/2 off the line it lies on, so
+                                                          a collinear T-junction (a crack or cut
+                                                          ending on an edge) can turn by a sine of
+                                                          ~grid / edge — above ``reflex_sin`` for
+                                                          edges shorter than 1000 grid cells —
+                                                          while sitting < 2 grid cells off the line.
 ``rounding_m``                ``0.01 ·`` median edge      the solver's corner rounding ``d``
                               (or given)                  (REFERENCE.md §5, UDEC's default ratio).
                                                           With potential cracks of size ``s`` the
@@ -55,7 +64,7 @@ import math
 from dataclasses import asdict, dataclass
 
 __all__ = ["Tolerances", "model_tolerances", "ROUNDING_FRACTION", "SNAP_FRACTION", "GRID_FRACTION", "LABEL_FRACTION",
-           "REFLEX_SIN", "AREA_BALANCE_RTOL", "CRACK_EDGE_FRACTION"]
+           "REFLEX_SIN", "AREA_BALANCE_RTOL", "CRACK_EDGE_FRACTION", "REFLEX_GRID_CELLS"]
 
 #: d / typical edge (REFERENCE.md §5).
 ROUNDING_FRACTION = 0.01
@@ -69,6 +78,8 @@ LABEL_FRACTION = 1e-7
 REFLEX_SIN = 1e-9
 #: typical edge / potential-crack size (an upper bound used for the rounding d with cracks).
 CRACK_EDGE_FRACTION = 0.5
+#: reflex height tolerance / noding grid.
+REFLEX_GRID_CELLS = 8
 #: relative area balance accepted as exact.
 AREA_BALANCE_RTOL = 1e-9
 
@@ -85,6 +96,7 @@ class Tolerances:
     min_edge_m: float
     sliver_width_m: float
     reflex_sin: float = REFLEX_SIN
+    reflex_m: float = 0.0
     area_balance_rtol: float = AREA_BALANCE_RTOL
 
     def to_dict(self) -> dict:
@@ -117,4 +129,4 @@ def model_tolerances(model_size_m: float, typical_edge_m: float, rounding_m: flo
     grid = 2.0 ** math.floor(math.log2(GRID_FRACTION * model_size_m))
     return Tolerances(model_size_m=float(model_size_m), grid_m=grid, snap_m=SNAP_FRACTION * model_size_m,
                       label_m=LABEL_FRACTION * model_size_m, rounding_m=d, min_edge_m=e,
-                      sliver_width_m=e)
+                      sliver_width_m=e, reflex_m=REFLEX_GRID_CELLS * grid)

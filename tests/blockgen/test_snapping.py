@@ -92,3 +92,20 @@ def test_cracked_models_have_no_edge_below_the_minimum_unless_listed(pattern, se
     # the snapping rule refused (listed as not_snapped)
     assert n_short == m.quality["tiny_edges"]["count"]
     assert n_short <= 2 * m.quality["edges_snapped"]["not_snapped"]
+
+
+def test_a_vertex_off_its_line_by_round_off_is_not_reflex_but_a_real_notch_is():
+    from rockmass.blockgen.convex import reflex_vertices
+    from rockmass.blockgen.tolerances import model_tolerances
+
+    tol = model_tolerances(141.0, 1.0)
+    assert tol.reflex_m == 8 * tol.grid_m
+
+    def ring(h):  # CCW unit square with a vertex h inside the bottom edge, between 1 mm edges
+        return np.array([[0, 0], [0.001, h], [0.002, 0], [1, 0], [1, 1], [0, 1]], float)
+
+    # 2 grid cells inside: the turn's sine (≈ 2h / 1 mm ≈ 5e-7) exceeds reflex_sin, the height does not
+    assert len(reflex_vertices(ring(2 * tol.grid_m), tol.reflex_sin)) == 1
+    assert len(reflex_vertices(ring(2 * tol.grid_m), tol.reflex_sin, tol.reflex_m)) == 0
+    assert reflex_vertices(ring(20 * tol.grid_m), tol.reflex_sin, tol.reflex_m).tolist() == [1]
+    assert len(reflex_vertices(ring(-20 * tol.grid_m), tol.reflex_sin, tol.reflex_m)) == 0
