@@ -68,7 +68,7 @@ if TYPE_CHECKING:
     from .scanline_stats import SpacingFit, fit_spacings, rqd_direct, rqd_priest_hudson, scanline_statistics
     from .size_fit import CensoredTraces, SizeFit, censored_traces, fit_sizes, trace_length_functions
     from .field_fit import FaceSurvey, FieldFit, FittedSet, assign_traces, fit_field
-    from .validation import ClosedLoop, closed_loop, compare_fit, compare_with_field, virtual_face, virtual_scanline
+    from .validation import ClosedLoop, closed_loop, compare_fit, compare_with_field, section_check, virtual_face, virtual_scanline
 
 #: Public name -> the module that defines it.
 _SOURCES = {
@@ -191,6 +191,7 @@ _SOURCES = {
     "closed_loop": "validation",
     "compare_fit": "validation",
     "compare_with_field": "validation",
+    "section_check": "validation",
     "virtual_face": "validation",
     "virtual_scanline": "validation",
 }

@@ -49,7 +49,8 @@ from .sampling import sample_line, sample_plane
 from .scanline import Scanline
 from .sizes import ExponentialSize, LognormalSize, PowerLawSize
 
-__all__ = ["ClosedLoop", "closed_loop", "compare_fit", "compare_with_field", "virtual_face", "virtual_scanline"]
+__all__ = ["ClosedLoop", "closed_loop", "compare_fit", "compare_with_field", "section_check", "virtual_face",
+           "virtual_scanline"]
 
 #: α95 multiple of the mean-pole tolerance (module docstring): sqrt(ln 1000 / ln 20).
 POLE_TOLERANCE_FACTOR = float(np.sqrt(np.log(1000.0) / np.log(20.0)))
@@ -317,3 +318,50 @@ def compare_with_field(network: DiskNetwork, field_fit: FieldFit, scanlines: Seq
             tol = POLE_TOLERANCE_FACTOR * float(np.hypot(s.alpha95_deg, sim_sets.fits[i].alpha95_deg))
             rows.append(_row(s.name, "mean_pole_deg", 0.0, angle, None, tol, angle))
     return rows
+
+
+def section_check(network: DiskNetwork, specs: Sequence[FractureSetSpec], point: ArrayLike, normal: ArrayLike,
+                  window_uv_m: ArrayLike) -> dict:
+    """Traces of a realization on a plane: measured P21 against Σ_s P32_s / C23_s (REFERENCE.md §4).
+
+    Parameters
+    ----------
+    network : DiskNetwork
+        Generated from ``specs`` (set j of the network is ``specs[j]``).
+    specs : sequence of FractureSetSpec
+    point, normal : (3,) array_like
+        The plane (origin of its (u, v) frame and its normal m).
+    window_uv_m : (k, 2) array_like
+        Window polygon in the plane frame.
+
+    Returns
+    -------
+    dict
+        ``traces``, ``area_m2``, ``p21`` (measured, m/m²), ``p21_expected`` (with each set's achieved
+        P32 and its C23 for m), ``p21_sd`` (P21 √((1 + CV²)/M), M traces, CV of their clipped lengths),
+        ``z`` = (measured − expected)/sd, ``mean_trace_length_m`` (clipped, window-censored) and the
+        same per set under ``sets``. Undefined numbers are None.
+    """
+    from .intensity import clipped_lengths_m
+
+    _require_network(network)
+    face = virtual_face(network, point, normal, window_uv_m)
+    area = face.area_m2
+    lengths = np.asarray(clipped_lengths_m(face.trace_map))
+    set_of = np.asarray(face.trace_map.attributes["set"])
+
+    def stats(mask, expected):
+        ell = lengths[mask & (lengths > 0)]
+        m = ell.size
+        p21 = float(ell.sum() / area)
+        sd = float(p21 * np.sqrt((1.0 + ell.var() / ell.mean() ** 2) / m)) if m > 1 else None
+        return {"traces": int(m), "p21": p21, "p21_expected": float(expected), "p21_sd": sd,
+                "z": None if not sd else (p21 - expected) / sd,
+                "mean_trace_length_m": float(ell.mean()) if m else None}
+
+    m = face.normal
+    expected = [network.p32(j) / spec.orientation.c23(m) for j, spec in enumerate(specs)]
+    out = stats(np.ones(lengths.size, dtype=bool), sum(expected))
+    out["area_m2"] = area
+    out["sets"] = [dict(stats(set_of == j, e), set=j, name=spec.name) for j, (spec, e) in enumerate(zip(specs, expected))]
+    return out

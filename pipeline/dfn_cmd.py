@@ -113,6 +113,16 @@ def _fit_sets(config_path, cfg):
     return specs, fit, scanlines, faces
 
 
+def _section(network, specs, sec, k: int) -> dict:
+    """``summary.json`` entry of one ``[[dfn.sections]]`` plane (:func:`rockmass.dfn.section_check`)."""
+    from .dfn.orientation import normal_from_dip
+    from .dfn.validation import section_check
+
+    result = section_check(network, specs, sec.point_m, normal_from_dip(sec.dip_deg, sec.dip_direction_deg),
+                           sec.window_uv_m)
+    return {"name": sec.name or f"section {k}", **result}
+
+
 def compute(args):
     """Load, fit if asked, generate, validate if asked.
 
@@ -152,7 +162,15 @@ def compute(args):
             from .dfn.validation import compare_with_field
 
             rows = compare_with_field(network, fit, *field)
-        results.append((i, network, realization_summary(network, specs, seed, i), rows))
+        summary = realization_summary(network, specs, seed, i)
+        if cfg.sections:
+            summary["sections"] = []
+            for k, sec in enumerate(cfg.sections):
+                try:
+                    summary["sections"].append(_section(network, specs, sec, k))
+                except ValueError as exc:
+                    raise InputError(f"{args.config}: dfn.sections[{k}]: {exc}") from exc
+        results.append((i, network, summary, rows))
     t2 = time.perf_counter()
     return document, specs, seed, results, {"load_s": t1 - t0, "generate_s": t2 - t1}, fit
 
@@ -210,4 +228,8 @@ def run(args) -> int:
         check = "" if not rows else f"; validation {sum(r['ok'] for r in rows)}/{len(rows)} within tolerance"
         print(f"realization {index}: {total['count']} fractures, P32 {total['achieved_p32']:.4g} "
               f"(target {total['target_p32']:.4g}) m²/m³{check}")
+        for sec in summary.get("sections", []):
+            sd = "" if sec["p21_sd"] is None else f" ± {sec['p21_sd']:.2g}"
+            print(f"  {sec['name']}: {sec['traces']} traces, P21 {sec['p21']:.4g}{sd} m/m² "
+                  f"(expected P32/C23 {sec['p21_expected']:.4g})")
     return 0

@@ -287,6 +287,21 @@ class FitConfig(StrictModel):
         return p if p.is_absolute() else Path(config_path).parent / p
 
 
+class SectionConfig(StrictModel):
+    """One ``[[dfn.sections]]`` entry: a plane on which each realization's traces are counted.
+
+    ``point_m`` is the origin of the plane frame (u, v) (:func:`rockmass.dfn.plane_frame` of the upper
+    normal of ``dip_deg`` / ``dip_direction_deg``) and ``window_uv_m`` the convex window in that frame.
+    """
+
+    name: str = Field("", max_length=64)
+    point_m: Triple
+    dip_deg: Dip
+    dip_direction_deg: Azimuth
+    window_uv_m: Annotated[list[Annotated[tuple[float, float], Field(strict=False)]],
+                           Field(min_length=3, max_length=1000)]
+
+
 class DFNConfig(StrictModel):
     """``[dfn]``: domain, seeding, guard and fracture sets.
 
@@ -303,6 +318,9 @@ class DFNConfig(StrictModel):
         1-50 sets, or none when ``fit`` is given.
     fit : FitConfig, optional
         Fit the sets from field data instead (exactly one of ``sets`` and ``fit``).
+    sections : list of SectionConfig, default []
+        Planes on which ``summary.json`` reports the traces of each realization: P21 measured and
+        expected (Σ P32 / C23), with its Poisson standard deviation.
     """
 
     domain: DomainConfig
@@ -311,6 +329,7 @@ class DFNConfig(StrictModel):
     max_fractures: int = Field(5_000_000, ge=1, le=10 ** 9)
     sets: Annotated[list[FractureSetConfig], Field(max_length=50)] = Field(default_factory=list)
     fit: FitConfig | None = None
+    sections: Annotated[list[SectionConfig], Field(max_length=100)] = Field(default_factory=list)
 
     @model_validator(mode="after")
     def _one_source_of_sets(self) -> DFNConfig:
