@@ -51,7 +51,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                      help="region of interest: GeoJSON polygon in image pixels (x = column, y = row "
                           "down, as image annotation tools write it)")
     p.add_argument("--bright-lines", action="store_true", dest="bright_lines",
-                   help="look for bright joints (filled joints, veins, mortar) instead of dark ones")
+                   help="look for bright joints (filled joints, veins, mortar) instead of dark ones; "
+                        "set --joint-width to their full width (about 8 px for the mortar of "
+                        "skimage's brick photo), or recessed joints split into their two bright rims")
     p.add_argument("--sets", type=int, dest="n_sets", help="number of joint sets (default: by BIC)")
     p.add_argument("--config", help="TOML file; its [imaging] section sets scale, width and params")
     p.add_argument("--debug", action="store_true", help="also write the intermediate images")

@@ -156,3 +156,43 @@ def test_brick_photo_yields_near_vertical_continuous_and_short_cross_joints():
     is_vertical = np.abs(angle - 90) < 45
     assert length[is_vertical].sum() > 3 * length[~is_vertical].sum()  # continuous joints dominate
     assert np.median(length[is_vertical]) > 2 * np.median(length[~is_vertical])  # cross joints short
+
+
+def _vertical_joints_per_row_by_third(traces, rows):
+    """Mean number of distinct near-vertical traces crossed per image row, in each column third."""
+    import shapely
+
+    vertical = np.abs(traces.attributes["angle_deg"] - 90) < 30
+    geoms = traces.to_shapely()[vertical]
+    counts = np.zeros(3)
+    for y in rows:
+        line = shapely.LineString([(0, y), (512, y)])
+        xs = sorted(p.x for g in geoms for p in shapely.get_parts(shapely.intersection(g, line))
+                    if p.geom_type == "Point")
+        xs = [x for i, x in enumerate(xs) if i == 0 or x - xs[i - 1] > 4]
+        for x in xs:
+            counts[min(int(x // 171), 2)] += 1
+    return counts / len(rows)
+
+
+def test_brick_bright_joints_are_found_across_the_whole_photo():
+    from scipy.ndimage import gaussian_filter
+    from scipy.signal import find_peaks
+    from skimage import data
+
+    image = data.brick()
+    rows = np.linspace(20, 492, 40).astype(int)
+    # independent count: bright intensity peaks (mortar) along each row of the lightly smoothed photo
+    smooth = gaussian_filter(image.astype(float), 1.5)
+    peaks = np.zeros(3)
+    for y in rows:
+        for x in find_peaks(smooth[y], prominence=25, distance=12)[0]:
+            peaks[min(x // 171, 2)] += 1
+    peaks /= rows.size
+    traces = extract(image, m_per_px=1.0, joint_width_px=8.0,
+                     params=ExtractParams(line_polarity="bright")).traces
+    # the face frame's v runs up from the bottom edge; the rows are symmetric about the middle, so
+    # the same 40 rows are scanned (v = 512 - row - 0.5); with the default 3 px width the right
+    # third's recessed joints give two rims each (9.1 crossings per row there)
+    found = _vertical_joints_per_row_by_third(traces, 512 - rows - 0.5)
+    np.testing.assert_allclose(found, peaks, rtol=0.2)
