@@ -24,19 +24,22 @@ from rockmass.dfn_config import DFNDocument
 SAMPLES = Path(__file__).resolve().parents[2] / "samples"
 SOURCE = SAMPLES / "dfn_seed001.toml"
 FIT_SAMPLE = SAMPLES / "dfn_fit_seed001.toml"
+#: The two fit samples: (field-data source config, file-name stem, fit config).
+VARIANTS = [(SOURCE, "scanline_seed001", FIT_SAMPLE),
+            (SAMPLES / "dfn_seed001_p32_2.toml", "scanline_seed001_p32_2", SAMPLES / "dfn_fit_seed001_p32_2.toml")]
 #: Field geometry of the sample: (file, start, end) of each scanline ...
-SCANLINES = [("scanline_seed001_x.csv", (1.0, 20.0, 3.0), (49.0, 20.0, 3.0)),
-             ("scanline_seed001_y.csv", (25.0, 1.0, 2.0), (25.0, 79.0, 2.0))]
+SCANLINES = [("_x.csv", (1.0, 20.0, 3.0), (49.0, 20.0, 3.0)),
+             ("_y.csv", (25.0, 1.0, 2.0), (25.0, 79.0, 2.0))]
 #: ... and (file, point, normal, window) of each face: a pavement at z = 3 m (map view: u East,
 #: v North) and a vertical face at y = 40 m looking North (u West, v up).
-FACES = [("scanline_seed001_pavement.geojson", (0.0, 0.0, 3.0), (0.0, 0.0, 1.0),
+FACES = [("_pavement.geojson", (0.0, 0.0, 3.0), (0.0, 0.0, 1.0),
           [(1.0, 1.0), (49.0, 1.0), (49.0, 79.0), (1.0, 79.0)]),
-         ("scanline_seed001_face.geojson", (25.0, 40.0, 0.0), (0.0, 1.0, 0.0),
+         ("_face.geojson", (25.0, 40.0, 0.0), (0.0, 1.0, 0.0),
           [(-24.0, 0.2), (24.0, 0.2), (24.0, 5.8), (-24.0, 5.8)])]
 
 
-def _scanline_csv(survey, start) -> str:
-    lines = ["# Virtual scanline: one realization of samples/dfn_seed001.toml (seed 1, realization 0),",
+def _scanline_csv(survey, start, source) -> str:
+    lines = [f"# Virtual scanline: one realization of samples/{source.name} (seed 1, realization 0),",
              "# written by tests/dfn/test_cli_fit.py::make_field_sample.",
              f"# trend: {survey.trend_deg:.6f}", f"# plunge: {survey.plunge_deg + 0.0:.6f}",
              f"# length: {survey.length_m:.6f}", "# start: " + ", ".join(f"{v:g}" for v in start),
@@ -46,32 +49,45 @@ def _scanline_csv(survey, start) -> str:
 
 
 def make_field_sample(folder: Path) -> None:
-    """Write the virtual field files of the fit sample into ``folder``."""
-    cfg = load_config(SOURCE, model=DFNDocument).dfn
-    specs = [s.to_spec() for s in cfg.sets]
-    net = generate(specs, cfg.domain_m(), seed=cfg.seed, realization=0)
-    for name, a, b in SCANLINES:
-        (folder / name).write_text(_scanline_csv(virtual_scanline(net, a, b), a))
-    for name, point, normal, window in FACES:
-        face = virtual_face(net, point, normal, window)
-        tm = face.trace_map
-        write_traces(dataclasses.replace(tm, frame="face", attributes={"id": tm.attributes["id"]}), folder / name)
+    """Write the virtual field files of both fit samples into ``folder``."""
+    for source, stem, _ in VARIANTS:
+        cfg = load_config(source, model=DFNDocument).dfn
+        specs = [s.to_spec() for s in cfg.sets]
+        net = generate(specs, cfg.domain_m(), seed=cfg.seed, realization=0)
+        for suffix, a, b in SCANLINES:
+            (folder / (stem + suffix)).write_text(_scanline_csv(virtual_scanline(net, a, b), a, source))
+        for suffix, point, normal, window in FACES:
+            tm = virtual_face(net, point, normal, window).trace_map
+            write_traces(dataclasses.replace(tm, frame="face", attributes={"id": tm.attributes["id"]}),
+                         folder / (stem + suffix))
 
 
-def test_bundled_field_sample_is_what_the_generator_writes(tmp_path):
+def test_bundled_field_samples_are_what_the_generator_writes(tmp_path):
     make_field_sample(tmp_path)
-    for name in [s[0] for s in SCANLINES] + [f[0] for f in FACES]:
-        assert (tmp_path / name).read_bytes() == (SAMPLES / name).read_bytes(), name
+    for _, stem, fit_config in VARIANTS:
+        for suffix in [s[0] for s in SCANLINES] + [f[0] for f in FACES]:
+            name = stem + suffix
+            assert (tmp_path / name).read_bytes() == (SAMPLES / name).read_bytes(), name
+            assert f'"{name}"' in fit_config.read_text()
 
 
-@pytest.fixture(scope="module")
-def fitted_run(tmp_path_factory):
+def test_the_two_fit_samples_differ_only_in_their_field_files_and_comments():
+    def body(path, stem):
+        lines = [ln for ln in path.read_text().splitlines() if not ln.startswith("#")]
+        return "\n".join(lines).replace(stem, "STEM")
+    assert body(VARIANTS[0][2], VARIANTS[0][1]) == body(VARIANTS[1][2], VARIANTS[1][1])
+
+
+@pytest.fixture(scope="module", params=[0, 1], ids=["p32_1", "p32_2"])
+def fitted_run(request, tmp_path_factory):
+    source, _, fit_config = VARIANTS[request.param]
     out = tmp_path_factory.mktemp("fit") / "out"
-    assert main(["dfn", str(FIT_SAMPLE), "--out", str(out), "--realizations", "2"]) == 0
-    return out
+    assert main(["dfn", str(fit_config), "--out", str(out), "--realizations", "2"]) == 0
+    return out, source
 
 
 def test_fit_run_writes_fitted_json_and_validation_per_realization(fitted_run):
+    fitted_run, _ = fitted_run
     names = sorted(p.name for p in fitted_run.iterdir())
     assert names == ["fitted.json", "manifest.json", "realization_0000", "realization_0001"]
     assert sorted(p.name for p in (fitted_run / "realization_0001").iterdir()) == \
@@ -84,10 +100,11 @@ def test_fit_run_writes_fitted_json_and_validation_per_realization(fitted_run):
 
 
 def test_fitted_sets_match_the_sets_the_field_data_came_from(fitted_run):
+    fitted_run, source = fitted_run
     from rockmass.dfn.orientation import angle_between, pole_from_dip
 
     fitted = json.loads((fitted_run / "fitted.json").read_text())["sets"]
-    truth = load_config(SOURCE, model=DFNDocument).dfn.sets
+    truth = load_config(source, model=DFNDocument).dfn.sets
     for t in truth:
         pole = pole_from_dip(t.orientation.dip_deg, t.orientation.dip_direction_deg)
         angles = [float(angle_between(pole, pole_from_dip(f["orientation"]["dip_deg"],
@@ -98,6 +115,7 @@ def test_fitted_sets_match_the_sets_the_field_data_came_from(fitted_run):
 
 
 def test_validation_rows_pass_within_their_poisson_tolerances(fitted_run):
+    fitted_run, _ = fitted_run
     doc = json.loads((fitted_run / "realization_0000" / "validation.json").read_text())
     quantities = {r["quantity"] for r in doc["rows"]}
     assert {"p10", "p21", "mean_trace_length_m", "mean_pole_deg"} <= quantities
