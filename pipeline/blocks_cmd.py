@@ -44,6 +44,39 @@ def _field_message(exc: Exception) -> str:
     return text if re.match(r"^(blocks\.)", text) else f"blocks.{text}"
 
 
+def dfn_section_traces(document, config_path):
+    """(TraceMap, window) of ``[blocks.dfn_section]``: the named ``[[dfn.sections]]`` plane of the
+    document's ``[dfn]`` section, generated on the plane (:func:`rockmass.dfn.generate_section`)."""
+    from .dfn.orientation import normal_from_dip
+    from .dfn.section import generate_section
+
+    choice = document.blocks.dfn_section
+    dfn = document.dfn
+    if dfn is None:
+        raise ConfigError(config_path, [("blocks.dfn_section", "needs the [dfn] section in the same "
+                                         "file (its sets, seed and [[dfn.sections]])")])
+    if not dfn.sets:
+        raise ConfigError(config_path, [("blocks.dfn_section", "needs [[dfn.sets]] (sets fitted by "
+                                         "[dfn.fit] are not supported here)")])
+    names = [s.name for s in dfn.sections]
+    if choice.section not in names:
+        raise ConfigError(config_path, [("blocks.dfn_section.section", f"no [[dfn.sections]] entry "
+                                         f"named {choice.section!r} (names: {names})")])
+    if choice.realization >= dfn.realizations:
+        raise ConfigError(config_path, [("blocks.dfn_section.realization", f"must be < "
+                                         f"dfn.realizations ({dfn.realizations}), got "
+                                         f"{choice.realization}")])
+    sec = dfn.sections[names.index(choice.section)]
+    try:
+        traces = generate_section([s.to_spec() for s in dfn.sets], sec.point_m,
+                                  normal_from_dip(sec.dip_deg, sec.dip_direction_deg), sec.window_uv_m,
+                                  seed=dfn.seed, realization=choice.realization,
+                                  max_fractures=dfn.max_fractures)
+    except ValueError as exc:
+        raise InputError(f"{config_path}: blocks.dfn_section: {exc}") from exc
+    return traces, [tuple(p) for p in sec.window_uv_m]
+
+
 def compute(args):
     """Load, validate and build; return (document, model, invariants, timings)."""
     from .blockgen import build, check_model
@@ -58,13 +91,17 @@ def compute(args):
     cfg = document.blocks
     traces = None
     path = cfg.traces_path(args.config)
+    domain_xy = None if cfg.domain is None else cfg.domain.xy_m()
     try:
         joint_sets = cfg.joint_sets()
         excavations = [e.to_excavation() for e in cfg.excavations]
         if path is not None:
             traces = read_trace_file(path, "blocks.traces")
+        if cfg.dfn_section is not None:
+            traces, window = dfn_section_traces(document, args.config)
+            domain_xy = window if domain_xy is None else domain_xy
         t1 = time.perf_counter()
-        model = build(cfg.domain.xy_m(), joint_sets, traces, excavations, dangling=cfg.dangling,
+        model = build(domain_xy, joint_sets, traces, excavations, dangling=cfg.dangling,
                       seed=cfg.seed, rounding_m=cfg.rounding_m, min_edge_m=cfg.min_edge_m,
                       merge_slivers=cfg.merge_slivers, convex=cfg.convex, snap_edges=cfg.snap_edges,
                       cracks=None if cfg.cracks is None else cfg.cracks.to_cracks())
@@ -100,10 +137,12 @@ def run(args) -> int:
         write_json(model, paths["blocks.json"])
         write_vtu(model, paths["blocks.vtu"])
         plot_blocks(model, paths["blocks.png"])
-        manifest = build_manifest(command=args.argv, config=document, inputs=inputs,
-                                  seeds={"root": document.blocks.seed,
-                                         "rule": "joint set i: SeedSequence(root).spawn(n)[i]; "
-                                                 "cracks: child n"},
+        seeds = {"root": document.blocks.seed,
+                 "rule": "joint set i: SeedSequence(root).spawn(n)[i]; cracks: child n"}
+        if document.blocks.dfn_section is not None:
+            seeds["dfn_section"] = {"dfn.seed": document.dfn.seed,
+                                    "realization": document.blocks.dfn_section.realization}
+        manifest = build_manifest(command=args.argv, config=document, inputs=inputs, seeds=seeds,
                                   timings_s=timings, extra={"invariants": invariants})
         atomic_write_json(paths["manifest.json"], manifest)
     q = model.quality

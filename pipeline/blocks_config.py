@@ -20,6 +20,9 @@ Example::
 ``[blocks.cracks]`` (``size_m``, ``pattern`` = "voronoi" or "triangular", ...) subdivides intact
 blocks by potential cracks (:class:`CracksConfig`).
 
+``[blocks.dfn_section]`` (``section``, ``realization``) takes the traces of a ``[[dfn.sections]]``
+plane of the same file's ``[dfn]`` section (:class:`DfnSectionConfig`).
+
 ``[blocks.two_sets]`` (``alpha_deg``, ``theta_deg``, ``spacing_m``) is the seed-000 parametrisation:
 set 1 at α from the horizontal, set 2 at α + θ. The section is the ``blocks`` field of
 :class:`rockmass.config.RockmassConfig` (what ``rockmass blocks`` loads, so one file can hold several
@@ -36,7 +39,7 @@ from pydantic import Field, model_validator
 from .strict import StrictModel, field_problem
 
 __all__ = ["BlocksConfig", "BlocksDocument", "DomainSection", "JointSetConfig", "TwoSetsConfig",
-           "CracksConfig",
+           "CracksConfig", "DfnSectionConfig",
            "CircleConfig", "HorseshoeConfig", "ArchedCavernConfig", "RectangleConfig",
            "PolygonConfig"]
 
@@ -240,6 +243,28 @@ class CracksConfig(StrictModel):
                       include_excavated=self.include_excavated)
 
 
+class DfnSectionConfig(StrictModel):
+    """``[blocks.dfn_section]``: cut the blocks by the traces of a DFN plane section.
+
+    The traces are generated on one ``[[dfn.sections]]`` plane of the same file's ``[dfn]`` section
+    (its sets, seed and ``max_fractures``), directly on the plane
+    (:func:`rockmass.dfn.section.generate_section`: the same Poisson disk model and statistics as
+    the volume realization, drawn on the plane), realization ``realization``. The block coordinates
+    are the plane frame (u, v) of that section; without ``[blocks.domain]`` the domain is the
+    section's ``window_uv_m``.
+
+    Parameters
+    ----------
+    section : str
+        ``name`` of a ``[[dfn.sections]]`` entry.
+    realization : int, default 0
+        Realization index (0 <= realization < dfn.realizations).
+    """
+
+    section: Name
+    realization: int = Field(0, ge=0, le=10000)
+
+
 ExcavationConfig = Annotated[CircleConfig | HorseshoeConfig | ArchedCavernConfig | RectangleConfig
                              | PolygonConfig, Field(discriminator="shape")]
 
@@ -249,12 +274,15 @@ class BlocksConfig(StrictModel):
 
     Parameters
     ----------
-    domain : DomainSection
+    domain : DomainSection, optional
+        Required unless ``dfn_section`` gives the domain (its window).
     sets : list of JointSetConfig, default []
     two_sets : TwoSetsConfig, optional
         Appended after ``sets``.
     traces : str, optional
         Trace file (GeoJSON / CSV, :func:`rockmass.dfn.read_traces`), relative to the config file.
+    dfn_section : DfnSectionConfig, optional
+        Traces of a ``[[dfn.sections]]`` plane of this file's ``[dfn]`` section (not with ``traces``).
     excavations : list, default []
         Stages (``shape`` = circle, horseshoe, arched_cavern, rectangle, polygon), unique names.
     dangling : {"glued", "joint", "drop"}, default "glued"
@@ -267,10 +295,11 @@ class BlocksConfig(StrictModel):
         ``[blocks.cracks]``: subdivide intact blocks by potential cracks (needs ``convex``).
     """
 
-    domain: DomainSection
+    domain: DomainSection | None = None
     sets: Annotated[list[JointSetConfig], Field(max_length=32)] = Field(default_factory=list)
     two_sets: TwoSetsConfig | None = None
     traces: str | None = None
+    dfn_section: DfnSectionConfig | None = None
     excavations: Annotated[list[ExcavationConfig], Field(max_length=64)] = Field(default_factory=list)
     dangling: Literal["glued", "joint", "drop"] = "glued"
     seed: int = Field(0, ge=0, lt=2 ** 63)
@@ -283,8 +312,14 @@ class BlocksConfig(StrictModel):
 
     @model_validator(mode="after")
     def _something_cuts(self):
+        if self.domain is None and self.dfn_section is None:
+            raise field_problem(self, "domain", "required: give [blocks.domain] (or take the window of "
+                                "a DFN section with [blocks.dfn_section])", None)
+        if self.traces is not None and self.dfn_section is not None:
+            raise field_problem(self, "dfn_section", "give traces or dfn_section, not both",
+                                self.dfn_section.section)
         if (not self.sets and self.two_sets is None and self.traces is None and not self.excavations
-                and self.cracks is None):
+                and self.cracks is None and self.dfn_section is None):
             raise field_problem(self, "sets", "nothing cuts the domain: give sets, two_sets, traces "
                                 "or excavations", [])
         names = [e.name for e in self.excavations]

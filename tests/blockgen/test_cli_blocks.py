@@ -13,7 +13,8 @@ SAMPLES = Path(__file__).resolve().parents[2] / "samples"
 
 
 @pytest.mark.parametrize("name", ["blocks_shaketable.toml", "blocks_cavern.toml",
-                                  "blocks_dfn_horseshoe.toml", "blocks_cavern_cracks.toml"])
+                                  "blocks_dfn_horseshoe.toml", "blocks_cavern_cracks.toml",
+                                  "blocks_dfn_section.toml"])
 def test_sample_configs_build_models_that_pass_the_invariants(name, tmp_path, capsys):
     assert main(["blocks", str(SAMPLES / name), "--out", str(tmp_path)]) == 0
     names = sorted(p.name for p in tmp_path.iterdir())
@@ -117,4 +118,46 @@ def test_bad_crack_section_exits_2_naming_the_field(tmp_path, capsys, line, fiel
     assert main(["blocks", str(path), "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert f"{field}:" in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_dfn_section_sample_cuts_the_window_by_the_section_traces(tmp_path):
+    from rockmass.blockgen.model import KIND_TRACE
+    from rockmass.config import load_config
+    from rockmass.dfn.orientation import normal_from_dip
+    from rockmass.dfn.section import generate_section
+
+    assert main(["blocks", str(SAMPLES / "blocks_dfn_section.toml"), "--out", str(tmp_path)]) == 0
+    model = read_json(tmp_path / "blocks.json")
+    # the domain is the 40 m x 30 m section window
+    assert model.quality["area_balance"]["domain_m2"] == pytest.approx(1200.0, rel=1e-12)
+    assert (model.contact_kind == KIND_TRACE).sum() > 100
+    # the traces are the section of the file's [dfn] sets with its seed, realization 0
+    doc = load_config(SAMPLES / "blocks_dfn_section.toml")
+    sec = doc.dfn.sections[0]
+    traces = generate_section([s.to_spec() for s in doc.dfn.sets], sec.point_m,
+                              normal_from_dip(sec.dip_deg, sec.dip_direction_deg), sec.window_uv_m,
+                              seed=doc.dfn.seed, realization=0)
+    assert model.quality["n_traces_used"] == traces.n_traces
+
+
+_SECTION = """
+[blocks]
+[blocks.dfn_section]
+section = "{name}"
+realization = {realization}
+"""
+_DFN = (SAMPLES / "blocks_dfn_section.toml").read_text().split("\n[blocks]\n")[0]
+
+
+@pytest.mark.parametrize("text, field", [
+    (_SECTION.format(name="drift face", realization=0), "blocks.dfn_section"),
+    (_DFN + _SECTION.format(name="nope", realization=0), "blocks.dfn_section.section"),
+    (_DFN + _SECTION.format(name="drift face", realization=1), "blocks.dfn_section.realization"),
+    ("[blocks]\n[[blocks.sets]]\nangle_deg = 0\nspacing_m = 1.0\n", "blocks.domain")],
+    ids=["no dfn", "unknown section", "realization", "no domain"])
+def test_bad_dfn_section_exits_2_naming_the_field(tmp_path, capsys, text, field):
+    path = _write(tmp_path, text)
+    assert main(["blocks", str(path), "--out", str(tmp_path / "out")]) == 2
+    assert f"{field}:" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
