@@ -49,8 +49,9 @@ _CY_SLIP_F = 0.05  # a CY slot with F below this counts as slipping in the repor
 
 
 @njit(cache=True)
-def world_vertices(loc, off, pos, rot, active, wv):
-    """wv[k] = pos[b] + R(rot[b]) loc[k] for the vertices of active blocks."""
+def world_vertices(loc, lnrm, off, pos, rot, active, wv):
+    """wv[k, :2] = pos[b] + R(rot[b]) loc[k] and wv[k, 2:] = R(rot[b]) lnrm[k] (the outward unit
+    normal of the edge starting at vertex k) for the vertices of active blocks."""
     for b in range(len(off) - 1):
         if not active[b]:
             continue
@@ -59,6 +60,8 @@ def world_vertices(loc, off, pos, rot, active, wv):
         for k in range(off[b], off[b + 1]):
             wv[k, 0] = pos[b, 0] + c * loc[k, 0] - s * loc[k, 1]
             wv[k, 1] = pos[b, 1] + s * loc[k, 0] + c * loc[k, 1]
+            wv[k, 2] = c * lnrm[k, 0] - s * lnrm[k, 1]
+            wv[k, 3] = s * lnrm[k, 0] + c * lnrm[k, 1]
 
 
 @njit(cache=True)
@@ -122,33 +125,45 @@ def broad_phase(wv, off, active, movable, margin):
 
 @njit(cache=True)
 def _edge(wv, off, b, i):
-    """Start, unit direction, length and outward unit normal of edge i (global vertex index)."""
+    """Start, unit direction, outward unit normal and end vertex of edge i (global index)."""
     j = i + 1
     if j == off[b + 1]:
         j = off[b]
-    ex = wv[j, 0] - wv[i, 0]
-    ey = wv[j, 1] - wv[i, 1]
-    length = math.sqrt(ex * ex + ey * ey)
-    ux = ex / length
-    uy = ey / length
-    return wv[i, 0], wv[i, 1], ux, uy, length, uy, -ux, j
+    nx = wv[i, 2]
+    ny = wv[i, 3]
+    return wv[i, 0], wv[i, 1], -ny, nx, nx, ny, j
 
 
 @njit(cache=True)
-def _max_separation(wv, off, a, b, stop):
-    """Largest over the edges of block a of the smallest signed distance of b's vertices to the
-    edge's line (separating-axis test); stops early once above ``stop``. Returns (sep, edge)."""
+def _max_separation(wv, off, a, b, stop, eps):
+    """Separating-axis test over the edges of block a: the largest over a's edges of the smallest
+    signed distance of b's vertices to the edge's line; stops early once above ``stop``.
+
+    Ties within ``eps`` (common when blocks share a face: the edges next to the face pass through
+    the shared corner and also score 0) go to the edge whose two nearest vertices of b are closest
+    together in distance, i.e. the edge that faces an edge of b. Returns (sep, edge).
+    """
     best = -np.inf
+    best_gap = np.inf
     best_edge = -1
     for i in range(off[a], off[a + 1]):
-        x0, y0, ux, uy, length, nx, ny, j = _edge(wv, off, a, i)
+        x0 = wv[i, 0]
+        y0 = wv[i, 1]
+        nx = wv[i, 2]
+        ny = wv[i, 3]
         low = np.inf
+        low2 = np.inf
         for k in range(off[b], off[b + 1]):
             d = (wv[k, 0] - x0) * nx + (wv[k, 1] - y0) * ny
             if d < low:
+                low2 = low
                 low = d
-        if low > best:
+            elif d < low2:
+                low2 = d
+        gap = low2 - low
+        if low > best + eps or (low >= best - eps and gap < best_gap):
             best = low
+            best_gap = gap
             best_edge = i
             if best > stop:
                 break
@@ -284,8 +299,28 @@ def _activate_slot(S, p, k, prop, broken):
 
 
 @njit(cache=True)
-def contact_forces(wv, off, pos, vel, omg, pa, pb, pprop, pref, pinit, init_brk, props, S,
-                   dt, ctol, hyst, rounding, beta, fpair, E):
+def _forces_from_slots(S, p, ax, ay, bx, by, fpair):
+    """Force and moment on both blocks of pair p from its slots' stored F_n, F_s (no dashpots)."""
+    for k in range(2):
+        if S[p, k, ACT] == 0.0:
+            continue
+        nx = S[p, k, NX]
+        ny = S[p, k, NY]
+        fx = -S[p, k, FN] * nx - S[p, k, FS] * ny
+        fy = -S[p, k, FN] * ny + S[p, k, FS] * nx
+        px = S[p, k, PX]
+        py = S[p, k, PY]
+        fpair[p, 0] += fx
+        fpair[p, 1] += fy
+        fpair[p, 2] += (px - ax) * fy - (py - ay) * fx
+        fpair[p, 3] -= fx
+        fpair[p, 4] -= fy
+        fpair[p, 5] -= (px - bx) * fy - (py - by) * fx
+
+
+@njit(cache=True)
+def contact_forces(wv, off, pos, vel, omg, radius, still, pa, pb, pprop, pref, pinit, init_brk,
+                   props, S, dt, ctol, hyst, rounding, beta, fpair, E):
     """Narrow phase and joint laws for every pair; writes per-pair force/moment on both blocks
     (``fpair[p] = fx_a, fy_a, m_a, fx_b, fy_b, m_b``) and returns (max overlap, its pair).
 
@@ -293,8 +328,9 @@ def contact_forces(wv, off, pos, vel, omg, pa, pb, pprop, pref, pinit, init_brk,
     reference (switching side only when the other is better by ``hyst``: no flicker on coincident
     edges); the most anti-parallel edge of the other block is clipped to the reference edge's
     extent (Box2D-style manifold) giving one or two points within the detection gap, each a slot of
-    length half the clipped overlap (at least ``rounding``). ``beta`` > 0 adds the stiffness-
-    proportional Rayleigh dashpots β K v_rel.
+    length half the clipped overlap (a lone corner point: at least ``rounding``). ``beta`` > 0 adds the stiffness-
+    proportional Rayleigh dashpots β K v_rel. Pairs of two ``still`` blocks (asleep or fixed) do not
+    move: their slots keep their state and only the forces are re-assembled from it.
     """
     max_ovl = 0.0
     max_pair = -1
@@ -313,16 +349,27 @@ def contact_forces(wv, off, pos, vel, omg, pa, pb, pprop, pref, pinit, init_brk,
         prop = props[pprop[p]]
         for q in range(6):
             fpair[p, q] = 0.0
+        if still[a] != 0 and still[b] != 0:
+            _forces_from_slots(S, p, pos[a, 0], pos[a, 1], pos[b, 0], pos[b, 1], fpair)
+            continue
         extra = 0.0
         for k in range(2):
             if S[p, k, ACT] != 0.0:
                 extra = max(extra, S[p, k, U0] + S[p, k, DIL])
         tol = ctol + extra
-        sep_a, e_a = _max_separation(wv, off, a, b, tol)
+        dx = pos[b, 0] - pos[a, 0]
+        dy = pos[b, 1] - pos[a, 1]
+        reach = radius[a] + radius[b] + tol
+        if dx * dx + dy * dy > reach * reach:  # bounding circles apart: no contact
+            for k in range(2):
+                if S[p, k, ACT] != 0.0:
+                    _open_slot(S, p, k)
+            continue
+        sep_a, e_a = _max_separation(wv, off, a, b, tol, hyst)
         sep_b = np.inf
         e_b = -1
         if sep_a <= tol:
-            sep_b, e_b = _max_separation(wv, off, b, a, tol)
+            sep_b, e_b = _max_separation(wv, off, b, a, tol, hyst)
         if sep_a > tol or sep_b > tol:
             for k in range(2):
                 if S[p, k, ACT] != 0.0:
@@ -337,17 +384,17 @@ def contact_forces(wv, off, pos, vel, omg, pa, pb, pprop, pref, pinit, init_brk,
         rb = a if ref == 0 else b
         ib = b if ref == 0 else a
         e = e_a if ref == 0 else e_b
-        x0, y0, ux, uy, lref, nrx, nry, _j = _edge(wv, off, rb, e)
+        x0, y0, ux, uy, nrx, nry, jref = _edge(wv, off, rb, e)
+        lref = (wv[jref, 0] - x0) * ux + (wv[jref, 1] - y0) * uy
         # incident edge: most anti-parallel outward normal on the other block
         best = np.inf
         inc = -1
         for i in range(off[ib], off[ib + 1]):
-            _x, _y, _ux, _uy, _l, nx, ny, _jj = _edge(wv, off, ib, i)
-            d = nx * nrx + ny * nry
+            d = wv[i, 2] * nrx + wv[i, 3] * nry
             if d < best:
                 best = d
                 inc = i
-        ix0, iy0, _iux, _iuy, _il, _inx, _iny, ij = _edge(wv, off, ib, inc)
+        ix0, iy0, _iux, _iuy, _inx, _iny, ij = _edge(wv, off, ib, inc)
         ix1 = wv[ij, 0]
         iy1 = wv[ij, 1]
         t0 = (ix0 - x0) * ux + (iy0 - y0) * uy
@@ -385,7 +432,8 @@ def contact_forces(wv, off, pos, vel, omg, pa, pb, pprop, pref, pinit, init_brk,
                 if S[p, k, ACT] != 0.0:
                     _open_slot(S, p, k)
             continue
-        length = max(0.5 * (thi - tlo), rounding)
+        # a face: each end carries half of it; a corner: half the facing part, at least d
+        length = 0.5 * (thi - tlo) if nkeep == 2 else max(0.5 * (thi - tlo), rounding)
         # contact normal from a to b, tangent
         nx = nrx if ref == 0 else -nrx
         ny = nry if ref == 0 else -nry
@@ -543,11 +591,11 @@ def quiet_forces(edges, pos, vel, omg, rot, qf):
 
 
 @njit(cache=True)
-def advance(n_steps, loc, off, pos, rot, vel, omg, inv_mass, mass, mode, dof_input, presc_val,
+def advance(n_steps, loc, lnrm, off, pos, rot, vel, omg, inv_mass, mass, mode, dof_input, presc_val,
             active, movable, gravity, ext_f, ext_a, ext_b, quiet_edges, pa, pb, pprop, pref, pinit,
             init_brk, props, S, ref_pos, ref_rot, radius, dt, ctol, hyst, rounding, ovl_limit,
             margin, alpha_local, alpha_mass, beta, tol_ratio, check_every, wv, fpair, bp_ptr,
-            bp_idx, E, out):
+            bp_idx, E, out, asleep, calm, sleep_ratio, sleep_steps):
     """Central-difference steps (REFERENCE.md §5). Stops early with a return code: converged
     (static, unbalanced ratio < ``tol_ratio``), rebuild needed (a block moved > margin/2 since the
     last broad phase), overlap above the limit, or a non-finite value. ``out`` receives
@@ -557,6 +605,12 @@ def advance(n_steps, loc, off, pos, rot, vel, omg, inv_mass, mass, mode, dof_inp
     m g, external forces ``ext_f`` with moment cos θ·ext_a + sin θ·ext_b (constant tractions on
     edges that rotate with the block), quiet-boundary dashpots, mass-proportional Rayleigh damping
     −α_M m v, local non-viscous damping −α|F|sign(v) per degree of freedom.
+
+    Sleeping (``sleep_ratio`` > 0, static stages): a block whose own unbalanced-force ratio stays
+    below ``sleep_ratio`` for ``sleep_steps`` steps is put to sleep (velocity zeroed, its kinetic
+    energy booked as damping); a sleeping block is not integrated and pairs of two sleeping or fixed
+    blocks skip the narrow phase; it wakes when its ratio exceeds 10 × ``sleep_ratio`` (a neighbour
+    moved). ``asleep`` must be 1 for blocks that cannot move.
     """
     nb = len(off) - 1
     qf = np.zeros((nb, 3))
@@ -565,10 +619,10 @@ def advance(n_steps, loc, off, pos, rot, vel, omg, inv_mass, mass, mode, dof_inp
     fe = np.zeros(3)
     ratio = np.inf
     for step in range(n_steps):
-        world_vertices(loc, off, pos, rot, active, wv)
-        max_ovl, max_pair = contact_forces(wv, off, pos, vel, omg, pa, pb, pprop, pref, pinit,
-                                           init_brk, props, S, dt, ctol, hyst, rounding, beta,
-                                           fpair, E)
+        world_vertices(loc, lnrm, off, pos, rot, active, wv)
+        max_ovl, max_pair = contact_forces(wv, off, pos, vel, omg, radius, asleep, pa, pb, pprop,
+                                           pref, pinit, init_brk, props, S, dt, ctol, hyst,
+                                           rounding, beta, fpair, E)
         if max_ovl > ovl_limit:
             out[0] = step
             out[2] = max_ovl
@@ -602,6 +656,17 @@ def advance(n_steps, loc, off, pos, rot, vel, omg, inv_mass, mass, mode, dof_inp
             fe[0] = ext_f[b, 0]
             fe[1] = ext_f[b, 1]
             fe[2] = c * ext_a[b] + s * ext_b[b]
+            app = fabs + math.sqrt(fg[0] ** 2 + fg[1] ** 2) + math.sqrt(fe[0] ** 2 + fe[1] ** 2)
+            if asleep[b] != 0:
+                fx = fc[0] + fg[0] + fe[0] + qf[b, 0]
+                fy = fc[1] + fg[1] + fe[1] + qf[b, 1]
+                own = math.sqrt(fx * fx + fy * fy)
+                sum_unb += own
+                sum_app += app
+                if own <= 10.0 * sleep_ratio * app:
+                    continue
+                asleep[b] = 0
+                calm[b] = 0
             unb = 0.0
             for d in range(3):
                 v_old = vel[b, d] if d < 2 else omg[b]
@@ -635,7 +700,19 @@ def advance(n_steps, loc, off, pos, rot, vel, omg, inv_mass, mass, mode, dof_inp
                     omg[b] = v_new
                     rot[b] += v_new * dt
             sum_unb += math.sqrt(unb)
-            sum_app += fabs + math.sqrt(fg[0] ** 2 + fg[1] ** 2) + math.sqrt(fe[0] ** 2 + fe[1] ** 2)
+            sum_app += app
+            if sleep_ratio > 0.0:
+                if math.sqrt(unb) < sleep_ratio * app:
+                    calm[b] += 1
+                else:
+                    calm[b] = 0
+                if calm[b] >= sleep_steps:
+                    asleep[b] = 1
+                    E[E_LOCAL_DAMP] -= 0.5 * (mass[b, 0] * vel[b, 0] ** 2 + mass[b, 1] * vel[b, 1] ** 2
+                                              + mass[b, 2] * omg[b] ** 2)
+                    vel[b, 0] = 0.0
+                    vel[b, 1] = 0.0
+                    omg[b] = 0.0
             dx = pos[b, 0] - ref_pos[b, 0]
             dy = pos[b, 1] - ref_pos[b, 1]
             if math.sqrt(dx * dx + dy * dy) + radius[b] * abs(rot[b] - ref_rot[b]) > 0.5 * margin:

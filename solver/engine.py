@@ -97,7 +97,12 @@ class Engine:
         self.mass = np.ascontiguousarray(np.column_stack([rho * area, rho * area, rho * polar]))
         self.active = np.ones(nb, np.bool_)
         self.radius = np.sqrt(np.maximum.reduceat((self.loc ** 2).sum(1), self.off[:-1]))
-        self.wv = np.empty_like(self.loc)
+        nxt = np.arange(len(self.loc)) + 1
+        nxt[self.off[1:] - 1] = self.off[:-1]
+        edge = self.loc[nxt] - self.loc
+        self.lnrm = np.ascontiguousarray(np.column_stack([edge[:, 1], -edge[:, 0]])
+                                         / np.hypot(edge[:, 0], edge[:, 1])[:, None])
+        self.wv = np.empty((len(self.loc), 4))
 
         edge = np.roll(model.xy_m, -1, axis=0) - model.xy_m
         last = self.off[1:] - 1
@@ -178,6 +183,12 @@ class Engine:
         self.mode[inp] = PRESCRIBED if dynamic else FIXED
         self.inv_mass = np.where(self.mode == FREE, 1.0 / self.mass, 0.0)
         self.movable = (self.mode != FIXED).any(axis=1) & self.active
+        self.wake_all()
+
+    def wake_all(self):
+        """Every block that can move is awake (blocks that cannot are marked asleep)."""
+        self.asleep = (~self.movable).astype(np.int8)
+        self.calm = np.zeros(self.nb, np.int64)
 
     @property
     def margin_m(self) -> float:
@@ -190,7 +201,7 @@ class Engine:
 
     def rebuild(self):
         """Broad phase and pair remap (state of surviving pairs kept)."""
-        K.world_vertices(self.loc, self.off, self.pos, self.rot, self.active, self.wv)
+        K.world_vertices(self.loc, self.lnrm, self.off, self.pos, self.rot, self.active, self.wv)
         margin = self.margin_m
         pa, pb = K.broad_phase(self.wv, self.off, self.active, self.movable, margin)
         n = len(pa)
@@ -210,9 +221,9 @@ class Engine:
 
     def detect(self):
         """Run the narrow phase once without motion: establishes the contact slots."""
-        K.world_vertices(self.loc, self.off, self.pos, self.rot, self.active, self.wv)
-        K.contact_forces(self.wv, self.off, self.pos, self.vel, self.omg, self.pa, self.pb,
-                         self.pprop, self.pref, self.pinit, self.init_brk, self.props, self.S, 0.0,
+        K.world_vertices(self.loc, self.lnrm, self.off, self.pos, self.rot, self.active, self.wv)
+        K.contact_forces(self.wv, self.off, self.pos, self.vel, self.omg, self.radius,
+                         np.zeros(self.nb, np.int8), self.pa, self.pb, self.pprop, self.pref, self.pinit, self.init_brk, self.props, self.S, 0.0,
                          self.ctol_m, self.hysteresis_m, self.rounding_m, 0.0, self.fpair,
                          np.zeros(K.N_ENERGY))
 
@@ -225,6 +236,7 @@ class Engine:
         self.vel[gone] = 0.0
         self.omg[gone] = 0.0
         self.movable &= self.active
+        self.wake_all()
         self.rebuild()
 
     # ------------------------------------------------------------------------- time step --

@@ -43,8 +43,9 @@ def _lumped(t0, t1, length):
 
 def apply_insitu(engine, insitu: InSituStress):
     """Write the in-situ stress into the active contact slots: σ_n = n·σ·n, τ = −t·σ·n
-    (compression-positive σ), lumped over each pair's contact face; the normal offset U0 makes the
-    joint law return exactly that σ_n at the present overlap."""
+    (compression-positive σ), lumped over each face (a block-model contact with both slots
+    active); the normal offset U0 makes the joint law return exactly that σ_n at the present
+    overlap. Corner-only touches start at zero force."""
     S = engine.S
     act = S[:, :, K.ACT] != 0
     if not act.any():
@@ -58,6 +59,9 @@ def apply_insitu(engine, insitu: InSituStress):
     sn = sn.reshape(-1, 2)
     tn = tn.reshape(-1, 2)
     both = act.all(axis=1)
+    # only faces of the block model carry the initial stress; blocks that merely touch at a
+    # corner (four blocks meeting at a point) start unloaded
+    face_pair = both & (engine.pinit >= 0)
     length = S[:, :, K.LEN]
     face = length.sum(axis=1)
     sig = sn.copy()
@@ -70,7 +74,8 @@ def apply_insitu(engine, insitu: InSituStress):
     for k in range(2):
         rows = np.flatnonzero(act[:, k])
         pr = props[rows]
-        s = sig[rows, k]
+        s = np.where(face_pair[rows], sig[rows, k], 0.0)
+        tau[rows, k] = np.where(face_pair[rows], tau[rows, k], 0.0)
         cy = pr[:, K.P_MODEL] == K.MODEL_CY
         en = pr[:, K.P_EN]
         un = np.where(cy, np.maximum(s, 0.0) ** (1 - en) / ((1 - en) * pr[:, K.P_KN]), s / pr[:, K.P_KN])

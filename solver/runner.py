@@ -32,6 +32,7 @@ __all__ = ["run"]
 _CHECK_EVERY = 10         # static convergence test interval (steps)
 _STATIC_CHUNK = 500       # steps between records in static stages
 _DYNAMIC_RECORDS = 400    # records per dynamic stage (history rows) when history_every == 0
+_SLEEP_STEPS = 100        # steps a block's own unbalanced ratio stays below tolerance before it sleeps
 
 
 def _rayleigh(stage: Stage) -> tuple[float, float]:
@@ -190,6 +191,7 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
         rec.frame(stage.name, 0)
     tol = stage.tolerance if not dynamic else 0.0
     alpha_local = stage.local_damping if not dynamic else 0.0
+    sleep_ratio = stage.tolerance if (settings.sleep and not dynamic) else 0.0
     while done < n_steps:
         todo = min(chunk - done % chunk, n_steps - done)
         t_half = eng.time_s + (np.arange(todo) + 0.5) * dt
@@ -197,14 +199,14 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
         for i, inp in enumerate(inputs):
             presc[:, i] = inp.history(t_half)
         snap = eng.snapshot()
-        rc = K.advance(todo, eng.loc, eng.off, eng.pos, eng.rot, eng.vel, eng.omg, eng.inv_mass,
+        rc = K.advance(todo, eng.loc, eng.lnrm, eng.off, eng.pos, eng.rot, eng.vel, eng.omg, eng.inv_mass,
                        eng.mass, eng.mode, eng.dof_input, presc, eng.active, eng.movable,
                        eng.gravity, eng.ext_f, eng.ext_a, eng.ext_b, eng.quiet_edges, eng.pa,
                        eng.pb, eng.pprop, eng.pref, eng.pinit, eng.init_brk, eng.props, eng.S,
                        eng.ref_pos, eng.ref_rot, eng.radius, dt, eng.ctol_m, eng.hysteresis_m,
                        eng.rounding_m, eng.overlap_limit_m, eng.margin, alpha_local, alpha_mass,
                        beta, tol, _CHECK_EVERY, eng.wv, eng.fpair, eng.bp_ptr, eng.bp_idx, eng.E,
-                       out)
+                       out, eng.asleep, eng.calm, sleep_ratio, _SLEEP_STEPS)
         steps = int(out[0])
         if rc == K.RC_NONFINITE:
             eng.restore(snap)

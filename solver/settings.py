@@ -369,7 +369,10 @@ class Settings:
     set name (``contact_kind == "joint"``), then its kind (``"joint"``, ``"trace"``, ``"glued"``,
     ``"excavation"``), then ``"default"`` (also used for contacts formed during the run between
     blocks that were not neighbours). ``rounding_m`` is the corner rounding d (UDEC): None gives 1 %
-    of the median edge length; the overlap limit is d/2 (REFERENCE.md §5).
+    of the median edge length; the overlap limit is d/2 (REFERENCE.md §5). ``sleep``: in static
+    stages, blocks whose own unbalanced-force ratio stays below the stage tolerance stop being
+    integrated until a neighbour disturbs them (REFERENCE.md §6; speed-up and the displacement error
+    it adds are measured in ``benchmarks/bench_solver.py``).
     """
 
     joints: dict
