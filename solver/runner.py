@@ -36,11 +36,17 @@ _SLEEP_STEPS = 100        # steps a block's own unbalanced ratio stays below tol
 
 
 def _rayleigh(stage: Stage) -> tuple[float, float]:
-    """(α, β) of C = αM + βK from ξ at f: α = ξω, β = ξ/ω (REFERENCE.md §5)."""
+    """(α, β) of C = αM + βK giving ξ at f, with ξ(ω) = ½(α/ω + βω) (REFERENCE.md §5):
+    both terms (minimum ξ at f): α = ξω, β = ξ/ω; mass only: α = 2ξω; stiffness only: β = 2ξ/ω."""
     if stage.kind != "dynamic" or stage.rayleigh_ratio <= 0:
         return 0.0, 0.0
     omega = 2 * math.pi * stage.rayleigh_frequency_hz
-    return stage.rayleigh_ratio * omega, stage.rayleigh_ratio / omega
+    xi = stage.rayleigh_ratio
+    if stage.rayleigh_mode == "mass":
+        return 2 * xi * omega, 0.0
+    if stage.rayleigh_mode == "stiffness":
+        return 0.0, 2 * xi / omega
+    return xi * omega, xi / omega
 
 
 def _overlap_diagnostic(eng: Engine, pair: int, overlap: float, dt: float) -> str:
@@ -178,6 +184,7 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
     frame_every = max(1, n_steps // stage.frames) if (dynamic and stage.frames) else 0
 
     stage_pos, stage_rot = eng.pos.copy(), eng.rot.copy()
+    stage_t0 = eng.time_s  # velocity histories run on the stage's own clock
     eng.E[:] = 0.0
     ke0, se0 = eng.kinetic_energy(), eng.strain_energy()
     out = np.zeros(5)
@@ -194,7 +201,7 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
     sleep_ratio = stage.tolerance if (settings.sleep and not dynamic) else 0.0
     while done < n_steps:
         todo = min(chunk - done % chunk, n_steps - done)
-        t_half = eng.time_s + (np.arange(todo) + 0.5) * dt
+        t_half = eng.time_s - stage_t0 + (np.arange(todo) + 0.5) * dt
         presc = np.zeros((todo, max(1, len(inputs))))
         for i, inp in enumerate(inputs):
             presc[:, i] = inp.history(t_half)

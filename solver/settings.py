@@ -274,7 +274,9 @@ History = Union[Sine, Ricker, TableHistory]
 @dataclass(frozen=True)
 class VelocityInput:
     """Prescribe velocity component ``component`` (``"x"`` or ``"y"``) of the chosen blocks to
-    ``history(t)`` (m/s) during dynamic stages — the shake-table base and sides (seed 002 §3)."""
+    ``history(t)`` (m/s) during dynamic stages — the shake-table base and sides (seed 002 §3).
+    ``t`` is the time since the start of the dynamic stage (each dynamic stage starts its input at
+    t = 0); in static stages these degrees of freedom are held fixed."""
 
     where: str
     component: Literal["x", "y"]
@@ -318,7 +320,9 @@ class Stage:
 
     ``kind="static"``: local non-viscous damping ``local_damping`` (0.8), stepping until the
     unbalanced-force ratio < ``tolerance`` (1e-5) or ``max_steps``. ``kind="dynamic"``: no local
-    damping, Rayleigh damping (``rayleigh_ratio`` ξ at ``rayleigh_frequency_hz``), velocity inputs
+    damping, Rayleigh damping (``rayleigh_ratio`` ξ at ``rayleigh_frequency_hz``; ``rayleigh_mode``
+    ``"mass_stiffness"`` (minimum at f), ``"mass"`` or ``"stiffness"`` only — the stiffness part
+    shortens the stable step, the mass part damps rigid-body motion), velocity inputs
     and quiet boundaries, for ``duration_s``. ``excavate``: excavation stages (regions of the
     BlockModel) removed at the start of this stage. ``time_step_s``: None picks it automatically;
     a value above the stable limit is refused.
@@ -333,10 +337,10 @@ class Stage:
     duration_s: float | None = None
     rayleigh_ratio: float = 0.0
     rayleigh_frequency_hz: float | None = None
+    rayleigh_mode: Literal["mass_stiffness", "mass", "stiffness"] = "mass_stiffness"
     time_step_s: float | None = None
     frames: int = 10
     history_every: int = 0
-    reset_displacement: bool = False
 
     def __post_init__(self):
         object.__setattr__(self, "excavate", tuple(int(k) for k in self.excavate))
@@ -353,6 +357,9 @@ class Stage:
             _positive(f"stage {self.name!r}: duration_s", self.duration_s)
         if not 0.0 <= self.rayleigh_ratio < 1.0:
             raise ValueError(f"stage {self.name!r}: rayleigh_ratio must be in [0, 1)")
+        if self.rayleigh_mode not in ("mass_stiffness", "mass", "stiffness"):
+            raise ValueError(f"stage {self.name!r}: rayleigh_mode must be 'mass_stiffness', 'mass' or "
+                             f"'stiffness', got {self.rayleigh_mode!r}")
         if self.rayleigh_ratio > 0 and self.rayleigh_frequency_hz is None:
             raise ValueError(f"stage {self.name!r}: rayleigh_ratio needs rayleigh_frequency_hz")
         if self.time_step_s is not None:
