@@ -595,7 +595,7 @@ def advance(n_steps, loc, lnrm, off, pos, rot, vel, omg, inv_mass, mass, mode, d
             active, movable, gravity, ext_f, ext_a, ext_b, quiet_edges, pa, pb, pprop, pref, pinit,
             init_brk, props, S, ref_pos, ref_rot, radius, dt, ctol, hyst, rounding, ovl_limit,
             margin, alpha_local, alpha_mass, beta, tol_ratio, check_every, wv, fpair, bp_ptr,
-            bp_idx, E, out, asleep, calm, sleep_ratio, sleep_steps):
+            bp_idx, E, out, asleep, calm, sleep_ratio, sleep_steps, sleep_speed):
     """Central-difference steps (REFERENCE.md §5). Stops early with a return code: converged
     (static, unbalanced ratio < ``tol_ratio``), rebuild needed (a block moved > margin/2 since the
     last broad phase), overlap above the limit, or a non-finite value. ``out`` receives
@@ -607,10 +607,11 @@ def advance(n_steps, loc, lnrm, off, pos, rot, vel, omg, inv_mass, mass, mode, d
     −α_M m v, local non-viscous damping −α|F|sign(v) per degree of freedom.
 
     Sleeping (``sleep_ratio`` > 0, static stages): a block whose own unbalanced-force ratio stays
-    below ``sleep_ratio`` for ``sleep_steps`` steps is put to sleep (velocity zeroed, its kinetic
-    energy booked as damping); a sleeping block is not integrated and pairs of two sleeping or fixed
-    blocks skip the narrow phase; it wakes when its ratio exceeds 10 × ``sleep_ratio`` (a neighbour
-    moved). ``asleep`` must be 1 for blocks that cannot move.
+    below ``sleep_ratio`` and whose speed (including ω × radius) stays below ``sleep_speed`` for
+    ``sleep_steps`` steps is put to sleep (velocity zeroed, its kinetic energy booked as damping);
+    a sleeping block is not integrated and pairs of two sleeping or fixed blocks skip the narrow
+    phase; it wakes when its ratio exceeds 10 × ``sleep_ratio`` (a neighbour moved). ``asleep``
+    must be 1 for blocks that cannot move.
     """
     nb = len(off) - 1
     qf = np.zeros((nb, 3))
@@ -702,7 +703,8 @@ def advance(n_steps, loc, lnrm, off, pos, rot, vel, omg, inv_mass, mass, mode, d
             sum_unb += math.sqrt(unb)
             sum_app += app
             if sleep_ratio > 0.0:
-                if math.sqrt(unb) < sleep_ratio * app:
+                speed = math.sqrt(vel[b, 0] ** 2 + vel[b, 1] ** 2) + abs(omg[b]) * radius[b]
+                if math.sqrt(unb) < sleep_ratio * app and speed < sleep_speed:
                     calm[b] += 1
                 else:
                     calm[b] = 0

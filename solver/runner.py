@@ -32,7 +32,8 @@ __all__ = ["run"]
 _CHECK_EVERY = 10         # static convergence test interval (steps)
 _STATIC_CHUNK = 500       # steps between records in static stages
 _DYNAMIC_RECORDS = 400    # records per dynamic stage (history rows) when history_every == 0
-_SLEEP_STEPS = 100        # steps a block's own unbalanced ratio stays below tolerance before it sleeps
+_SLEEP_STEPS = 100        # steps a block stays calm (ratio < tolerance / 10, slow) before it sleeps
+_SLEEP_CREEP = 1e-3       # calm = moving less than this fraction of the rounding in _SLEEP_STEPS steps
 
 
 def _rayleigh(stage: Stage) -> tuple[float, float]:
@@ -198,7 +199,7 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
         rec.frame(stage.name, 0)
     tol = stage.tolerance if not dynamic else 0.0
     alpha_local = stage.local_damping if not dynamic else 0.0
-    sleep_ratio = stage.tolerance if (settings.sleep and not dynamic) else 0.0
+    sleep_ratio = 0.1 * stage.tolerance if (settings.sleep and not dynamic) else 0.0
     while done < n_steps:
         todo = min(chunk - done % chunk, n_steps - done)
         t_half = eng.time_s - stage_t0 + (np.arange(todo) + 0.5) * dt
@@ -213,7 +214,8 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
                        eng.ref_pos, eng.ref_rot, eng.radius, dt, eng.ctol_m, eng.hysteresis_m,
                        eng.rounding_m, eng.overlap_limit_m, eng.margin, alpha_local, alpha_mass,
                        beta, tol, _CHECK_EVERY, eng.wv, eng.fpair, eng.bp_ptr, eng.bp_idx, eng.E,
-                       out, eng.asleep, eng.calm, sleep_ratio, _SLEEP_STEPS)
+                       out, eng.asleep, eng.calm, sleep_ratio, _SLEEP_STEPS,
+                       _SLEEP_CREEP * eng.rounding_m / (_SLEEP_STEPS * dt))
         steps = int(out[0])
         if rc == K.RC_NONFINITE:
             eng.restore(snap)
