@@ -415,8 +415,8 @@ def _add_cracks(noded, faces, region, cracks, seq, tol, report, sources, excavat
     touched = _rows_in(segment_keys(noded, tol.grid_m), segment_keys(bseg, tol.grid_m))
     renoded = node(np.concatenate([noded[touched], segs]), tol.grid_m)
     noded = collapse(np.concatenate([noded[~touched], renoded]))
-    faces = polygonize_segments(noded)
-    return noded, faces, _regions(faces, excavations)
+    faces, region = _local_faces(noded, faces, region, parents, excavations, tol.grid_m)
+    return noded, faces, region
 
 
 def _crack_summary(model, cracks):
@@ -478,8 +478,50 @@ def _merge_slivers(noded, faces, region, tol, report, excavations):
     keys = segment_keys(noded, tol.grid_m)
     gone = _rows_in(keys, drop)
     noded = noded[~gone]
-    faces = polygonize_segments(noded)
-    return noded, faces, _regions(faces, excavations)
+    faces, region = _local_faces(noded, faces, region, np.flatnonzero(used), excavations, tol.grid_m)
+    return noded, faces, region
+
+
+def _local_faces(noded, faces, region, changed, excavations, grid_m):
+    """Faces of the network ``noded`` after a local change (a local rebuild, not a full
+    polygonisation).
+
+    A face is *kept* when every one of its edges is still a segment of the network and it is not in
+    ``changed`` (faces known to hold new segments: cuts, cracks). The others are rebuilt by
+    polygonising the segments that do not lie between two kept faces (or a kept face and the domain
+    boundary); a rebuilt face that holds a kept face (the kept face again, when all its edges
+    bordered rebuilt faces, or the outline around a group of kept faces) is dropped.
+    Kept faces keep their region; rebuilt ones get theirs from the excavation outlines.
+    """
+    seg, fa, fb = _pairs(faces, grid_m)
+    ekeys = segment_keys(seg, grid_m)
+    nkeys = segment_keys(noded, grid_m)
+    both = np.concatenate([ekeys, nkeys])
+    _, inv = np.unique(both, axis=0, return_inverse=True)
+    inv = inv.ravel()
+    e_inv, n_inv = inv[:len(ekeys)], inv[len(ekeys):]
+    present = np.isin(e_inv, n_inv)
+    kept = np.ones(len(faces), bool)
+    kept[np.asarray(changed, np.int64)] = False
+    kept[fa[~present]] = False
+    kept[fb[~present & (fb >= 0)]] = False
+    if kept.all():
+        return faces, region
+    # network segments between two kept faces (or a kept face and the outside) stay out
+    inside = present & kept[fa] & np.where(fb >= 0, kept[np.maximum(fb, 0)], True)
+    lookup = np.zeros(inv.max() + 1, bool)
+    lookup[e_inv[inside]] = True
+    local = noded[~lookup[n_inv]]
+    new = polygonize_segments(local)
+    if len(new):
+        # a rebuilt face that holds a kept face (the kept face itself, or the outline of a group of
+        # kept faces whose inner edges stayed out) is not a block
+        kept_faces = faces[kept]
+        i, j = shapely.STRtree(kept_faces).query(new)
+        holds = shapely.contains_properly(new[i], shapely.point_on_surface(kept_faces[j]))
+        new = np.delete(new, np.unique(i[holds]))
+    return (np.concatenate([faces[kept], new]),
+            np.concatenate([region[kept], _regions(new, excavations)]))
 
 
 def _rows_in(a, b):
@@ -515,8 +557,8 @@ def _make_convex(noded, faces, region, tol, report, sources, excavations, label_
     touched = _rows_in(keys, segment_keys(bseg, tol.grid_m))
     renoded = node(np.concatenate([noded[touched], cuts]), tol.grid_m)
     noded = collapse(np.concatenate([noded[~touched], renoded]))
-    faces = polygonize_segments(noded)
-    return noded, faces, _regions(faces, excavations)
+    faces, region = _local_faces(noded, faces, region, concave, excavations, tol.grid_m)
+    return noded, faces, region
 
 
 def _assemble(faces, region, noded, kind, src, tol, report, domain_xy, excavations, set_names,

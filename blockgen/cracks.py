@@ -147,25 +147,56 @@ def _width(polys):
     return 2 * shapely.area(polys) / shapely.length(polys)
 
 
-def _badness(pieces, parent, sliver_width_m, min_edge_m, near_m):
+def _badness(pieces, parents, sliver_width_m, min_edge_m, near_m):
     """min(width / sliver_width_m, shortest new edge / min_edge_m) per piece: < 1 is a bad piece.
 
-    A *new* edge has an end that is not a vertex of the parent (within ``near_m``): an edge the
-    cracks created. The parent's own short edges are not the cracks' doing and are not counted.
+    ``parents`` is the parent of each piece (or one parent for all). A *new* edge has an end that
+    is not a vertex of the parent (farther than ``near_m``): an edge the cracks created. The
+    parent's own short edges are not the cracks' doing and are not counted.
     """
     pieces = np.atleast_1d(pieces)
+    corners = np.broadcast_to(shapely.extract_unique_points(np.asarray(parents, dtype=object)),
+                              pieces.shape)
     score = _width(pieces) / sliver_width_m
     coords, index = shapely.get_coordinates(shapely.get_exterior_ring(pieces), return_index=True)
     same = index[1:] == index[:-1]
     a, b, owner = coords[:-1][same], coords[1:][same], index[:-1][same]
-    corners = np.asarray(parent.exterior.coords)[:-1]
-    d_a = np.min(np.hypot(*(a[:, None, :] - corners[None]).transpose(2, 0, 1)), axis=1)
-    d_b = np.min(np.hypot(*(b[:, None, :] - corners[None]).transpose(2, 0, 1)), axis=1)
+    d_a = shapely.distance(shapely.points(a), corners[owner])
+    d_b = shapely.distance(shapely.points(b), corners[owner])
     new = (d_a > near_m) | (d_b > near_m)
     ratio = np.hypot(*(b - a).T) / min_edge_m
     edge_score = np.full(len(pieces), np.inf)
     np.minimum.at(edge_score, owner[new], ratio[new])
     return np.minimum(score, edge_score)
+
+
+def _voronoi_all(polys, groups, seeds, tol, stats):
+    """Crack segments of many parents at once; parents with a bad piece go to
+    :func:`_voronoi_parent` (seed removal). Returns (segments, number of subdivided parents)."""
+    par = np.array([g[0] for g in groups])
+    sizes = np.array([len(g[1]) for g in groups])
+    owner = np.repeat(np.arange(len(groups)), sizes)
+    mp = shapely.multipoints(seeds[np.concatenate([g[1] for g in groups])], indices=owner)
+    cells = shapely.voronoi_polygons(mp, extend_to=polys[par], ordered=True)
+    parts, which = shapely.get_parts(cells, return_index=True)
+    pieces = shapely.intersection(parts, polys[par][which])
+    bad = np.bincount(which, _badness(pieces, polys[par][which], *tol) < 1, len(groups)) > 0
+    out, n_sub = [], 0
+    good = np.flatnonzero(~bad)
+    if len(good):
+        edges = shapely.voronoi_polygons(mp[good], extend_to=polys[par[good]], only_edges=True)
+        segs = _lines_to_segments(shapely.intersection(edges, polys[par[good]]))
+        if len(segs):
+            out.append(segs)
+        n_sub += len(good)
+        stats["n_pieces"] += int(sizes[good].sum())
+    for g in np.flatnonzero(bad).tolist():
+        segs, n = _voronoi_parent(polys[par[g]], seeds[groups[g][1]], tol, stats)
+        if len(segs):
+            out.append(segs)
+            n_sub += 1
+            stats["n_pieces"] += int(n)
+    return out, n_sub
 
 
 def _lines_to_segments(geoms) -> np.ndarray:
@@ -321,14 +352,10 @@ def crack_segments(faces, parents, cracks: Cracks, rng, sliver_width_m: float, m
         order = np.argsort(f, kind="stable")
         f, p = f[order], p[order]
         split = np.flatnonzero(np.diff(f)) + 1
-        for fs, ps in zip(np.split(f, split), np.split(p, split)):
-            if len(ps) < 2:
-                continue
-            segs, n = _voronoi_parent(polys[fs[0]], seeds[ps], tol, stats)
-            if len(segs):
-                out.append(segs)
-                stats["n_subdivided"] += 1
-                stats["n_pieces"] += int(n)
+        groups = [(int(fs[0]), ps) for fs, ps in zip(np.split(f, split), np.split(p, split))
+                  if len(ps) >= 2]
+        if groups:
+            out, stats["n_subdivided"] = _voronoi_all(polys, groups, seeds, tol, stats)
     else:
         stats["pieces_merged"] = 0
         stats["slivers_kept"] = 0

@@ -147,3 +147,30 @@ def test_within_m_without_excavations_and_cracks_without_convex_are_refused():
         build(square(2.0), SETS, cracks=Cracks(0.5, within_m=1.0))
     with pytest.raises(ValueError, match="convex=True"):
         build(square(2.0), SETS, cracks=Cracks(0.5), convex=False)
+
+
+@pytest.mark.parametrize("pattern", ["voronoi", "triangular"])
+def test_local_rebuild_gives_the_blocks_of_a_full_polygonisation(monkeypatch, pattern):
+    # two routes, one answer: the builder's local rebuild after merges, cuts and cracks against
+    # polygonising the whole network every time (excavation stages inside a cracked zone)
+    import rockmass.blockgen.builder as builder
+    from rockmass.blockgen import rectangle
+
+    def model():
+        return build(square(10.0), SETS, excavations=[circle((5, 5), 1.5, "arch"),
+                                                      rectangle((5, 3), 3.0, 1.0, "bench")],
+                     cracks=Cracks(0.5, pattern=pattern, within_m=1.5), seed=4)
+
+    local = model()
+
+    def full(noded, faces, region, changed, excavations, grid_m):
+        new = builder.polygonize_segments(noded)
+        return new, builder._regions(new, excavations)
+
+    monkeypatch.setattr(builder, "_local_faces", full)
+    reference = model()
+    assert check_model(local)["ok"]
+    a = sorted(g.wkb for g in shapely.normalize(local.to_shapely()))
+    b = sorted(g.wkb for g in shapely.normalize(reference.to_shapely()))
+    assert a == b
+    assert np.array_equal(np.sort(local.contact_length_m), np.sort(reference.contact_length_m))
