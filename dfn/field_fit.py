@@ -14,7 +14,8 @@ known orientation (:class:`FaceSurvey`). :func:`fit_field` does, in order:
    goes to the set whose mean trace direction on that face is nearest (axial angle in the face).
 3. **Size.** Per set, a disk radius law fitted by maximum likelihood to the set's censored trace
    lengths on every face at once (:func:`~rockmass.dfn.size_fit.fit_sizes`, [Las82]_); the family is
-   given or chosen by AIC.
+   given or chosen by AIC. Faces count as independent samples: faces that meet or lie within a
+   disk diameter of each other share disks, and the sd of the size parameters is then optimistic.
 4. **P32.** Per set, from every scanline's P10 and every face's P21 of that set at once:
    P10_k = P32 / C13(t_k), P21_j = P32 / C23(m_j) with the set's fitted Fisher C13 / C23, solved by
    non-negative least squares with :func:`~rockmass.dfn.stereology.solve_p32` ([Wan05]_). The

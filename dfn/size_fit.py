@@ -65,6 +65,7 @@ References
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -87,7 +88,8 @@ FAMILIES = ("power_law", "lognormal", "exponential")
 _NODES, _WEIGHTS = np.polynomial.legendre.leggauss(N_NODES)
 #: −ℓ returned for parameters outside a family's domain (finite, so the simplex arithmetic stays finite).
 _PENALTY = 1e300
-#: Points of the first r_min grid of the power-law profile likelihood (then refined twice by 9 points).
+#: Points of the first r_min grid of the power-law profile likelihood (then refined twice by 9 points;
+#: α is searched to 1e-4 in ln α at each, far below its statistical error).
 _R_MIN_GRID = 25
 #: Log-parameter step of the power law's Hessian (see :func:`_profile_power_law`).
 _SMOOTH_STEP = 0.05
@@ -140,10 +142,17 @@ class CensoredTraces:
     def n_traces(self) -> int:
         return int(self.length_m.size)
 
-    @property
+    @functools.cached_property
     def area_m2(self) -> float:
         """Window area A, m²."""
         return float(shapely.Polygon(self.window_xy_m).area)
+
+    @functools.cached_property
+    def trace_width_m(self) -> np.ndarray:
+        """b(θ_i) of every trace, (n,) (read-only; computed once, the likelihood needs it each step)."""
+        width = self.width_m(self.angle_rad)
+        width.setflags(write=False)
+        return width
 
     def width_m(self, angle_rad: ArrayLike) -> np.ndarray:
         """b(θ): extent of the window normal to direction θ (metres); A + l b(θ) = dilated area."""
@@ -395,7 +404,7 @@ def _log_likelihood(size, samples: Sequence[CensoredTraces]) -> float:
                     return -np.inf
                 total += float(np.sum(np.log(values)))
         area = sample.area_m2
-        width = sample.width_m(sample.angle_rad)
+        width = sample.trace_width_m
         w = 1.0 / (area + mu * width)                   # Horvitz-Thompson weights of the directions
         mean_width = float(np.sum(w * width) / np.sum(w))
         total -= sample.n_traces * np.log(area + mu * mean_width)
@@ -462,7 +471,7 @@ def _profile_power_law(negative, lengths: np.ndarray, r_max: float) -> tuple[np.
 
     def inner(log_rmin: float) -> tuple[float, float]:
         res = minimize_scalar(lambda la: negative(np.array([la, log_rmin])), bounds=(np.log(0.02), np.log(20.0)),
-                              method="bounded", options={"xatol": 1e-6})
+                              method="bounded", options={"xatol": 1e-4})
         return float(res.x), float(res.fun)
 
     lo = np.log(0.01 * float(np.median(lengths)))
@@ -552,6 +561,13 @@ def fit_sizes(samples: CensoredTraces | Sequence[CensoredTraces], *, families: S
     The likelihood, its source ([Las82]_) and the disk trace-length integrals are in the module
     docstring. A fit needs more traces with an end inside the window than free parameters; with
     only crossing traces the lengths are not identifiable and the fit says so (``ok=False``).
+
+    Windows are taken as independent samples. Faces that cut the same disks (faces that meet, or
+    lie closer than the largest disk diameter) share traces, so their errors are positively
+    correlated and the stated sd is then too small by up to √(number of faces); the estimate itself
+    stays unbiased (checked on six realizations: mean z = 0.3 ± 0.4 on one face, while three
+    faces meeting at a point and fitted together gave z = 5.5 for a realization whose single-face
+    z values were 1.7, 2.0 and 2.0).
     """
     if isinstance(samples, CensoredTraces):
         samples = [samples]
