@@ -10,7 +10,10 @@ are unbiased (the first two) and consistent (the ratio) for a stationary network
 lengths and orientations, because they need neither the lengths of the censored traces nor their
 number. This module counts n and m on a trace map (:func:`mauldon_circle`), evaluates the formulas
 (:func:`mauldon_from_counts`), and decides whether a window polygon is a circle
-(:func:`circle_window`) — fractopo reports the Mauldon values only for circular target areas.
+(:func:`circle_window`) — fractopo reports the Mauldon values only for circular target areas. On any
+other window (a rectangular photograph, a mapped outcrop polygon) :func:`inscribed_circles` places
+disjoint circles fully inside it and :func:`mauldon_circles` pools their counts, as Mauldon et al.
+(2001) and Rohrbaugh et al. (2002) do with several circles on one map.
 """
 
 from __future__ import annotations
@@ -25,6 +28,8 @@ from .intensity import SamplingWindow, _endpoints_xy, _floor_tolerance, _integer
 from .tracemap import TraceMap, _as_window, _require_trace_map
 
 __all__ = ["CircleWindow", "MauldonEstimate", "circle_window", "mauldon_circle", "mauldon_from_counts"]
+# also public, imported from this module until rockmass.dfn registers them (its __all__ must equal the
+# union of the modules' __all__): InscribedCircles, MauldonCircles, inscribed_circles, mauldon_circles
 
 #: Default largest radial deviation, relative to the radius, of a polygon still taken for a circle:
 #: a regular polygon inscribed in a circle deviates by 1 - cos(pi / k) at its edge midpoints, so 1 %
@@ -301,3 +306,244 @@ def circle_window(window: Any, *, rel_tolerance: float = CIRCLE_REL_TOLERANCE) -
         f"best-fit circle (tolerance {rel:g})"
     )
     return CircleWindow(is_circle, (float(centre[0]), float(centre[1])), radius, deviation, reason)
+
+
+#: Default radius of circles placed in a window, as a fraction of the largest inscribed circle's: a
+#: little room lets a second circle fit beside the first in a window about twice as long as wide.
+INSCRIBED_RADIUS_FRACTION = 0.9
+
+
+@dataclass(frozen=True)
+class InscribedCircles:
+    """Disjoint circles of one radius placed fully inside a window polygon.
+
+    Attributes
+    ----------
+    centres_xy_m : (k, 2) ndarray of float64
+        Circle centres (x, y) in metres, k >= 1.
+    radius_m : float
+        The common radius r in metres.
+    largest_radius_m : float
+        Radius of the window's largest inscribed circle (r <= this).
+    """
+
+    centres_xy_m: np.ndarray
+    radius_m: float
+    largest_radius_m: float
+
+    @property
+    def n_circles(self) -> int:
+        """Number of circles k."""
+        return int(self.centres_xy_m.shape[0])
+
+
+def _window_polygon(window: Any, name: str = "window"):
+    import shapely
+
+    if isinstance(window, SamplingWindow):
+        return window.polygon
+    try:
+        ring = _as_window(window)
+    except ValueError as exc:
+        raise ValueError(f"{name}: {exc}") from exc
+    if ring is None:
+        raise ValueError(f"{name} is required: the polygon to place circles in")
+    polygon = shapely.Polygon(ring)
+    if not polygon.is_valid:
+        raise ValueError(f"{name} is not a valid polygon (self-intersecting ring?)")
+    return polygon
+
+
+def inscribed_circles(window: Any, *, radius_m: float | None = None,
+                      radius_fraction: float = INSCRIBED_RADIUS_FRACTION) -> InscribedCircles:
+    r"""Disjoint circles of one radius, fully inside a window polygon, as many as a hexagonal grid fits.
+
+    Parameters
+    ----------
+    window : (k, 2) array_like of float, shapely.Polygon or SamplingWindow
+        The window (metres).
+    radius_m : float, optional
+        Circle radius, > 0 and at most the largest inscribed circle's. Default None:
+        ``radius_fraction`` times the largest inscribed circle's radius.
+    radius_fraction : float, default 0.9
+        In (0, 1]; used when ``radius_m`` is None.
+
+    Returns
+    -------
+    InscribedCircles
+        At least one circle.
+
+    Raises
+    ------
+    ValueError
+        A bad window, a radius that does not fit (the message gives the largest that does), or a
+        ``radius_fraction`` outside (0, 1].
+
+    Notes
+    -----
+    The largest inscribed circle is GEOS's (``shapely.maximum_inscribed_circle``, the pole of
+    inaccessibility). Centres of circles inside the window are the points of the window eroded by
+    r; candidate centres form a hexagonal grid of spacing 2r (touching, never overlapping circles),
+    anchored at the eroded region's lower-left corner and shifted by quarter spacings; the shift
+    that keeps the most candidates wins, and the chosen pattern is then centred in the eroded
+    region when it still fits. A W × H rectangle (W >= H) thus gets about W / H circles side by
+    side. The circles are disjoint, so their counts are independent samples of one network.
+
+    Examples
+    --------
+    >>> c = inscribed_circles([(0, 0), (20, 0), (20, 10), (0, 10)])
+    >>> c.n_circles, round(c.radius_m, 9), c.centres_xy_m.round(9).tolist()
+    (2, 4.5, [[5.5, 5.0], [14.5, 5.0]])
+    """
+    import shapely
+
+    polygon = _window_polygon(window)
+    largest = float(shapely.maximum_inscribed_circle(polygon, tolerance=1e-9 * math.sqrt(polygon.area)).length)
+    if radius_m is None:
+        fraction = _real(radius_fraction, "radius_fraction")
+        if not 0.0 < fraction <= 1.0:
+            raise ValueError(f"radius_fraction must be in (0, 1] (of the largest inscribed radius), got {fraction}")
+        r = fraction * largest
+    else:
+        r = _real_at_least(radius_m, "radius_m", "circle radius in metres", above_zero=True)
+        if r > largest * (1.0 + 1e-9):
+            raise ValueError(f"radius_m = {r:g} does not fit in the window: its largest inscribed circle "
+                             f"has radius {largest:g}")
+    core = polygon.buffer(-r * (1.0 - 1e-12))
+    if core.is_empty or core.area <= 0.0:
+        centre = shapely.get_coordinates(shapely.maximum_inscribed_circle(polygon))[0]
+        return InscribedCircles(centre[None, :].copy(), r, largest)
+    xmin, ymin, xmax, ymax = core.bounds
+    dx, dy = 2.0 * r, math.sqrt(3.0) * r
+    best = None
+    for fy in (0.0, 0.25, 0.5, 0.75):
+        for fx in (0.0, 0.25, 0.5, 0.75):
+            points = []
+            for i, y in enumerate(np.arange(ymin + fy * dy, ymax + 1e-9 * dy, dy)):
+                xs = np.arange(xmin + fx * dx + (i % 2) * r, xmax + 1e-9 * dx, dx)  # rows offset by r
+                points.append(np.column_stack([xs, np.full(xs.size, y)]))
+            grid = np.vstack(points) if points else np.zeros((0, 2))
+            keep = grid[shapely.covers(core, shapely.points(grid))] if grid.size else grid
+            if best is None or keep.shape[0] > best.shape[0]:
+                best = keep
+    if best.shape[0] == 0:  # a core thinner than the grid: its best point
+        best = shapely.get_coordinates(shapely.maximum_inscribed_circle(polygon))[:1]
+    shift = np.array([0.5 * (xmin + xmax), 0.5 * (ymin + ymax)]) - 0.5 * (best.min(axis=0) + best.max(axis=0))
+    if shapely.covers(core, shapely.points(best + shift)).all():
+        best = best + shift
+    return InscribedCircles(np.ascontiguousarray(best, dtype=np.float64), r, largest)
+
+
+@dataclass(frozen=True)
+class MauldonCircles:
+    r"""Mauldon's estimates pooled over k disjoint circles of one radius.
+
+    Attributes
+    ----------
+    centres_xy_m : (k, 2) ndarray of float64
+    radius_m : float
+    n_intersections : (k,) ndarray of int64
+        n_j per circle.
+    n_endpoints : (k,) ndarray of int64
+        m_j per circle.
+    p21_per_m : float
+        :math:`\sum n_j / (4 k r)` in m/m².
+    p20_per_m2 : float
+        :math:`\sum m_j / (2\pi k r^2)` in 1/m².
+    mean_length_m : float
+        :math:`(\pi r / 2) \sum n_j / \sum m_j` in metres; NaN when no end lies inside any circle.
+    valid : bool
+        Whether ``mean_length_m`` is defined.
+    reason : str
+        Why not ('' when valid).
+    """
+
+    centres_xy_m: np.ndarray
+    radius_m: float
+    n_intersections: np.ndarray
+    n_endpoints: np.ndarray
+    p21_per_m: float
+    p20_per_m2: float
+    mean_length_m: float
+    valid: bool
+    reason: str
+
+    @property
+    def n_circles(self) -> int:
+        """Number of circles k."""
+        return int(self.centres_xy_m.shape[0])
+
+
+def mauldon_circles(trace_map: TraceMap, circles: InscribedCircles | None = None, *, window: Any = None,
+                    tolerance_m: float = 0.0) -> MauldonCircles:
+    r"""Mauldon's P21, P20 and mean trace length pooled over disjoint circles inside a window.
+
+    Parameters
+    ----------
+    trace_map : TraceMap
+        The traces.
+    circles : InscribedCircles, optional
+        Where to count; default None: :func:`inscribed_circles` of ``window`` (or of the map's window).
+    window : array_like, shapely.Polygon or SamplingWindow, optional
+        Used when ``circles`` is None.
+    tolerance_m : float, default 0.0
+        As in :func:`mauldon_circle`.
+
+    Returns
+    -------
+    MauldonCircles
+
+    Notes
+    -----
+    For k circles of radius r the counts add: :math:`E[\sum n_j] = 4 k r P_{21}` and
+    :math:`E[\sum m_j] = 2 \pi k r^2 P_{20}` (Mauldon et al. 2001, eqs. 14 and 11 for each circle), so
+
+    .. math:: \hat P_{21} = \frac{\sum n_j}{4 k r}, \quad \hat P_{20} = \frac{\sum m_j}{2\pi k r^2},
+              \quad \hat\mu_L = \frac{\pi r}{2}\,\frac{\sum n_j}{\sum m_j}
+
+    are unbiased (the first two) and consistent (the ratio) as for one circle, with the variance of
+    k times the area; pooling counts rather than averaging per-circle ratios keeps
+    :math:`\hat\mu_L` defined when a single circle has m = 0 (Rohrbaugh et al. 2002).
+
+    References
+    ----------
+    .. [1] Mauldon, M., Dunne, W. M., Rohrbaugh, M. B. (2001). Circular scanlines and circular windows:
+       new tools for characterizing the geometry of fracture traces. J. Struct. Geol. 23, 247-258.
+    .. [2] Rohrbaugh, M. B., Dunne, W. M., Mauldon, M. (2002). Estimating fracture trace intensity,
+       density, and mean length using circular scan lines and windows. AAPG Bulletin 86(12),
+       2089-2104.
+
+    Examples
+    --------
+    >>> tm = TraceMap.from_segments([[0, 5, 20, 5]], window=[(0, 0), (20, 0), (20, 10), (0, 10)])
+    >>> e = mauldon_circles(tm)  # two circles of radius 4.5, each crossed twice
+    >>> e.n_intersections.tolist(), round(e.p21_per_m, 12)
+    ([2, 2], 0.111111111111)
+    """
+    _require_trace_map(trace_map)
+    if circles is None:
+        if window is None:
+            if trace_map.window_xy_m is None:
+                raise ValueError("give circles or a window: the trace map has no window to place circles in")
+            window = trace_map.window_xy_m
+        circles = inscribed_circles(window)
+    elif not isinstance(circles, InscribedCircles):
+        raise TypeError(f"circles must be an InscribedCircles, got {type(circles).__name__}")
+    r = circles.radius_m
+    counts = [mauldon_circle(trace_map, c, r, tolerance_m=tolerance_m) for c in circles.centres_xy_m]
+    n = np.array([e.n_intersections for e in counts], dtype=np.int64)
+    m = np.array([e.n_endpoints for e in counts], dtype=np.int64)
+    k = n.size
+    valid = int(m.sum()) > 0
+    return MauldonCircles(
+        centres_xy_m=circles.centres_xy_m.copy(),
+        radius_m=r,
+        n_intersections=n,
+        n_endpoints=m,
+        p21_per_m=float(n.sum()) / (4.0 * k * r),
+        p20_per_m2=float(m.sum()) / (2.0 * math.pi * k * r * r),
+        mean_length_m=0.5 * math.pi * r * float(n.sum()) / float(m.sum()) if valid else math.nan,
+        valid=valid,
+        reason="" if valid else (f"no trace end inside any of the {k} circle(s) (m = 0): the mean trace "
+                                 "length is undefined"),
+    )

@@ -2,9 +2,9 @@
 
 :func:`trace_map_statistics` resolves the sampling window once and runs, on the traces that reach it:
 joint sets (:mod:`~rockmass.dfn.sets2d`), P20 / P21 / mean length and scanline spacing
-(:mod:`~rockmass.dfn.intensity`), Mauldon's estimators when the window is a circle
-(:mod:`~rockmass.dfn.mauldon`) and the I-Y-X-E topology (:mod:`~rockmass.dfn.topology`). Each
-parameter is ``{"value": number or None, "unit": str}``, with a ``"reason"`` when the value is None;
+(:mod:`~rockmass.dfn.intensity`), Mauldon's estimators on the window when it is a circle, else on
+disjoint circles placed inside it (:mod:`~rockmass.dfn.mauldon`), and the I-Y-X-E topology
+(:mod:`~rockmass.dfn.topology`). Each parameter is ``{"value": number or None, "unit": str}``, with a ``"reason"`` when the value is None;
 the names and units follow fractopo's ``Param`` (Ovaskainen et al. 2022). No NaN or infinity is ever
 returned, so ``json.dumps(result, allow_nan=False)`` always succeeds.
 """
@@ -26,7 +26,15 @@ from .intensity import (
     scanline_survey,
     trace_intensity,
 )
-from .mauldon import CIRCLE_REL_TOLERANCE, MauldonEstimate, circle_window, mauldon_circle
+from .mauldon import (
+    CIRCLE_REL_TOLERANCE,
+    InscribedCircles,
+    MauldonEstimate,
+    circle_window,
+    inscribed_circles,
+    mauldon_circle,
+    mauldon_circles,
+)
 from .sets2d import RESOLUTION_DEG, JointSets2D, fit_sets_2d, trace_angles_deg
 from .topology import trace_topology
 from .tracemap import TraceMap, _require_trace_map
@@ -49,6 +57,7 @@ def trace_map_statistics(
     angle_method: str = "segments",
     resolution_deg: float = RESOLUTION_DEG,
     circle_rel_tolerance: float = CIRCLE_REL_TOLERANCE,
+    mauldon_in_window: bool = True,
     seed: int = 0,
     length_unit: str = "m",
 ) -> dict:
@@ -76,8 +85,13 @@ def trace_map_statistics(
     resolution_deg, seed
         Passed to :func:`~rockmass.dfn.sets2d.fit_axial_mixture`.
     circle_rel_tolerance : float, default 0.01
-        How close to a circle the window must be for Mauldon's estimators
+        How close to a circle the window must be for Mauldon's estimators on the window itself
         (:func:`~rockmass.dfn.mauldon.circle_window`).
+    mauldon_in_window : bool, default True
+        When the window is not a circle, evaluate Mauldon's estimators on disjoint circles placed
+        fully inside it (:func:`~rockmass.dfn.mauldon.inscribed_circles`, counts pooled by
+        :func:`~rockmass.dfn.mauldon.mauldon_circles`); ``result["window"]["mauldon_circles"]``
+        lists them. False: leave them undefined with a reason, as fractopo does.
     length_unit : str, default "m"
         Unit label of the map's coordinates (``"px"`` for a photo without scale); only the labels change.
 
@@ -98,7 +112,9 @@ def trace_map_statistics(
         - ``"set_selection"``: ``{"method": "bic" | "given", "bic": {k: value or None}}``;
         - ``"traces"``: per trace ``id``, clipped ``length``, ``censored``, ``set``, ``angle_deg``,
           ``connections`` and ``end_class`` (the trace-length distribution with censoring marked);
-        - ``"window"``: source, area, whether it is a circle (centre, radius);
+        - ``"window"``: source, area, whether it is a circle (centre, radius), and the circles the
+          Mauldon values were counted in when it is not (``"mauldon_circles"``: count, radius,
+          centres; None when the window is a circle or ``mauldon_in_window`` is False);
         - ``"settings"`` and ``"diagnostics"``.
 
     Raises
@@ -149,6 +165,9 @@ def trace_map_statistics(
     else:
         tolerance = _real_at_least(snap_tolerance_m, "snap_tolerance_m", "snap distance in metres")
     circle = circle_window(resolved.polygon, rel_tolerance=circle_rel_tolerance)
+    if not isinstance(mauldon_in_window, (bool, np.bool_)):
+        raise TypeError(f"mauldon_in_window must be True or False, got {mauldon_in_window!r}")
+    circles = inscribed_circles(resolved) if (mauldon_in_window and not circle.is_circle) else None
 
     topology = trace_topology(traces, snap_tolerance_m=tolerance, window=resolved)
     overall = trace_intensity(traces, window=resolved, p20_rule=p20_rule, edge_tolerance_m=tolerance)
@@ -169,7 +188,7 @@ def trace_map_statistics(
         "Connections per Branch": _quantity(topology.connections_per_branch, "-", "no branch (no I, Y or X node)"),
         "Connection Frequency": _quantity((topology.n_y + topology.n_x) / overall.area_m2, u.per_area),
         "Number of Censored Traces": _quantity(int(topology.censored.sum()), "-"),
-        **_mauldon_block(traces, circle, tolerance, u),
+        **_mauldon_block(traces, circle, circles, tolerance, u),
         "Node Counts": {"I": topology.n_i, "Y": topology.n_y, "X": topology.n_x, "E": topology.n_e},
         "sets": [],
         "set_selection": None,
@@ -178,7 +197,7 @@ def trace_map_statistics(
     if isinstance(sets, JointSets2D):
         membership = sets.membership
         result["sets"] = [
-            _set_block(traces, sets, s, resolved, p20_rule, tolerance, scanline_spacing_m, circle, u)
+            _set_block(traces, sets, s, resolved, p20_rule, tolerance, scanline_spacing_m, circle, circles, u)
             for s in range(sets.n_sets)
         ]
         result["set_selection"] = {
@@ -205,6 +224,11 @@ def trace_map_statistics(
         "centre_xy": list(circle.centre_xy_m) if circle.is_circle else None,
         "radius": circle.radius_m if circle.is_circle else None,
         "circle_deviation": _number(circle.max_rel_deviation),
+        "mauldon_circles": None if circles is None else {
+            "count": circles.n_circles,
+            "radius": circles.radius_m,
+            "centres_xy": circles.centres_xy_m.tolist(),
+        },
     }
     result["settings"] = {
         "snap_tolerance": _quantity(topology.snap_tolerance_m, u.length),
@@ -212,6 +236,7 @@ def trace_map_statistics(
         "angle_method": angle_method,
         "n_sets": _number(n_sets),
         "resolution_deg": resolution_deg,
+        "mauldon_in_window": bool(mauldon_in_window),
         "seed": _number(seed),
         "scanline_spacing": None if scanline_spacing_m is None else _quantity(scanline_spacing_m, u.length),
     }
@@ -276,17 +301,21 @@ def _intensity_block(intensity, lengths: np.ndarray, u: _Units) -> dict:
     }
 
 
-def _mauldon_block(traces: TraceMap, circle, tolerance: float, u: _Units) -> dict:
+def _mauldon_block(traces: TraceMap, circle, circles: InscribedCircles | None, tolerance: float, u: _Units) -> dict:
+    """Mauldon's values on the window when it is a circle, else pooled over ``circles`` (if any)."""
     names = ("Fracture Intensity (Mauldon)", "Fracture Density (Mauldon)", "Trace Mean Length (Mauldon)")
     units = (u.intensity, u.per_area, u.length)
-    if not circle.is_circle:
+    if circle.is_circle:
+        estimate: MauldonEstimate = mauldon_circle(traces, circle.centre_xy_m, circle.radius_m, tolerance_m=tolerance)
+    elif circles is not None:
+        estimate = mauldon_circles(traces, circles, tolerance_m=tolerance)
+    else:
         return {name: _quantity(None, unit, circle.reason) for name, unit in zip(names, units)}
-    estimate: MauldonEstimate = mauldon_circle(traces, circle.centre_xy_m, circle.radius_m, tolerance_m=tolerance)
     values = (estimate.p21_per_m, estimate.p20_per_m2, estimate.mean_length_m)
     return {name: _quantity(v, unit, estimate.reason) for name, v, unit in zip(names, values, units)}
 
 
-def _set_block(traces, sets: JointSets2D, s: int, window, p20_rule, tolerance, spacing, circle, u) -> dict:
+def _set_block(traces, sets: JointSets2D, s: int, window, p20_rule, tolerance, spacing, circle, circles, u) -> dict:
     members = traces.subset(sets.membership == s)
     intensity = trace_intensity(members, window=window, p20_rule=p20_rule, edge_tolerance_m=tolerance)
     survey = scanline_survey(members, float(sets.mean_angle_deg[s]), window=window, line_spacing_m=spacing)
@@ -300,7 +329,7 @@ def _set_block(traces, sets: JointSets2D, s: int, window, p20_rule, tolerance, s
         "Weight": _quantity(sets.weight[s], "-"),
         "Number of Traces": _quantity(int(sets.count[s]), "-"),
         **_intensity_block(intensity, lengths, u),
-        **_mauldon_block(members, circle, tolerance, u),
+        **_mauldon_block(members, circle, circles, tolerance, u),
         "Mean Spacing": _quantity(survey.mean_spacing_m, u.length, survey.reason),
         "Scanline P10": _quantity(survey.p10_per_m, u.per_length, "the scanlines have zero length"),
         "Scanline Angle": _quantity(survey.scanline_angle_deg, "deg"),

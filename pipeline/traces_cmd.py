@@ -2,7 +2,8 @@
 
 Reads traces (GeoJSON or CSV), computes the trace-map statistics of
 :func:`rockmass.dfn.trace_map_statistics` (joint sets, P20, P21, trace lengths with censoring,
-Mauldon estimators where the window is a circle, I-Y-X-E topology) and the box-counting dimension of
+Mauldon estimators on the window when it is a circle, else on disjoint circles placed inside it,
+I-Y-X-E topology) and the box-counting dimension of
 :func:`rockmass.fractal.box_count` over the same window, and writes under ``--out DIR``:
 ``summary.json``, ``rose.png`` (length-weighted, equal-area, axial), ``traces.png`` (the map by set)
 and ``manifest.json`` — all of them or none. ``--json`` prints the summary to stdout.

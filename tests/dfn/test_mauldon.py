@@ -9,7 +9,8 @@ import shapely
 
 from rockmass.dfn import TraceMap
 from rockmass.dfn.intensity import sampling_window
-from rockmass.dfn.mauldon import circle_window, mauldon_circle, mauldon_from_counts
+from rockmass.dfn.mauldon import (circle_window, inscribed_circles, mauldon_circle, mauldon_circles,
+                                  mauldon_from_counts)
 
 from ._fixtures import CATALOGUE, poisson_segments
 
@@ -192,3 +193,90 @@ def test_mauldon_circle_does_not_modify_the_centre():
     centre = np.array([0.5, -0.25])
     mauldon_circle(CATALOGUE["crossing_pair"].build(), centre, 1.0)
     assert centre.tolist() == [0.5, -0.25]
+
+
+# -- circles placed inside a window -------------------------------------------------------------
+
+L_SHAPE = [(0, 0), (30, 0), (30, 10), (10, 10), (10, 30), (0, 30)]
+WINDOWS = {
+    "rectangle 3:1": [(0, 0), (30, 0), (30, 10), (0, 10)],
+    "square": [(0, 0), (10, 0), (10, 10), (0, 10)],
+    "L-shape": L_SHAPE,
+    "triangle": [(0, 0), (12, 0), (3, 9)],
+    "tilted rectangle": [(0, 0), (16, 12), (13, 16), (-3, 4)],
+}
+
+
+@pytest.mark.parametrize("name", sorted(WINDOWS))
+def test_inscribed_circles_lie_inside_the_window_and_do_not_overlap(name):
+    polygon = shapely.Polygon(WINDOWS[name])
+    c = inscribed_circles(WINDOWS[name])
+    assert c.n_circles >= 1 and 0 < c.radius_m <= c.largest_radius_m
+    for centre in c.centres_xy_m:
+        point = shapely.Point(centre)
+        assert polygon.covers(point)
+        assert polygon.exterior.distance(point) >= c.radius_m * (1 - 1e-9)  # the whole circle inside
+    gaps = [np.hypot(*(a - b)) for i, a in enumerate(c.centres_xy_m) for b in c.centres_xy_m[i + 1:]]
+    assert all(g >= 2 * c.radius_m * (1 - 1e-9) for g in gaps)
+
+
+def test_a_three_to_one_rectangle_gets_three_circles_of_nine_tenths_its_half_width():
+    c = inscribed_circles(WINDOWS["rectangle 3:1"])
+    assert c.n_circles == 3
+    assert c.radius_m == pytest.approx(4.5) and c.largest_radius_m == pytest.approx(5.0)
+    np.testing.assert_allclose(c.centres_xy_m[:, 1], 5.0)  # centred across the width
+
+
+def test_smaller_circles_pack_hexagonally():
+    # radius 5 in a 40 m square: hexagonal rows 5 sqrt(3) apart fit 4 + 3 + 4 + 3 centres
+    c = inscribed_circles([(0, 0), (40, 0), (40, 40), (0, 40)], radius_m=5.0)
+    assert c.n_circles == 14
+
+
+def test_a_radius_that_does_not_fit_is_rejected_with_the_largest_that_does():
+    with pytest.raises(ValueError, match="radius_m.*largest inscribed circle has radius 5"):
+        inscribed_circles(WINDOWS["rectangle 3:1"], radius_m=5.5)
+    with pytest.raises(ValueError, match="radius_fraction"):
+        inscribed_circles(WINDOWS["square"], radius_fraction=1.5)
+
+
+def test_pooled_counts_over_one_circle_equal_the_single_circle_estimate():
+    tm = TraceMap.from_segments([[1, 1, 4, 5], [2, 8, 8, 8], [6, 1, 6, 4], [5, 5, 15, 5]],
+                                window=WINDOWS["square"])
+    pooled = mauldon_circles(tm)
+    single = mauldon_circle(tm, pooled.centres_xy_m[0], pooled.radius_m)
+    assert pooled.n_circles == 1
+    assert (pooled.p21_per_m, pooled.p20_per_m2, pooled.mean_length_m) == (
+        single.p21_per_m, single.p20_per_m2, single.mean_length_m)
+
+
+def test_a_trace_along_a_rectangle_crosses_each_circle_twice():
+    tm = TraceMap.from_segments([[0, 5, 30, 5]], window=WINDOWS["rectangle 3:1"])
+    e = mauldon_circles(tm)
+    assert e.n_intersections.tolist() == [2, 2, 2] and e.n_endpoints.tolist() == [0, 0, 0]
+    assert e.p21_per_m == pytest.approx(6 / (4 * 3 * 4.5))  # sum n / (4 k r)
+    assert not e.valid and "m = 0" in e.reason and math.isnan(e.mean_length_m)
+
+
+def test_pooled_mauldon_matches_a_poisson_segment_process_in_a_rectangle():
+    # seed 11: isotropic segments of 1 m at 10 per m2 (P21 = 10, P20 = 10); a 40 x 20 m window gets
+    # two circles of radius 9: E[sum n] = 4 k r P21 = 720, E[sum m] = 2 pi k r^2 P20 ~ 10 180
+    rng = np.random.default_rng(11)
+    rows = poisson_segments(rng, intensity_per_m2=10.0, length_m=1.0, region_radius_m=23.0)
+    rows[:, [0, 2]] += 20.0
+    rows[:, [1, 3]] += 10.0
+    tm = TraceMap.from_segments(rows, window=[(0, 0), (40, 0), (40, 20), (0, 20)])
+    e = mauldon_circles(tm)
+    assert e.n_circles == 2 and e.radius_m == pytest.approx(9.0)
+    # as for one circle: Var(sum n) <= 2 E[sum n], Var(sum m) <= 2 E[sum m] (0..2 hits per segment)
+    expected_n, expected_m = 4 * 2 * 9.0 * 10.0, 2 * math.pi * 2 * 81.0 * 10.0
+    assert abs(e.p21_per_m - 10.0) <= 3 * math.sqrt(2 * expected_n) / (4 * 2 * 9.0)
+    assert abs(e.p20_per_m2 - 10.0) <= 3 * math.sqrt(2 * expected_m) / (2 * math.pi * 2 * 81.0)
+    assert abs(e.mean_length_m - 1.0) <= 3 * math.sqrt(2 / expected_n) + 3 * math.sqrt(2 / expected_m)
+
+
+def test_mauldon_circles_needs_a_window_or_circles():
+    with pytest.raises(ValueError, match="window"):
+        mauldon_circles(TraceMap.from_segments([[0, 0, 1, 1]]))
+    with pytest.raises(TypeError, match="circles"):
+        mauldon_circles(TraceMap.from_segments([[0, 0, 1, 1]]), circles=[(0, 0)])

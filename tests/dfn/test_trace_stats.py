@@ -96,11 +96,24 @@ def test_edge_censored_network_gives_hand_counted_topology():
     assert result["traces"]["end_class"] == [["E", "E"], ["I", "E"]]
 
 
-def test_square_window_leaves_mauldon_undefined_with_a_reason():
-    result = trace_map_statistics(intensity_square())
+def test_square_window_leaves_mauldon_undefined_with_a_reason_when_asked_to():
+    result = trace_map_statistics(intensity_square(), mauldon_in_window=False)
     for name in ("Fracture Intensity (Mauldon)", "Fracture Density (Mauldon)", "Trace Mean Length (Mauldon)"):
         assert result[name]["value"] is None and "not a circle" in result[name]["reason"]
-    assert result["window"]["is_circle"] is False
+    assert result["window"]["is_circle"] is False and result["window"]["mauldon_circles"] is None
+
+
+def test_square_window_gets_hand_counted_mauldon_values_on_its_inscribed_circle():
+    # circle of radius 4.5 (0.9 x the inscribed 5) at (5, 5); the traces give
+    # n = 1 + 0 + 0 + 1 = 2 crossings and m = 1 + 2 + 2 + 1 = 6 ends inside
+    result = trace_map_statistics(intensity_square())
+    circles = result["window"]["mauldon_circles"]
+    assert circles["count"] == 1 and circles["radius"] == pytest.approx(4.5)
+    np.testing.assert_allclose(circles["centres_xy"], [[5.0, 5.0]])
+    assert result["Fracture Intensity (Mauldon)"]["value"] == pytest.approx(2 / (4 * 4.5))
+    assert result["Fracture Density (Mauldon)"]["value"] == pytest.approx(6 / (2 * math.pi * 4.5**2))
+    assert result["Trace Mean Length (Mauldon)"]["value"] == pytest.approx(math.pi * 4.5 / 2 * 2 / 6)
+    json.dumps(result, allow_nan=False)
 
 
 def test_circular_window_gives_hand_counted_mauldon_values():
