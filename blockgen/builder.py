@@ -44,7 +44,7 @@ from .joints import JointSet, set_segments
 from .model import (CONTACT_KINDS, KIND_DOMAIN, KIND_EXCAVATION, KIND_GLUED, KIND_JOINT, KIND_TRACE,
                     SOURCE_CONVEX_CUT, SOURCE_CRACK, BlockModel)
 from .network import (Sources, dangling_extensions, label_segments, node, polygonize_segments,
-                      ring_segments, segment_keys, snap_to_grid, collapse_short)
+                      ring_segments, segment_keys, snap_to_grid, collapse_short, unique_rows)
 from .snapping import snap_short_edges
 from .tolerances import CRACK_EDGE_FRACTION, model_tolerances
 
@@ -113,7 +113,7 @@ def _pairs(faces, grid_m):
     """Matched edges: (segments, face_a, face_b) with face_b = -1 for unmatched edges."""
     seg, face = _ring_edges(faces)
     keys = segment_keys(seg, grid_m)
-    _, inv, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    _, inv, counts = unique_rows(keys)
     inv = inv.ravel()
     order = np.argsort(inv, kind="stable")
     first = np.ones(len(order), bool)
@@ -383,7 +383,7 @@ def _groups(kind, src):
     table = np.column_stack([kind, src])
     if not len(table):
         return []
-    labels, inv = np.unique(table, axis=0, return_inverse=True)
+    labels, inv, _ = unique_rows(table)
     inv = inv.ravel()
     return [((int(k), int(s)), np.flatnonzero(inv == i)) for i, (k, s) in enumerate(labels)]
 
@@ -497,7 +497,7 @@ def _local_faces(noded, faces, region, changed, excavations, grid_m):
     ekeys = segment_keys(seg, grid_m)
     nkeys = segment_keys(noded, grid_m)
     both = np.concatenate([ekeys, nkeys])
-    _, inv = np.unique(both, axis=0, return_inverse=True)
+    _, inv, _ = unique_rows(both)
     inv = inv.ravel()
     e_inv, n_inv = inv[:len(ekeys)], inv[len(ekeys):]
     present = np.isin(e_inv, n_inv)
@@ -527,7 +527,7 @@ def _local_faces(noded, faces, region, changed, excavations, grid_m):
 def _rows_in(a, b):
     """Mask of rows of int array ``a`` that occur in ``b``."""
     both = np.concatenate([a, b])
-    _, inv = np.unique(both, axis=0, return_inverse=True)
+    _, inv, _ = unique_rows(both)
     inv = inv.ravel()
     return np.isin(inv[:len(a)], inv[len(a):])
 
@@ -580,7 +580,7 @@ def _assemble(faces, region, noded, kind, src, tol, report, domain_xy, excavatio
     ekeys = segment_keys(seg, tol.grid_m)
     nkeys = segment_keys(noded, tol.grid_m)
     both = np.concatenate([ekeys, nkeys])
-    _, inv = np.unique(both, axis=0, return_inverse=True)
+    _, inv, _ = unique_rows(both)
     inv = inv.ravel()
     lookup = np.full(inv.max() + 1, -1, np.int64)
     lookup[inv[len(ekeys):]] = np.arange(len(nkeys))
@@ -597,7 +597,7 @@ def _assemble(faces, region, noded, kind, src, tol, report, domain_xy, excavatio
     ek = np.where(b < 0, KIND_DOMAIN, ek)
     es = np.where(b < 0, -1, es)
     table = np.column_stack([a, b, ek, es])
-    uniq, cinv = np.unique(table, axis=0, return_inverse=True)
+    uniq, cinv, _ = unique_rows(table)
     clen = np.bincount(cinv.ravel(), length, len(uniq))
     contact_blocks, contact_kind, contact_source = uniq[:, :2], uniq[:, 2], uniq[:, 3]
     # quality

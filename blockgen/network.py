@@ -14,7 +14,7 @@ import shapely
 
 from .model import KIND_DOMAIN, KIND_EXCAVATION
 
-__all__ = ["Sources", "snap_to_grid", "node", "collapse_short", "label_segments", "dangling_extensions", "polygonize_segments",
+__all__ = ["Sources", "unique_rows", "snap_to_grid", "node", "collapse_short", "label_segments", "dangling_extensions", "polygonize_segments",
            "segment_keys"]
 
 # priority of a kind when two sources cover the same edge (lower wins)
@@ -50,6 +50,23 @@ class Sources:
     def arrays(self):
         return (np.concatenate(self._segs), np.concatenate(self._kind), np.concatenate(self._src),
                 np.concatenate(self._prio))
+
+
+def unique_rows(a: np.ndarray):
+    """``np.unique(a, axis=0, return_inverse=True, return_counts=True)`` for 2-D int arrays, by a
+    lexicographic sort of the columns (same rows, order and inverse; several times faster than
+    numpy's structured-view sort)."""
+    a = np.asarray(a)
+    if not len(a):
+        return a.copy(), np.empty(0, np.int64), np.empty(0, np.int64)
+    order = np.lexsort(a.T[::-1])
+    s = a[order]
+    new = np.ones(len(a), bool)
+    new[1:] = np.any(s[1:] != s[:-1], axis=1)
+    group = np.cumsum(new) - 1
+    inverse = np.empty(len(a), np.int64)
+    inverse[order] = group
+    return s[new], inverse, np.bincount(group)
 
 
 def ring_segments(xy: np.ndarray) -> np.ndarray:
@@ -90,7 +107,7 @@ def collapse_short(segments: np.ndarray, min_len: float, grid: float):
     if not short.any():
         return segments, 0
     q = np.round(segments.reshape(-1, 2) / grid).astype(np.int64)
-    uniq, inv = np.unique(q, axis=0, return_inverse=True)
+    uniq, inv, _ = unique_rows(q)
     inv = inv.reshape(-1, 2)
     xy = np.zeros((len(uniq), 2))
     xy[inv.ravel()] = segments.reshape(-1, 2)
@@ -109,7 +126,7 @@ def collapse_short(segments: np.ndarray, min_len: float, grid: float):
     ends = label[inv]
     keep = ends[:, 0] != ends[:, 1]
     ends = np.sort(ends[keep], axis=1)
-    ends = np.unique(ends, axis=0)
+    ends = unique_rows(ends)[0]
     return xy[ends], n_merged
 
 
@@ -172,7 +189,7 @@ def dangling_extensions(segments: np.ndarray, grid: float, max_len: float):
     n_dangling : int
     """
     q = np.round(segments.reshape(-1, 2) / grid).astype(np.int64)
-    _, inverse, counts = np.unique(q, axis=0, return_inverse=True, return_counts=True)
+    _, inverse, counts = unique_rows(q)
     deg1 = counts[inverse.ravel()] == 1
     ends = np.flatnonzero(deg1)
     if not len(ends):

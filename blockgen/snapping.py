@@ -31,6 +31,7 @@ import numpy as np
 
 from .convex import reflex_vertices
 from .model import KIND_DOMAIN, KIND_EXCAVATION
+from .network import unique_rows
 
 __all__ = ["snap_short_edges", "AREA_RTOL"]
 
@@ -111,7 +112,7 @@ def _one_pass(noded, kind, src, moved, faces, region, min_edge_m, grid_m, reflex
         return None
     # the nodes of the short edges, matched exactly on the grid in the rings and the network
     qr = np.round(coords / grid_m).astype(np.int64)
-    ends = np.unique(np.concatenate([qr[tiny], qr[tiny + 1]]), axis=0)
+    ends = unique_rows(np.concatenate([qr[tiny], qr[tiny + 1]]))[0]
     node_id = {tuple(k): i for i, k in enumerate(ends.tolist())}
     xy = ends * grid_m  # on the grid, as every network node
     h_ends = _hash(ends)

@@ -110,3 +110,15 @@ def test_a_vertex_off_its_line_by_round_off_is_not_reflex_but_a_real_notch_is():
     assert reflex_vertices(ring(20 * tol.grid_m), tol.reflex_sin, tol.reflex_m).tolist() == [1]
     # pushed outwards the vertex itself is convex (its neighbours are then the notch)
     assert 1 not in reflex_vertices(ring(-20 * tol.grid_m), tol.reflex_sin, tol.reflex_m)
+
+
+def test_unique_rows_matches_numpy_unique():
+    from rockmass.blockgen.network import unique_rows
+
+    rng = np.random.default_rng(11)  # fixed seed: rows with many repeats and negative values
+    a = rng.integers(-3, 3, (500, 4))
+    uniq, inv, counts = unique_rows(a)
+    ref = np.unique(a, axis=0, return_inverse=True, return_counts=True)
+    assert np.array_equal(uniq, ref[0]) and np.array_equal(inv, ref[1].ravel())
+    assert np.array_equal(counts, ref[2])
+    assert np.array_equal(uniq[inv], a)
