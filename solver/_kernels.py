@@ -46,6 +46,7 @@ N_ENERGY = 10
 RC_DONE, RC_REBUILD, RC_CONVERGED, RC_OVERLAP, RC_NONFINITE = range(5)
 
 _CY_SLIP_F = 0.05  # a CY slot with F below this counts as slipping in the reports
+_FACING_COS = -0.99  # edges whose normals are this close to anti-parallel face each other
 
 
 @njit(cache=True)
@@ -386,14 +387,28 @@ def contact_forces(wv, off, pos, vel, omg, radius, still, pa, pb, pprop, pref, p
         e = e_a if ref == 0 else e_b
         x0, y0, ux, uy, nrx, nry, jref = _edge(wv, off, rb, e)
         lref = (wv[jref, 0] - x0) * ux + (wv[jref, 1] - y0) * uy
-        # incident edge: most anti-parallel outward normal on the other block
+        # incident edge: among the edges of the other block facing the reference edge (normals
+        # within ~8° of anti-parallel) the one overlapping it most along the edge (snapped
+        # near-collinear pieces must not win by a hair); otherwise the most anti-parallel edge
         best = np.inf
         inc = -1
+        best_cover = 0.0
+        facing = -1
         for i in range(off[ib], off[ib + 1]):
             d = wv[i, 2] * nrx + wv[i, 3] * nry
             if d < best:
                 best = d
                 inc = i
+            if d < _FACING_COS:
+                j = i + 1 if i + 1 < off[ib + 1] else off[ib]
+                s0 = (wv[i, 0] - x0) * ux + (wv[i, 1] - y0) * uy
+                s1 = (wv[j, 0] - x0) * ux + (wv[j, 1] - y0) * uy
+                cover = min(lref, max(s0, s1)) - max(0.0, min(s0, s1))
+                if cover > best_cover:
+                    best_cover = cover
+                    facing = i
+        if facing >= 0:
+            inc = facing
         ix0, iy0, _iux, _iuy, _inx, _iny, ij = _edge(wv, off, ib, inc)
         ix1 = wv[ij, 0]
         iy1 = wv[ij, 1]
