@@ -288,6 +288,13 @@ def _open_slot(S, p, k):
 
 
 @njit(cache=True)
+def _open_pair(S, p):
+    for k in range(2):
+        if S[p, k, ACT] != 0.0:
+            _open_slot(S, p, k)
+
+
+@njit(cache=True)
 def _activate_slot(S, p, k, prop, broken):
     S[p, k, ACT] = 1.0
     S[p, k, U0] = 0.0
@@ -362,9 +369,7 @@ def contact_forces(wv, off, pos, vel, omg, radius, still, pa, pb, pprop, pref, p
         dy = pos[b, 1] - pos[a, 1]
         reach = radius[a] + radius[b] + tol
         if dx * dx + dy * dy > reach * reach:  # bounding circles apart: no contact
-            for k in range(2):
-                if S[p, k, ACT] != 0.0:
-                    _open_slot(S, p, k)
+            _open_pair(S, p)
             continue
         sep_a, e_a = _max_separation(wv, off, a, b, tol, hyst)
         sep_b = np.inf
@@ -372,9 +377,7 @@ def contact_forces(wv, off, pos, vel, omg, radius, still, pa, pb, pprop, pref, p
         if sep_a <= tol:
             sep_b, e_b = _max_separation(wv, off, b, a, tol, hyst)
         if sep_a > tol or sep_b > tol:
-            for k in range(2):
-                if S[p, k, ACT] != 0.0:
-                    _open_slot(S, p, k)
+            _open_pair(S, p)
             continue
         ref = pref[p]
         if ref == 0 and sep_b > sep_a + hyst:
@@ -417,9 +420,7 @@ def contact_forces(wv, off, pos, vel, omg, radius, still, pa, pb, pprop, pref, p
         tlo = max(0.0, min(t0, t1))
         thi = min(lref, max(t0, t1))
         if thi < tlo:
-            for k in range(2):
-                if S[p, k, ACT] != 0.0:
-                    _open_slot(S, p, k)
+            _open_pair(S, p)
             continue
         # the two clipped points
         for m in range(2):
@@ -443,9 +444,7 @@ def contact_forces(wv, off, pos, vel, omg, radius, still, pa, pb, pprop, pref, p
             if csep[1] < csep[0]:
                 keep[0] = 1
         if nkeep == 0:
-            for k in range(2):
-                if S[p, k, ACT] != 0.0:
-                    _open_slot(S, p, k)
+            _open_pair(S, p)
             continue
         # a face: each end carries half of it; a corner: half the facing part, at least d
         length = 0.5 * (thi - tlo) if nkeep == 2 else max(0.5 * (thi - tlo), rounding)

@@ -34,6 +34,13 @@ def _positive(name: str, value: float, allow_zero: bool = False):
                          f"got {value!r}")
 
 
+def _sides(sides) -> tuple[str, ...]:
+    sides = tuple(sides)
+    if not sides or any(s not in SIDES for s in sides):
+        raise ValueError(f"sides must be a non-empty subset of {SIDES}, got {sides!r}")
+    return sides
+
+
 def _angle(name: str, value: float, low: float = 0.0, high: float = 90.0):
     if not (math.isfinite(value) and low <= value < high):
         raise ValueError(f"{name} must be in [{low}, {high}) degrees, got {value!r}")
@@ -192,10 +199,7 @@ class BoundaryStress:
     from_insitu: bool = False
 
     def __post_init__(self):
-        object.__setattr__(self, "sides", tuple(self.sides))
-        bad = [s for s in self.sides if s not in SIDES]
-        if bad or not self.sides:
-            raise ValueError(f"sides must be a non-empty subset of {SIDES}, got {self.sides!r}")
+        object.__setattr__(self, "sides", _sides(self.sides))
 
 
 @dataclass(frozen=True)
@@ -295,10 +299,7 @@ class QuietBoundary:
     sides: tuple[str, ...]
 
     def __post_init__(self):
-        object.__setattr__(self, "sides", tuple(self.sides))
-        bad = [s for s in self.sides if s not in SIDES]
-        if bad or not self.sides:
-            raise ValueError(f"sides must be a non-empty subset of {SIDES}, got {self.sides!r}")
+        object.__setattr__(self, "sides", _sides(self.sides))
 
 
 @dataclass(frozen=True)
