@@ -21,7 +21,7 @@ known orientation (:class:`FaceSurvey`). :func:`fit_field` does, in order:
    non-negative least squares with :func:`~rockmass.dfn.stereology.solve_p32` ([Wan05]_). The
    weights are Poisson: sd(P10_k) = √N_k / L_k (N_k hits, at least 1), sd(P21_j) =
    P21_j √(1 + CV²) / √M_j (M_j traces, CV the coefficient of variation of their lengths; a face
-   with no trace of the set gets sd = mean trace length / area, the value one trace would give).
+   with fewer than 2 traces of the set gets sd = mean trace length / area, what one trace gives).
 
 References
 ----------
@@ -248,6 +248,30 @@ def _check_inputs(scanlines, faces) -> tuple[list[Scanline], list[FaceSurvey]]:
     return scanlines, faces
 
 
+@dataclass(frozen=True)
+class _TraceSample:
+    """P21 and mean length of the clipped traces of one window, with Poisson standard deviations."""
+
+    m: int                   # traces with a non-zero length in the window
+    p21: float               # Σ l / A, m/m²
+    p21_sd: float | None     # P21 √((1 + CV²)/M); None for M < 2 (no spread to measure)
+    mean_m: float | None     # mean clipped length (window-censored), m
+    mean_sd: float | None    # sd(l) / √M
+
+
+def _trace_sample(lengths_m: np.ndarray, area_m2: float) -> _TraceSample:
+    """Counts are Poisson and lengths scatter with coefficient of variation CV, so
+    var(Σ l) = M E[l²] = M mean² (1 + CV²) and sd(P21) = P21 √((1 + CV²)/M) (sample CV, ddof 1)."""
+    ell = np.asarray(lengths_m, dtype=np.float64)
+    ell = ell[ell > 0]
+    m = int(ell.size)
+    p21 = float(ell.sum() / area_m2)
+    if m < 2:
+        return _TraceSample(m, p21, None, float(ell.mean()) if m else None, None)
+    mean, var = float(ell.mean()), float(ell.var(ddof=1))
+    return _TraceSample(m, p21, p21 * float(np.sqrt((1.0 + var / mean ** 2) / m)), mean, float(np.sqrt(var / m)))
+
+
 def _p32_of_set(pole: np.ndarray, kappa: float, s: int, scanlines, scan_member, faces, face_member,
                 face_lengths) -> tuple:
     """solve_p32 for one set from its P10 on every scanline and P21 on every face."""
@@ -263,14 +287,10 @@ def _p32_of_set(pole: np.ndarray, kappa: float, s: int, scanlines, scan_member, 
         p21, p21_sd = [], []
         for face, mem, clipped in zip(faces, face_member, face_lengths):
             area = face.area_m2
-            mine = clipped[mem == s]
-            if mine.size:
-                cv2 = float(np.var(mine) / np.mean(mine) ** 2) if np.mean(mine) > 0 else 0.0
-                p21.append(mine.sum() / area)
-                p21_sd.append(mine.sum() / area * np.sqrt((1.0 + cv2) / mine.size))
-            else:
-                p21.append(0.0)
-                p21_sd.append(typical / area)
+            sample = _trace_sample(clipped[mem == s], area)
+            p21.append(sample.p21)
+            # fewer than 2 traces: the sd one trace of typical length would give
+            p21_sd.append(sample.p21_sd if sample.p21_sd else typical / area)
         kwargs.update(face_normals=np.array([f.normal for f in faces]), p21=np.array(p21),
                       p21_sd=np.array(p21_sd))
     sol = solve_p32(pole[None, :], [kappa], **kwargs)

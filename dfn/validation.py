@@ -41,7 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .field_fit import FaceSurvey, FieldFit, fit_field
+from .field_fit import FaceSurvey, FieldFit, _trace_sample, fit_field
 from .generation import FisherOrientation, FractureSetSpec, generate
 from .network import DiskNetwork, _require_network
 from .orientation import angle_between, dip_from_normal, trend_plunge_from_vector
@@ -234,21 +234,6 @@ def closed_loop(specs: Sequence[FractureSetSpec], domain_m: ArrayLike, *, scanli
                       sum(f.trace_map.n_traces for f in face_surveys))
 
 
-def _p21_stats(trace_map, area: float) -> tuple[float, float, float, float, int]:
-    """(P21, sd(P21), mean length, sd(mean length), M) of a face's clipped traces."""
-    from .intensity import clipped_lengths_m
-
-    lengths = np.asarray(clipped_lengths_m(trace_map))
-    lengths = lengths[lengths > 0]
-    m = lengths.size
-    if m == 0:
-        return 0.0, 0.0, float("nan"), float("nan"), 0
-    p21 = float(lengths.sum() / area)
-    mean = float(lengths.mean())
-    var = float(lengths.var(ddof=1)) if m > 1 else mean ** 2
-    return p21, p21 * float(np.sqrt((1.0 + var / mean ** 2) / m)), mean, float(np.sqrt(var / m)), m
-
-
 def compare_with_field(network: DiskNetwork, field_fit: FieldFit, scanlines: Sequence[Scanline],
                        faces: Sequence[FaceSurvey]) -> list[dict]:
     """Measured vs re-sampled P10, P21, mean trace length and set orientations (module docstring).
@@ -275,6 +260,8 @@ def compare_with_field(network: DiskNetwork, field_fit: FieldFit, scanlines: Seq
     ValueError
         A scanline without ``start_xyz_m`` or a face without ``point_m`` (their position is needed).
     """
+    from .intensity import clipped_lengths_m
+
     _require_network(network)
     rows = []
     virtual_lines = []
@@ -299,12 +286,13 @@ def compare_with_field(network: DiskNetwork, field_fit: FieldFit, scanlines: Seq
         sim = virtual_face(network, face.point_m, face.normal, face.trace_map.window_xy_m, name=label)
         virtual_faces.append(sim)
         area = face.area_m2
-        p_f, sd_f, l_f, lsd_f, _ = _p21_stats(face.trace_map, area)
-        p_s, sd_s, l_s, lsd_s, _ = _p21_stats(sim.trace_map, area)
-        sd = float(np.hypot(sd_f, sd_s))
-        rows.append(_row(label, "p21", p_f, p_s, sd, N_SIGMA * sd, p_s - p_f))
-        sd_l = float(np.hypot(lsd_f, lsd_s))
-        rows.append(_row(label, "mean_trace_length_m", l_f, l_s, sd_l, N_SIGMA * sd_l, l_s - l_f))
+        f, v = (_trace_sample(clipped_lengths_m(x.trace_map), area) for x in (face, sim))
+        sd = float(np.hypot(f.p21_sd or 0.0, v.p21_sd or 0.0))
+        rows.append(_row(label, "p21", f.p21, v.p21, sd, N_SIGMA * sd, v.p21 - f.p21))
+        if f.mean_m is not None and v.mean_m is not None:
+            sd_l = float(np.hypot(f.mean_sd or 0.0, v.mean_sd or 0.0))
+            rows.append(_row(label, "mean_trace_length_m", f.mean_m, v.mean_m, sd_l, N_SIGMA * sd_l,
+                             v.mean_m - f.mean_m))
     if sum(s.n_intersections for s in virtual_lines) >= 2:
         from .sets3d import fit_sets_3d
 
@@ -351,13 +339,9 @@ def section_check(network: DiskNetwork, specs: Sequence[FractureSetSpec], point:
     set_of = np.asarray(face.trace_map.attributes["set"])
 
     def stats(mask, expected):
-        ell = lengths[mask & (lengths > 0)]
-        m = ell.size
-        p21 = float(ell.sum() / area)
-        sd = float(p21 * np.sqrt((1.0 + ell.var() / ell.mean() ** 2) / m)) if m > 1 else None
-        return {"traces": int(m), "p21": p21, "p21_expected": float(expected), "p21_sd": sd,
-                "z": None if not sd else (p21 - expected) / sd,
-                "mean_trace_length_m": float(ell.mean()) if m else None}
+        t = _trace_sample(lengths[mask], area)
+        return {"traces": t.m, "p21": t.p21, "p21_expected": float(expected), "p21_sd": t.p21_sd,
+                "z": None if not t.p21_sd else (t.p21 - expected) / t.p21_sd, "mean_trace_length_m": t.mean_m}
 
     m = face.normal
     expected = [network.p32(j) / spec.orientation.c23(m) for j, spec in enumerate(specs)]

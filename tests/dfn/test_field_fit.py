@@ -44,6 +44,16 @@ def test_vertical_face_frame_puts_horizontal_planes_along_u():
     assert assign_traces(face, poles).tolist() == [0, 1, 0]
 
 
+def test_p21_sd_is_poisson_count_times_length_scatter_by_hand():
+    from rockmass.dfn.field_fit import _trace_sample
+
+    t = _trace_sample(np.array([1.0, 3.0, 0.0]), 4.0)          # the zero-length trace is not counted
+    assert (t.m, t.p21, t.mean_m) == (2, 1.0, 2.0)
+    assert t.p21_sd == pytest.approx(np.sqrt((1 + 2.0 / 4.0) / 2))  # var 2 (ddof 1), CV² = 1/2
+    assert t.mean_sd == pytest.approx(1.0)
+    assert _trace_sample(np.array([2.0]), 4.0).p21_sd is None     # one trace: no spread to measure
+
+
 def test_virtual_scanline_reports_the_dip_of_each_disk_hit():
     net = generate(SPECS[:1], [0, 0, 0, 20, 20, 20], seed=3)
     survey = virtual_scanline(net, [10, 10, 0.5], [10, 10, 19.5])
