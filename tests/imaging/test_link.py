@@ -143,3 +143,11 @@ def test_extract_returns_two_traces_for_a_low_angle_thick_crossing():
         cv2.line(img, tuple(int(v) for v in p0), tuple(int(v) for v in p1), 60, 5, cv2.LINE_AA)
     traces = extract(img, m_per_px=0.01, joint_width_px=5.0).traces
     assert traces.n_traces == 2
+
+
+@pytest.mark.parametrize("field, value", [("link_gap_px", -1.0), ("link_offset_px", float("nan")),
+                                          ("link_turn_deg", 120.0), ("link_reach_px", 0.0),
+                                          ("border_extend_px", -2.0)])
+def test_bad_link_settings_are_refused_naming_the_field(field, value):
+    with pytest.raises(ValueError, match=field):
+        ExtractParams(**{field: value})
