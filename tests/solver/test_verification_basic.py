@@ -104,14 +104,16 @@ def test_incline_toppling(b, topples):
 
 
 # --------------------------------------------------------------------- 2. Newmark block --
+@pytest.mark.parametrize("start", ["insitu", "static"])
 @pytest.mark.parametrize("ratio, t0", [(2.0, 0.1), (4.0, 0.05)])
-def test_newmark_permanent_slip(ratio, t0):
+def test_newmark_permanent_slip(ratio, t0, start):
     """Base acceleration A = ratio · a_y for t₀, then constant base velocity V = A t₀: the block
     (friction μ, a_y = μ g) slips d = (V²/2a_y)(1 − a_y/A) relative to the base, within 1 %.
 
     The joint is elastic before it slips, so the block starts sliding a little late (about A/ω
     of velocity lag): the slip exceeds the rigid-plastic d by ~0.2–0.5 % with k = 1e10 Pa/m.
-    The block starts on its in-situ stress σ_yy = W/b (no landing transient).
+    The block starts on its in-situ stress σ_yy = W/b (no landing transient) or settles in a
+    static stage first (the input then starts at t = 0 of the dynamic stage).
     """
     phi, b, h = 15.0, 1.0, 0.5
     a_y = G * math.tan(_rad(phi))
@@ -119,13 +121,15 @@ def test_newmark_permanent_slip(ratio, t0):
     V = A * t0
     duration = t0 + 1.5 * V / a_y  # slip ends at V/a_y
     base_velocity = TableHistory((0.0, t0, 10 * duration), (0.0, V, V))
+    shake = Stage("shake", "dynamic", duration_s=duration)
     st = Settings(joints={"default": Coulomb(1e10, 1e10, phi)},
-                  stages=(Stage("shake", "dynamic", duration_s=duration),), material=Material(RHO),
-                  fixes=(Fix("blocks:0", "yr"),),
+                  stages=(shake,) if start == "insitu" else (Stage("settle"), shake),
+                  material=Material(RHO), fixes=(Fix("blocks:0", "yr"),),
                   velocity_inputs=(VelocityInput("blocks:0", "x", base_velocity),),
                   monitors=(Monitor("block", block=1), Monitor("base", block=0)),
-                  insitu=InSituStress(syy_pa=RHO * h * G))
+                  insitu=InSituStress(syy_pa=RHO * h * G) if start == "insitu" else None)
     r = run(incline(0.0, b, h), st)
+    assert r.ok
     hist = r.history
     # the base follows its input: ∫v dt = V (T − t₀/2)
     assert hist["base_ux_m"][-1] == pytest.approx(V * (duration - t0 / 2), rel=1e-3)
@@ -333,6 +337,34 @@ def test_automatic_time_step_below_the_true_limit():
     r = run(model, settings)
     assert r.stages[0].stable_time_step_s == pytest.approx(limit, rel=1e-12)
     assert r.stages[0].time_step_s == pytest.approx(settings.time_step_safety * limit, rel=1e-12)
+
+
+@pytest.mark.parametrize("factor, stable", [(0.97, True), (1.03, False)])
+def test_stability_boundary_is_two_over_omega_max(monkeypatch, factor, stable):
+    """Central difference is stable iff Δt ≤ 2/ω_max: with the solver's (conservative) refusal
+    switched off, a glued block on an incline runs at 0.97 of the hand-computed 2/ω_max with
+    bounded energy and blows up within a few dozen steps at 1.03 (the run stops with a failed
+    status, overlap or non-finite, instead of returning garbage)."""
+    from rockmass.solver import Engine
+
+    psi, b, h, kn, ks = 20.0, 1.0, 0.5, 1e9, 4e8
+    true_limit = 2.0 / _block_on_spring_omega_max(b, h, kn, ks, RHO * b * h)
+    monkeypatch.setattr(Engine, "stable_time_step", lambda self, beta=0.0: math.inf)
+    glued = Coulomb(kn, ks, 40.0, cohesion_pa=1e9, tension_pa=1e9)
+    stage = Stage("shake", "dynamic", duration_s=0.3, time_step_s=factor * true_limit,
+                  history_every=1)
+    r = run(incline(psi, b, h), Settings(joints={"default": glued}, stages=(stage,),
+                                         material=Material(RHO), fixes=(Fix("blocks:0"),)))
+    s = r.stages[0]
+    ke = r.history["kinetic_energy_j"]
+    assert np.isfinite(ke).all() and np.isfinite(r.displacement_m).all()
+    if stable:
+        assert s.status == "completed"
+        half = len(ke) // 2
+        assert ke[half:].max() <= 1.5 * ke[:half].max()
+    else:
+        assert s.status in ("overlap", "unstable") and s.diagnostic
+        assert s.steps < 200
 
 
 def test_user_time_step_above_the_limit_is_refused():
