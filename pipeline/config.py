@@ -204,6 +204,7 @@ def Stage(module: str, name: str) -> Any:  # noqa: N802 (reads as a type in a fi
 
 DFNSection = Stage("dfn_config", "DFNConfig")
 BlocksSection = Stage("blocks_config", "BlocksConfig")
+SolveSection = Stage("solve_config", "SolveConfig")
 
 
 class RockmassConfig(StrictModel):
@@ -222,12 +223,15 @@ class RockmassConfig(StrictModel):
         ``[dfn]`` section (disk fracture network generation).
     blocks : rockmass.blocks_config.BlocksConfig or None
         ``[blocks]`` section (block model of a 2D section).
+    solve : rockmass.solve_config.SolveConfig or None
+        ``[solve]`` section (DEM run of a block model).
     """
 
     imaging: ImagingConfig | None = None
     fractal: FractalConfig | None = None
     dfn: DFNSection = None
     blocks: BlocksSection = None
+    solve: SolveSection = None
 
 
 # ------------------------------------------------------------------------------------------ loading
@@ -653,7 +657,7 @@ def config_hash(obj: Any) -> str:
 
     Examples
     --------
-    >>> empty = {"imaging": None, "fractal": None, "dfn": None, "blocks": None}
+    >>> empty = {"imaging": None, "fractal": None, "dfn": None, "blocks": None, "solve": None}
     >>> config_hash(RockmassConfig()) == config_hash(empty)
     True
     """

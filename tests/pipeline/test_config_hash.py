@@ -14,7 +14,7 @@ from rockmass.config import FractalConfig, RockmassConfig, canonical_json, confi
 # Written by hand from the documented defaults: the independent answer.
 DEFAULT_FRACTAL_CANONICAL = (
     '{"blocks":null,"dfn":null,"fractal":{"grid":360,"invert":false,"line_rule":"supercover","method":"raster",'
-    '"n_offsets":8,"range_px":null,"skeletonize":"auto","threshold":null},"imaging":null}'
+    '"n_offsets":8,"range_px":null,"skeletonize":"auto","threshold":null},"imaging":null,"solve":null}'
 )
 
 
