@@ -14,6 +14,7 @@ target size² and the same invariants.
 from __future__ import annotations
 
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -55,6 +56,8 @@ def crack_case(n_parents: int, pattern: str):
 def main(quick: bool = False) -> None:
     from rockmass.blockgen import check_model
 
+    load = os.getloadavg()[0]  # other work on the machine inflates every time below
+
     sizes = [(1_000, 3), (10_000, 3), (100_000, 1)] if not quick else [(1_000, 1), (10_000, 1)]
     rows = []
     for n, repeat in sizes:
@@ -76,7 +79,7 @@ def main(quick: bool = False) -> None:
             ("check_s", ".3f"), ("convex_splits", "d"), ("slivers_merged", "d"),
             ("edges_snapped", "d"), ("short_edges_left", "d"), ("area_balance", ".2e"),
             ("invariants_ok", "s")]
-    print(header(title))
+    print(header(title) + f"\nload average (1 min) at start: {load:.2f}")
     print(table(rows, cols))
     crack_rows = []
     crack_sizes = [(1_000, 1), (10_000, 0)] if not quick else [(1_000, 0)]
@@ -107,8 +110,8 @@ def main(quick: bool = False) -> None:
     print()
     print(crack_title)
     print(table(crack_rows, crack_cols))
-    save("bench_blockgen", {"title": title, "rows": rows, "cracks_title": crack_title,
-                            "cracks_rows": crack_rows})
+    save("bench_blockgen", {"title": title, "load_average_1min": load, "rows": rows,
+                            "cracks_title": crack_title, "cracks_rows": crack_rows})
 
 
 if __name__ == "__main__":

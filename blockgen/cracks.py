@@ -170,7 +170,7 @@ def _badness(pieces, parents, sliver_width_m, min_edge_m, near_m):
     return np.minimum(score, edge_score)
 
 
-def _voronoi_all(polys, groups, seeds, tol, stats):
+def _voronoi_all(polys, groups, seeds, tol, stats, spacing_m):
     """Crack segments of many parents at once; parents with a bad piece go to
     :func:`_voronoi_parent` (seed removal). Returns (segments, number of subdivided parents)."""
     par = np.array([g[0] for g in groups])
@@ -191,7 +191,7 @@ def _voronoi_all(polys, groups, seeds, tol, stats):
         n_sub += len(good)
         stats["n_pieces"] += int(sizes[good].sum())
     for g in np.flatnonzero(bad).tolist():
-        segs, n = _voronoi_parent(polys[par[g]], seeds[groups[g][1]], tol, stats)
+        segs, n = _voronoi_parent(polys[par[g]], seeds[groups[g][1]], tol, stats, spacing_m)
         if len(segs):
             out.append(segs)
             n_sub += 1
@@ -211,18 +211,30 @@ def _lines_to_segments(geoms) -> np.ndarray:
     return out[np.any(out[:, 0] != out[:, 1], axis=1)]
 
 
-def _voronoi_parent(poly, pts, tol, stats):
-    """Crack segments of one parent from its seed points (seeds of bad pieces removed)."""
+def _voronoi_parent(poly, pts, tol, stats, spacing_m):
+    """Crack segments of one parent from its seed points (seeds of bad pieces removed).
+
+    Each round removes the seed of the worst bad piece and of every other bad piece whose seed is
+    farther than ``3·spacing_m`` from the seeds already chosen in that round (a seed's removal only
+    changes the cells next to it), so a large parent needs few rounds.
+    """
     while len(pts) >= 2:
         cells = shapely.get_parts(shapely.voronoi_polygons(shapely.multipoints(pts), extend_to=poly,
                                                            ordered=True))
         pieces = shapely.intersection(cells, poly)
         bad = _badness(pieces, poly, *tol)
-        worst = int(np.argmin(bad))
-        if bad[worst] >= 1:
+        order = np.argsort(bad, kind="stable")
+        order = order[bad[order] < 1]
+        if not len(order):
             break
-        pts = np.delete(pts, worst, axis=0)
-        stats["seeds_removed"] += 1
+        chosen = []
+        for k in order.tolist():
+            if all(math.dist(pts[k], pts[c]) > 3 * spacing_m for c in chosen):
+                chosen.append(k)
+        if len(pts) - len(chosen) < 1:
+            chosen = chosen[:1]
+        pts = np.delete(pts, chosen, axis=0)
+        stats["seeds_removed"] += len(chosen)
     if len(pts) < 2:
         return np.empty((0, 2, 2)), 1
     edges = shapely.voronoi_polygons(shapely.multipoints(pts), extend_to=poly, only_edges=True)
@@ -279,16 +291,14 @@ def _triangular_parent(poly, cracks, origin, tol, stats):
     geom = {g: pieces[g] for g in members}
     blocked = set()
 
-    while True:
-        if len(members) < 2:
+    ids0 = list(members)
+    score = dict(zip(ids0, _badness(np.array([geom[g] for g in ids0], dtype=object), poly, *tol)
+                     .tolist())) if ids0 else {}
+    while len(members) > 1:
+        open_ = [g for g in members if g not in blocked and score[g] < 1]
+        if not open_:
             break
-        ids = [g for g in members if g not in blocked]
-        if not ids:
-            break
-        bad = _badness(np.array([geom[g] for g in ids], dtype=object), poly, *tol)
-        if bad.min() >= 1:
-            break
-        g = ids[int(np.argmin(bad))]
+        g = min(open_, key=lambda k: score[k])
         ga, gb = group[pairs[:, 0]], group[pairs[:, 1]]
         across = (ga != gb) & ((ga == g) | (gb == g))
         lengths = {}
@@ -314,6 +324,8 @@ def _triangular_parent(poly, cracks, origin, tol, stats):
         members[g] += members.pop(o)
         geom[g] = union
         geom.pop(o)
+        score.pop(o)
+        score[g] = float(_badness(np.array([union], dtype=object), poly, *tol)[0])
         stats["pieces_merged"] += 1
     keep = group[pairs[:, 0]] != group[pairs[:, 1]]
     return _lines_to_segments(clipped[keep]), len(members)
@@ -355,7 +367,8 @@ def crack_segments(faces, parents, cracks: Cracks, rng, sliver_width_m: float, m
         groups = [(int(fs[0]), ps) for fs, ps in zip(np.split(f, split), np.split(p, split))
                   if len(ps) >= 2]
         if groups:
-            out, stats["n_subdivided"] = _voronoi_all(polys, groups, seeds, tol, stats)
+            spacing = cracks.size_m * math.sqrt(2 / math.sqrt(3))
+            out, stats["n_subdivided"] = _voronoi_all(polys, groups, seeds, tol, stats, spacing)
     else:
         stats["pieces_merged"] = 0
         stats["slivers_kept"] = 0
