@@ -9,6 +9,10 @@
      "contacts": [{"blocks": [i, j], "length_m": l, "kind": "joint", "source": 0}, ...],
      "quality": {...}}
 
+A contact's ``source`` is the joint-set index (``joint``), the trace index (``trace``), the stage
+(``excavation``), ``-1`` (``domain``); for ``glued`` the extended set or trace index, ``-2`` for a
+convex-decomposition cut and ``-3`` for a potential crack (:data:`rockmass.blockgen.SOURCE_CRACK`).
+
 Floats are written with Python's shortest round-trip repr, so reading the file rebuilds the same
 arrays bit for bit and writing again gives the same text. Areas are written for readers; they are
 recomputed from the vertices on reading.
