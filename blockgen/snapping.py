@@ -12,13 +12,15 @@ Rule for one edge ``(u, v)`` of length < ``min_edge_m`` (shortest first):
    the outline turns is a corner and never moves). Candidate targets, in order: the midpoint (when
    neither end is pinned), ``u``, ``v``.
 2. **Accepted** when, for every block touching ``u`` or ``v``: the new ring is convex (no reflex
-   vertex beyond ``reflex_sin`` and ``reflex_m``) with positive area, or has collapsed to nothing (a triangle on the
-   edge, its area passing to its neighbours); and the area of these blocks, summed per region, is
-   unchanged (to 1e-12 relative) — so the domain and every excavation stage keep their areas
-   exactly, and no block overlaps another. Otherwise the next candidate is tried; an edge with no
-   acceptable candidate is left and listed.
+   vertex beyond ``reflex_sin`` and ``reflex_m``) with positive area, or has collapsed to nothing
+   (a triangle on the edge, its area passing to its neighbours); and the area of these blocks,
+   summed per region, is unchanged (to 1e-12 relative) — so the domain and every excavation stage
+   keep their areas exactly, and no block overlaps another. Otherwise the next candidate is tried;
+   an edge with no acceptable candidate is left and listed. The midpoint is rounded to the noding
+   grid (every node lies on it).
 3. Blocks changed by an accepted collapse wait for the next pass (their geometry changed); passes
-   repeat until nothing changes.
+   repeat until nothing changes. The blocks are rebuilt locally from their new rings (no new
+   polygonisation); the builder then re-checks convexity.
 
 Every collapse is reported (``quality["edges_snapped"]``): the edge length, both old nodes, the new
 point, the blocks involved and the kinds of the lines that moved. Lines keep their labels: a joint
