@@ -40,7 +40,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .generation import FisherOrientation, FractureSetSpec, IntensityP32
+from .generation import (
+    BootstrapOrientation,
+    FisherOrientation,
+    FractureSetSpec,
+    IntensityP32,
+)
 from .orientation import _as_vectors, dip_from_normal, normal_from_dip
 from .sampling import plane_frame
 from .scanline import Scanline
@@ -122,16 +127,28 @@ class FittedSet:
     size: SizeFit | None
     n_traces: int
     name: str = ""
+    poles: np.ndarray | None = field(default=None, repr=False)
 
-    def spec(self, size: object | None = None, *, n_vertices: int = 16) -> FractureSetSpec:
-        """The :class:`FractureSetSpec` to generate this set (``size`` overrides the fitted law)."""
+    def spec(self, size: object | None = None, *, orientation: str = "fisher", n_vertices: int = 16) -> FractureSetSpec:
+        """The :class:`FractureSetSpec` to generate this set.
+
+        ``size`` overrides the fitted radius law; ``orientation`` is ``"fisher"`` (the fitted mean and
+        κ) or ``"bootstrap"`` (the set's measured poles resampled, :class:`BootstrapOrientation`).
+        """
         size = size if size is not None else (self.size.size if self.size is not None and self.size.ok else None)
         if size is None:
             raise ValueError(f"set {self.name!r}: no size law was fitted (no traces on any face); give one")
         if not self.p32 > 0:
             raise ValueError(f"set {self.name!r}: fitted P32 is 0 (no intersections or traces of this set)")
-        return FractureSetSpec(FisherOrientation(self.mean_dip_deg, self.mean_dip_direction_deg, self.kappa),
-                               size, IntensityP32(self.p32), name=self.name, n_vertices=n_vertices)
+        if orientation == "fisher":
+            model = FisherOrientation(self.mean_dip_deg, self.mean_dip_direction_deg, self.kappa)
+        elif orientation == "bootstrap":
+            if self.poles is None or len(self.poles) == 0:
+                raise ValueError(f"set {self.name!r}: no measured poles to bootstrap from")
+            model = BootstrapOrientation(self.poles)
+        else:
+            raise ValueError(f"orientation must be 'fisher' or 'bootstrap', got {orientation!r}")
+        return FractureSetSpec(model, size, IntensityP32(self.p32), name=self.name, n_vertices=n_vertices)
 
     def as_dict(self) -> dict:
         """JSON-ready (no NaN)."""
@@ -173,9 +190,11 @@ class FieldFit:
     face_membership: tuple
     size_fits: tuple = field(default=())
 
-    def specs(self, sizes: Sequence[object | None] | None = None, *, n_vertices: int = 16) -> list[FractureSetSpec]:
+    def specs(self, sizes: Sequence[object | None] | None = None, *, orientation: str = "fisher",
+              n_vertices: int = 16) -> list[FractureSetSpec]:
+        """:meth:`FittedSet.spec` of every set (``sizes``: one override or None per set)."""
         sizes = [None] * len(self.sets) if sizes is None else list(sizes)
-        return [s.spec(z, n_vertices=n_vertices) for s, z in zip(self.sets, sizes)]
+        return [s.spec(z, orientation=orientation, n_vertices=n_vertices) for s, z in zip(self.sets, sizes)]
 
     def as_dict(self) -> dict:
         return {"n_sets": len(self.sets), "selected_by": self.joint_sets.selected_by,
@@ -373,5 +392,6 @@ def fit_field(scanlines: Scanline | Sequence[Scanline], faces: FaceSurvey | Sequ
             kappa_sd=kappa / np.sqrt(max(n_poles - 1, 1)),
             alpha95_deg=float(fit.alpha95_deg) if fit is not None else float("nan"), n_poles=n_poles,
             p32=p32, p32_sd=p32_sd, p32_chi2=chi2, p32_dof=dof, n_observations=n_obs,
-            size=fits.get("best"), n_traces=int(sum(c.n_traces for c in samples)), name=names[s]))
+            size=fits.get("best"), n_traces=int(sum(c.n_traces for c in samples)), name=names[s],
+            poles=poles[joint_sets.membership == s]))
     return FieldFit(tuple(sets), joint_sets, scan_member, face_member, tuple(size_fits))

@@ -106,7 +106,7 @@ def _fit_sets(config_path, cfg):
         raise InputError(f"{config_path}: dfn.fit: {exc}") from exc
     size = None if fit_cfg.size is None else size_from_config(fit_cfg.size)
     try:
-        specs = fit.specs([size] * len(fit.sets))
+        specs = fit.specs([size] * len(fit.sets), orientation=fit_cfg.orientation)
     except ValueError as exc:
         raise InputError(f"{config_path}: dfn.fit: {exc} (give dfn.fit.size or faces with traces of every "
                          "set)") from exc

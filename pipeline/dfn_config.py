@@ -32,6 +32,7 @@ Instead of ``[[dfn.sets]]``, ``[dfn.fit]`` fits the sets from field data (:func:
     scanlines = ["scanline_seed001.csv"]   # relative to this file; trend / plunge / length in each
     n_sets = 3                             # optional: default by BIC
     size_family = "best"                   # power_law | lognormal | exponential | best (AIC)
+    orientation = "fisher"                 # or "bootstrap": resample each set's measured poles
     r_max_m = 40.0                         # power-law upper truncation of the fitted radii
     validate = true                        # re-sample every realization like the field data
 
@@ -262,6 +263,8 @@ class FitConfig(StrictModel):
         Trace ends closer than this to a window edge are censored (default 1e-9 of the window size).
     size : size table, optional
         Radius law for every set when no face is given (or to override the fitted one).
+    orientation : {"fisher", "bootstrap"}, default "fisher"
+        Generate each set from its fitted Fisher law, or by resampling its measured poles.
     validate : bool, default false
         Re-sample every realization with the field geometry and write ``validation.json``.
     """
@@ -273,6 +276,7 @@ class FitConfig(StrictModel):
     r_max_m: Length = 100.0
     boundary_tolerance_m: float | None = Field(None, ge=0, le=1e3)
     size: SizeTable | None = None
+    orientation: Literal["fisher", "bootstrap"] = "fisher"
     validate_: bool = Field(False, alias="validate")
 
     @model_validator(mode="after")

@@ -131,3 +131,17 @@ def test_face_without_traces_of_a_set_still_gives_its_p32():
     s = fit.sets[0]
     assert s.p32 > 0 and np.isfinite(s.p32_sd) and s.n_observations == 2
     assert abs(s.p32 - net.p32(0)) <= 3 * s.p32_sd
+
+
+def test_bootstrap_specs_generate_only_the_measured_poles_of_each_set(loops):
+    fit = loops[0].fit
+    specs = fit.specs(orientation="bootstrap")
+    net = generate(specs, [0, 0, 0, 15, 15, 15], seed=5)
+    for j, s in enumerate(fit.sets):
+        normals = net.normal[net.set_id == j]
+        assert normals.shape[0] > 10
+        # every generated normal is (up to sign) one of the set's measured poles
+        assert np.allclose(np.abs(normals @ s.poles.T).max(axis=1), 1.0, atol=1e-12)
+    assert sum(s.poles.shape[0] for s in fit.sets) == loops[0].n_hits
+    with pytest.raises(ValueError, match="orientation"):
+        fit.sets[0].spec(orientation="kent")
