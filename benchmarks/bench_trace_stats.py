@@ -8,7 +8,8 @@
    (REFERENCE.md §3; Mauldon et al. 2001; Santaló 1976 for the crossing density):
 
    - P21 = λ L, P20 (end-counting rule, m / 2A) = λ;
-   - Mauldon on the inscribed circle: P21 = λ L, P20 = λ, mean trace length = L;
+   - Mauldon on the inscribed circle: P21 = λ L, P20 = λ, mean trace length = L; the same pooled
+     over the disjoint circles :func:`rockmass.dfn.mauldon.inscribed_circles` places in a 3:1 strip;
    - X nodes per area = Σ_{j<k} λ_j λ_k L² E|sin(θ_j - θ_k)| + Σ_k ½ λ_k² L² E|sin(θ - θ')|
      (E|sin| of two independent draws, here by quadrature over the two von Mises laws);
    - joint sets: 2 sets (BIC), means μ_k, circular spread ½ √(-2 ln A1(κ_k)) with A1 = I1 / I0.
@@ -121,6 +122,17 @@ def poisson_rows(n_expected: int, seed: int, repeat: int) -> list[dict]:
                     2 * np.sqrt(circle_n) / (2 * np.pi * r * r), "1/m²"))
     rows.append(row(n_expected, "Mauldon mean length", first, warm, ma.mean_length_m, LENGTH_M,
                     LENGTH_M * np.sqrt(1 / (4 * r * density * LENGTH_M) + 1 / circle_n), "m"))
+    # a 3:1 strip of the map: three disjoint circles of 0.9 x its half-width, counts pooled
+    from rockmass.dfn.mauldon import mauldon_circles
+
+    strip = [(0.0, 0.0), (side, 0.0), (side, side / 3), (0.0, side / 3)]
+    first, warm, mp = timed(lambda: mauldon_circles(tm, window=strip, tolerance_m=tol), repeat)
+    k, rc = mp.n_circles, mp.radius_m
+    pooled_m = density * np.pi * rc * rc * k
+    rows.append(row(n_expected, f"Mauldon P21, {k} circles in 3:1", first, warm, mp.p21_per_m,
+                    density * LENGTH_M, np.sqrt(4 * k * rc * density * LENGTH_M) / (4 * k * rc), "m/m²"))
+    rows.append(row(n_expected, f"Mauldon P20, {k} circles in 3:1", first, warm, mp.p20_per_m2, density,
+                    2 * np.sqrt(pooled_m) / (2 * np.pi * k * rc * rc), "1/m²"))
     first, warm, topo = timed(lambda: trace_topology(tm, snap_tolerance_m=tol), repeat)
     x_expected = expected_crossings_per_area(density) * area
     rows.append(row(n_expected, "X nodes", first, warm, float(topo.n_x), x_expected,
