@@ -227,7 +227,7 @@ def _update_slot(S, p, k, prop, delta, dus, length, E):
                 ddil = min(prop[P_TANPSI] * dup, prop[P_MAXDIL] - S[p, k, DIL])
                 S[p, k, DIL] += ddil
             S[p, k, USP] += dup
-            S[p, k, SLIP] = 1.0
+            S[p, k, SLIP] = 1.0 if sig > 0.0 else 0.0  # an unloaded touch is not a slipping joint
             E[E_SLIP] += (released - sig * ddil) * length
         S[p, k, TAU] = tau
         S[p, k, FN] = sig * length
@@ -509,7 +509,7 @@ def contact_forces(wv, off, pos, vel, omg, radius, still, pa, pb, pprop, pref, p
             S[p, k, NY] = ny
             fn = S[p, k, FN]
             fs = S[p, k, FS]
-            if beta > 0.0 and fn > 0.0:
+            if beta > 0.0 and fn != 0.0:  # closed contacts, glued ones in tension included
                 vn = vrx * nx + vry * ny
                 vt = vrx * tx + vry * ty
                 fn -= beta * prop[P_KN] * length * vn
