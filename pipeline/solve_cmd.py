@@ -6,7 +6,8 @@ the same file (built as ``rockmass blocks`` builds it). Writes under ``--out``:
 - ``result.json``: the run's status and diagnostic, per stage (steps, time step, simulated time,
   convergence, unbalanced-force ratio, maximum displacements, slipping / open / broken contacts,
   detached blocks, energy ledger), the block kinetic energy vs volume table (seed 001 Fig. 7),
-  per monitor its block and displacement at the end of each stage, the frame list and timings;
+  per monitor its block, its displacement at the end of each stage and the largest plastic
+  (slip) displacement on its contacts at the end, the frame list and timings;
 - ``history.csv``: the monitored blocks over time (one column per quantity);
 - ``blocks_NNNN.vtu`` per frame and ``blocks.pvd`` (ParaView time series): the polygons placed at
   each frame's positions and rotations, cell data ``displacement`` and ``velocity`` (3-vectors,
@@ -160,6 +161,12 @@ def _monitor_summary(result, model, settings) -> dict:
             if final is not None:
                 entry["final_ux_m"], entry["final_uy_m"] = final["ux_m"], final["uy_m"]
                 entry["final_displacement_m"] = final["displacement_m"]
+        c = result.contacts or {}
+        if len(c.get("block_a", ())):
+            mine = (np.asarray(c["block_a"]) == block) | (np.asarray(c["block_b"]) == block)
+            slip = np.abs(np.asarray(c["plastic_slip_m"])[mine])
+            entry["contacts_at_end"] = int(mine.sum())
+            entry["max_contact_plastic_slip_m"] = float(slip.max(initial=0.0))
         out[m.name] = entry
     return out
 

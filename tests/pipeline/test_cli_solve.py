@@ -170,6 +170,7 @@ def test_sine_input_starts_with_the_dynamic_stage(tiny_run):
     result = json.loads((out / "result.json").read_text())
     base = result["monitors"]["base"]
     assert base["block"] == 0
+    assert base["contacts_at_end"] >= 1 and base["max_contact_plastic_slip_m"] >= 0.0
     shake = base["stages"][-1]
     assert abs(shake["ux_m"]) < 1e-6
     # peak table displacement 2 A / (2 pi f) = 0.8 mm was reached during the stage
