@@ -54,15 +54,18 @@ def chain_column(n: int, s: float = 1.0, width: float = 1.0, soft_joint: int | N
 # ------------------------------------------------------------ continuously yielding joint --
 def cy_branch(tau0: float, phi0: float, d: int, r: float, s_eval: np.ndarray, sigma_n: float,
               ks: float, phi_b: float, rough: float):
-    """τ and φ_m along one monotonic branch of the CY joint (seed 001 eqs. 6–12) at constant σ_n.
+    """τ, φ_m and the dilation along one monotonic branch of the CY joint (seed 001 eqs. 6–13) at
+    constant σ_n.
 
     ``s_eval``: path lengths |Δu| from the start of the branch (increasing), ``d`` = ±1 the
     direction, ``r`` the reversal factor (0 on the first loading, τ/τ_m · d at a reversal).
     Below the bounding strength: dτ/ds = d F k_s, F = (1 − dτ/τ_m)/(1 − r), τ_m = σ_n tan φ_m,
     dφ_m/ds = −(φ_m − φ_b)(1 − F)/R, integrated with scipy's DOP853 at rtol 1e-11 up to the event
     dτ = τ_m. On the bound F = 0, so φ_m = φ_b + (φ_m* − φ_b) exp(−(s − s*)/R) in closed form and
-    τ = d σ_n tan φ_m. Returns (τ(s), φ_m(s), s*, τ(s*)); s* = inf (τ(s*) = τ at the end) if the
-    bound is not reached.
+    τ = d σ_n tan φ_m. The dilation grows by tan i du_p with i = atan(|τ|/σ_n) − φ_b (eq. 13, no
+    contraction when i < 0) and du_p = (1 − F) ds (eq. 11), integrated alongside (on the bound
+    tan i = tan(φ_m − φ_b)). Returns (τ(s), φ_m(s), dilation(s) from the branch start, s*, τ(s*));
+    s* = inf (τ(s*) = τ at the end) if the bound is not reached.
     """
     from scipy.integrate import solve_ivp
 
@@ -70,10 +73,16 @@ def cy_branch(tau0: float, phi0: float, d: int, r: float, s_eval: np.ndarray, si
     s_end = float(s_eval.max(initial=0.0))
 
     def rhs(_s, y):
-        tau, phi = y
+        tau, phi, _dil = y
         tm = sigma_n * math.tan(phi)
         f = (1.0 - d * tau / tm) / (1.0 - r)
-        return [d * f * ks, -(phi - phi_b) * (1.0 - f) / rough]
+        ang = math.atan(abs(tau) / sigma_n) - phi_b
+        return [d * f * ks, -(phi - phi_b) * (1.0 - f) / rough,
+                math.tan(ang) * (1.0 - f) if ang > 0 else 0.0]
+
+    def rhs_bound(_s, y):
+        phi, _dil = y
+        return [-(phi - phi_b) / rough, math.tan(phi - phi_b)]
 
     def bound(_s, y):
         return sigma_n * math.tan(y[1]) - d * y[0]
@@ -82,21 +91,26 @@ def cy_branch(tau0: float, phi0: float, d: int, r: float, s_eval: np.ndarray, si
     bound.direction = -1
     tau = np.empty_like(s_eval)
     phi = np.empty_like(s_eval)
+    dil = np.empty_like(s_eval)
     if s_end <= 0.0:
-        tau[:], phi[:] = tau0, phi0
-        return tau, phi, math.inf, tau0
-    sol = solve_ivp(rhs, (0.0, s_end), [tau0, phi0], method="DOP853", rtol=1e-11,
-                    atol=[1e-6 * sigma_n, 1e-14], events=bound, dense_output=True)
+        tau[:], phi[:], dil[:] = tau0, phi0, 0.0
+        return tau, phi, dil, math.inf, tau0
+    sol = solve_ivp(rhs, (0.0, s_end), [tau0, phi0, 0.0], method="DOP853", rtol=1e-11,
+                    atol=[1e-6 * sigma_n, 1e-14, 1e-15], events=bound, dense_output=True)
     hit = sol.t_events[0]
     s_hit = float(hit[0]) if len(hit) else math.inf
     below = s_eval <= s_hit
-    tau[below], phi[below] = sol.sol(s_eval[below])
+    tau[below], phi[below], dil[below] = sol.sol(s_eval[below])
     tau_hit = sol.y[0, -1]
     if len(hit):
-        tau_hit, phi_hit = sol.y_events[0][0]
+        tau_hit, phi_hit, dil_hit = sol.y_events[0][0]
         phi[~below] = phi_b + (phi_hit - phi_b) * np.exp(-(s_eval[~below] - s_hit) / rough)
         tau[~below] = d * sigma_n * np.tan(phi[~below])
-    return tau, phi, s_hit, tau_hit
+        if s_end > s_hit:
+            on = solve_ivp(rhs_bound, (s_hit, s_end), [phi_hit, dil_hit], method="DOP853",
+                           rtol=1e-11, atol=[1e-14, 1e-15], dense_output=True)
+            dil[~below] = on.sol(s_eval[~below])[1]
+    return tau, phi, dil, s_hit, tau_hit
 
 
 # ----------------------------------------------------------------- discrete chain waves --
