@@ -212,7 +212,8 @@ def run(args) -> int:
         manifest_path = stack.enter_context(atomic_path(out / "manifest.json"))
         timings["write_s"] = time.perf_counter() - t0
         manifest = build_manifest(
-            command=args.argv, config=document, inputs=[args.config],
+            command=args.argv, config=document,
+            inputs=[args.config] + ([] if document.dfn.fit is None else document.dfn.fit.field_files(args.config)),
             seeds={"root": seed, "realizations": [r[0] for r in results],
                    "rule": "realization i: SeedSequence(root, spawn_key=(i,)); set j: spawn_key (i, j)"},
             timings_s=timings,

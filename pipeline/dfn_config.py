@@ -277,7 +277,15 @@ class FitConfig(StrictModel):
     boundary_tolerance_m: float | None = Field(None, ge=0, le=1e3)
     size: SizeTable | None = None
     orientation: Literal["fisher", "bootstrap"] = "fisher"
+    # ``validate`` is a (deprecated) BaseModel method, so the field is ``validate_`` with the key as alias,
+    # and dumps (the run manifest) use the alias too
+    model_config = {**StrictModel.model_config, "serialize_by_alias": True}
     validate_: bool = Field(False, alias="validate")
+
+    def field_files(self, config_path) -> list[Path]:
+        """Every scanline and face file, resolved against the config's folder."""
+        return [self.path(n, config_path) for n in self.scanlines] + \
+            [self.path(f.file, config_path) for f in self.faces]
 
     @model_validator(mode="after")
     def _sizes_known(self) -> FitConfig:

@@ -92,6 +92,9 @@ def test_fit_run_writes_fitted_json_and_validation_per_realization(fitted_run):
     assert names == ["fitted.json", "manifest.json", "realization_0000", "realization_0001"]
     assert sorted(p.name for p in (fitted_run / "realization_0001").iterdir()) == \
         ["fractures.csv", "fractures.vtu", "summary.json", "validation.json"]
+    manifest = json.loads((fitted_run / "manifest.json").read_text())
+    assert len(manifest["inputs"]) == 1 + len(SCANLINES) + len(FACES)      # the config and every field file
+    assert manifest["config"]["dfn"]["fit"]["validate"] is True             # the key as written in TOML
     fitted = json.loads((fitted_run / "fitted.json").read_text())   # strict JSON: no NaN
     assert fitted["n_sets"] == 3
     for s in fitted["sets"]:
