@@ -1,0 +1,225 @@
+"""``rockmass study CONFIG --out DIR [--workers N] [--scheduler ADDRESS]``: many cases of one chain.
+
+CONFIG is a rockmass config (its ``[blocks]``, ``[solve]``, ``[fractal]``, ... sections are the
+*base*) with a ``[study]`` section (:mod:`rockmass.study_config`) that varies fields over a grid
+and/or a list, with a number of realizations (seeds). Each case builds its block model, box-counts
+its joint network (D_box with R², P21) and runs its DEM stages (:mod:`rockmass.study`).
+
+Writes under ``--out``:
+
+- ``cases/<case id>/case.json``: one per finished case (its config, parameters, seed, every value
+  measured, timings), written atomically as the case finishes;
+- ``results.csv``: one row per finished case in case order, rebuilt (atomically) after every case;
+- ``report.html``: self-contained (images embedded): D_box against the maximum displacement coloured
+  by θ (Jiang et al., seed 000 Figs. 7–8), the spread over realizations, the table;
+- ``manifest.json``: command, config and its hash, seeds, executor, counts, timings.
+
+Every case is validated before any runs (exit 2 naming the study field and the case). Re-running
+the same study skips every finished case (same case id = hash of the resolved case config). Cases
+that fail are recorded with their error, the others go on; the exit code is then 1 and a re-run
+retries only the failed and missing cases.
+
+Executors: ``--scheduler ADDRESS`` (or the ``DASK_SCHEDULER_ADDRESS`` environment variable) runs on
+a Dask cluster (``pip install rockmass[dask]``; the workers need rockmass installed); otherwise a
+local pool of ``--workers`` processes (default: the number of CPUs), or serially with
+``--workers 1``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+
+from .errors import InputError, RunError
+
+__all__ = ["add_parser", "run"]
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 1, got {value}")
+    return value
+
+
+def add_parser(subparsers) -> argparse.ArgumentParser:
+    """Register the ``study`` subcommand."""
+    p = subparsers.add_parser(
+        "study", help="run a study (grid / list of config fields x realizations) locally or on Dask",
+        description="Run the chain (blocks, box counting, DEM) for every case of a [study] "
+                    "section: results.csv, per-case folders, report.html and manifest.json. "
+                    "Resumable: finished cases are skipped.")
+    p.add_argument("config", help="TOML file with the base sections and a [study] section")
+    p.add_argument("--out", required=True, help="study folder (results.csv, cases/, report.html, "
+                                                "manifest.json); re-use it to resume")
+    p.add_argument("--workers", type=_positive_int, default=None,
+                   help="local worker processes (default: the number of CPUs; 1 runs serially)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="Dask scheduler address (default: $DASK_SCHEDULER_ADDRESS; without "
+                        "either, cases run locally)")
+    p.add_argument("--list", action="store_true",
+                   help="validate, print the cases (id, parameters, seed, finished or not) and exit")
+    p.add_argument("--json", action="store_true", help="print the study summary as JSON")
+    p.set_defaults(handler=run)
+    return p
+
+
+def _log(message: str) -> None:
+    print(message, file=sys.stderr, flush=True)
+
+
+def _connect(address: str):
+    try:
+        from dask.distributed import Client
+    except ImportError as exc:
+        raise InputError(f"--scheduler {address}: Dask is not installed (pip install "
+                         "'rockmass[dask]')") from exc
+    try:
+        return Client(address, timeout="10s", set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise InputError(f"--scheduler {address}: cannot reach the Dask scheduler: {exc}") from exc
+
+
+def _preflight(case, config_path) -> None:
+    """Build the first pending case's blocks and solver settings: a ``[solve]`` that does not fit
+    the model (an excavation name that is not a region, a selector) is bad input, found before any
+    case runs."""
+    from .study import _build_model
+
+    solve = getattr(case.document, "solve", None)
+    if solve is None:
+        return
+    try:
+        model = _build_model(case.document, config_path)
+    except RunError:
+        return  # a failing case is the case's result, not a config error
+    solve.to_settings(model, config_path)
+
+
+def _params_text(params: dict) -> str:
+    return ", ".join(f"{k.rsplit('.', 1)[-1]}={v}" for k, v in params.items())
+
+
+def run(args) -> int:
+    """Handler of ``rockmass study``."""
+    from .atomic import atomic_write_json, atomic_write_text
+    from .manifest import build_manifest
+    from .outputs import output_folder, print_json
+    from .study import RESULTS_FILE, CASE_FILE, csv_text, load_finished, results_rows, run_tasks
+    from .study_config import expand_cases, load_study
+
+    t_start = time.perf_counter()
+    document, raw = load_study(args.config)
+    cases = expand_cases(document, raw, args.config)
+    study = document.study
+    t_cases = time.perf_counter()
+
+    from pathlib import Path
+
+    out_path = Path(args.out)
+    finished = load_finished(out_path, cases) if out_path.is_dir() else {}
+    pending = [c for c in cases if c.case_id not in finished]
+    if args.list:
+        for c in cases:
+            state = "finished" if c.case_id in finished else "pending"
+            print(f"{c.index:5d}  {c.short_id}  {state:8s}  r={c.realization} seed={c.seed}  "
+                  f"{_params_text(c.params) or '(base)'}")
+        return 0
+
+    scheduler = args.scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS") or None
+    client = None
+    if pending:
+        _preflight(pending[0], args.config)
+        if scheduler is not None:
+            client = _connect(scheduler)
+    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
+    workers = max(1, min(workers, len(pending) or 1))
+
+    config_path = os.path.abspath(args.config)
+    tasks = [{"case": c.index, "case_id": c.case_id, "config": c.raw, "config_path": config_path,
+              "params": c.params, "realization": c.realization, "seed": c.seed} for c in pending]
+    by_id = {c.case_id: c for c in cases}
+    failed: dict[str, dict] = {}
+    counter = {"done": 0}
+    executor = "none"
+    status = "interrupted"
+    with output_folder(args.out) as out:
+        def write_results():
+            header, rows = results_rows(cases, {**finished, **failed}, study.displacement)
+            atomic_write_text(out / RESULTS_FILE, csv_text(header, rows))
+
+        def on_done(result: dict) -> None:
+            case = by_id[result["case_id"]]
+            record = {**result, "case_id": case.case_id, "config": case.raw}
+            atomic_write_json(out / "cases" / case.short_id / CASE_FILE, record, nan_as_null=True)
+            if result["status"] == "ok":
+                finished[case.case_id] = record
+                failed.pop(case.case_id, None)
+            else:
+                failed[case.case_id] = record
+            write_results()
+            counter["done"] += 1
+            d = result.get("d_box")
+            disp = result.get("max_displacement_boundary_m" if study.displacement == "boundary"
+                              else "max_displacement_overall_m")
+            what = (f"D_box {d:.4f}" if d is not None else "D_box -") + \
+                   (f", max displacement {disp * 1e3:.3g} mm" if disp is not None else "")
+            if result["status"] != "ok":
+                what = f"FAILED: {result['error']}"
+            _log(f"[{counter['done']}/{len(pending)}] case {case.index} ({case.short_id}) "
+                 f"{_params_text(case.params)} r={case.realization}: {what} "
+                 f"({result.get('wall_time_s') or 0.0:.1f} s)")
+
+        _log(f"rockmass study: {len(cases)} cases, {len(cases) - len(pending)} already finished "
+             f"(skipped), {len(pending)} to run")
+        write_results()
+        t_run = time.perf_counter()
+        try:
+            executor = run_tasks(tasks, on_done, workers=workers, scheduler=scheduler,
+                                 client=client)
+            status = "complete" if not failed else "failed cases"
+        finally:
+            if client is not None:
+                client.close()
+            t_end = time.perf_counter()
+            from .study_report import write_report
+
+            summary = {"cases": len(cases), "finished": len(finished), "failed": len(failed),
+                       "skipped": len(cases) - len(pending), "ran": counter["done"],
+                       "executor": executor, "status": status}
+            try:
+                write_report(out / "report.html", document, cases, finished, failed, summary,
+                             args.config)
+            except Exception as exc:  # noqa: BLE001 - a report problem must not hide the results
+                _log(f"rockmass study: report.html not written: {type(exc).__name__}: {exc}")
+            manifest = build_manifest(
+                command=args.argv if hasattr(args, "argv") else ["rockmass", "study"],
+                config=document, inputs=[args.config, *sorted({p for c in cases for p in c.inputs})],
+                seeds={"root": study.seed, "realizations": study.realizations,
+                       "rule": "realization r: 63 bits of SeedSequence(root, spawn_key=(r,)), "
+                               "written into " + ", ".join(study.seed_fields or ["blocks.seed"]),
+                       "by_realization": sorted({(c.realization, c.seed) for c in cases})},
+                timings_s={"cases_s": t_cases - t_start, "run_s": t_end - t_run,
+                           "total_s": t_end - t_start,
+                           "case_wall_time_sum_s": sum(r.get("wall_time_s", 0.0)
+                                                       for r in finished.values())},
+                extra={**summary, "workers": workers if scheduler is None else None,
+                       "scheduler": scheduler,
+                       "case_ids": {c.short_id: c.index for c in cases}})
+            atomic_write_json(out / "manifest.json", manifest)
+    if args.json:
+        print_json(summary)
+    else:
+        print(f"{len(finished)}/{len(cases)} cases finished ({summary['skipped']} skipped, "
+              f"{summary['ran']} run, {len(failed)} failed) with {executor} in "
+              f"{t_end - t_run:.1f} s; {out_path / RESULTS_FILE}, {out_path / 'report.html'}")
+    if failed:
+        raise RunError(f"{len(failed)} of {len(cases)} cases failed (their error is in "
+                       f"results.csv and cases/<id>/case.json); re-run the same command to retry "
+                       "them")
+    return 0

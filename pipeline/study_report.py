@@ -1,0 +1,256 @@
+"""``report.html`` of a study: one self-contained page (PNG images embedded as base64, no script,
+no network) with
+
+- D_box against the maximum displacement, one colour per value of the colouring field (θ, as in
+  Jiang et al., seed 000 Figs. 7–8): every realization as a dot, the mean of each parameter
+  combination with ± one standard deviation over its realizations in both directions;
+- the spread over realizations: D_box and displacement of every combination;
+- a summary table per combination (mean ± sd, n) and the table of every case (as results.csv).
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import json
+import math
+from collections import OrderedDict
+
+__all__ = ["write_report", "colour_field", "groups"]
+
+
+def colour_field(study, cases) -> str | None:
+    """The field that colours the plots: ``study.colour_by``, else θ when it varies, else the
+    first varying field."""
+    if study.colour_by:
+        return study.colour_by
+    varying = []
+    for c in cases:
+        for p in c.params:
+            if p not in varying:
+                varying.append(p)
+    for p in varying:
+        if p.endswith("theta_deg"):
+            return p
+    return varying[0] if varying else None
+
+
+def _value(case, path):
+    from .study_config import get_path
+
+    if path in case.params:
+        return case.params[path]
+    return get_path(case.raw, path)
+
+
+def _label(value) -> str:
+    if isinstance(value, float) and value.is_integer():
+        return f"{value:g}"
+    return json.dumps(value) if isinstance(value, (list, dict)) else str(value)
+
+
+def groups(cases, records: dict) -> "OrderedDict[str, list]":
+    """Parameter combination (the case's params as text) -> [(case, record)] over realizations."""
+    out: OrderedDict[str, list] = OrderedDict()
+    for c in cases:
+        rec = records.get(c.case_id)
+        if rec is None:
+            continue
+        key = json.dumps(c.params, sort_keys=True)
+        out.setdefault(key, []).append((c, rec))
+    return out
+
+
+def _mean_sd(values):
+    vals = [v for v in values if v is not None and math.isfinite(v)]
+    if not vals:
+        return None, None, 0
+    m = sum(vals) / len(vals)
+    sd = math.sqrt(sum((v - m) ** 2 for v in vals) / (len(vals) - 1)) if len(vals) > 1 else 0.0
+    return m, sd, len(vals)
+
+
+def _png(fig) -> str:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
+    return base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def _disp_key(study) -> str:
+    return "max_displacement_boundary_m" if study.displacement == "boundary" else \
+        "max_displacement_overall_m"
+
+
+def _figures(study, cases, finished) -> list[tuple[str, str]]:
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    figs = []
+    key = _disp_key(study)
+    cfield = colour_field(study, cases)
+    grouped = groups(cases, finished)
+    has_disp = any(r.get(key) is not None for r in finished.values())
+    colour_values = []
+    for c in cases:
+        v = _label(_value(c, cfield)) if cfield else "all"
+        if v not in colour_values:
+            colour_values.append(v)
+    cmap = plt.get_cmap("tab10")
+    colours = {v: cmap(i % 10) for i, v in enumerate(colour_values)}
+    cname = (cfield or "").rsplit(".", 1)[-1]
+    symbol = "θ" if cname == "theta_deg" else cname
+
+    # 1. D_box vs maximum displacement (seed 000 Figs. 7-8)
+    fig, ax = plt.subplots(figsize=(7.0, 5.0))
+    ylab = f"maximum displacement {'around the excavation' if study.displacement == 'boundary' else ''} (mm)"
+    series: dict[str, list] = {}
+    for members in grouped.values():
+        c0 = members[0][0]
+        cv = _label(_value(c0, cfield)) if cfield else "all"
+        ds = [r.get("d_box") for _, r in members]
+        ys = [r.get(key) if has_disp else r.get("p21_per_m") for _, r in members]
+        scale = 1e3 if has_disp else 1.0
+        pts = [(d, y * scale) for d, y in zip(ds, ys) if d is not None and y is not None]
+        if not pts:
+            continue
+        ax.scatter([p[0] for p in pts], [p[1] for p in pts], s=12, alpha=0.35,
+                   color=colours[cv], linewidths=0)
+        md, sd_d, _ = _mean_sd([p[0] for p in pts])
+        my, sd_y, _ = _mean_sd([p[1] for p in pts])
+        ax.errorbar(md, my, xerr=sd_d or None, yerr=sd_y or None, fmt="o", ms=6,
+                    color=colours[cv], capsize=3)
+        series.setdefault(cv, []).append((md, my))
+    for cv, pts in series.items():
+        pts.sort()
+        ax.plot([p[0] for p in pts], [p[1] for p in pts], "-", color=colours[cv], lw=1.2,
+                label=f"{symbol} = {cv}" + ("°" if cname.endswith("_deg") else ""))
+    ax.set_xlabel("fractal dimension D_box (360 × 360 box counting)")
+    ax.set_ylabel(ylab if has_disp else "P21 (m/m²)")
+    ax.set_title("Maximum displacement versus fractal dimension" if has_disp
+                 else "Joint intensity versus fractal dimension (no [solve] section)")
+    if series:
+        ax.legend(title=None, frameon=False)
+    ax.grid(alpha=0.3)
+    figs.append(("D_box versus maximum displacement, coloured by " + (cfield or "case")
+                 + "; dots: realizations, markers: mean ± sd over realizations", _png(fig)))
+    plt.close(fig)
+
+    # 2. spread over realizations, per combination
+    labels, dvals, yvals, cols = [], [], [], []
+    for gkey, members in grouped.items():
+        c0 = members[0][0]
+        labels.append(_params_short(c0.params) or "base")
+        dvals.append([r.get("d_box") for _, r in members if r.get("d_box") is not None])
+        yvals.append([r.get(key) * 1e3 for _, r in members if r.get(key) is not None])
+        cols.append(colours[_label(_value(c0, cfield)) if cfield else "all"])
+    if labels:
+        panels = 2 if has_disp else 1
+        fig, axes = plt.subplots(panels, 1, figsize=(max(6.0, 0.45 * len(labels) + 2), 2.6 * panels + 1),
+                                 sharex=True, squeeze=False)
+        for ax, vals, name in zip(axes[:, 0], (dvals, yvals), ("D_box", "max displacement (mm)")):
+            for i, (v, col) in enumerate(zip(vals, cols)):
+                ax.scatter([i] * len(v), v, s=14, color=col, alpha=0.7, linewidths=0)
+                m, sd, n = _mean_sd(v)
+                if m is not None:
+                    ax.errorbar(i + 0.18, m, yerr=sd or None, fmt="_", ms=10, color="k", capsize=3)
+            ax.set_ylabel(name)
+            ax.grid(alpha=0.3)
+        axes[-1, 0].set_xticks(range(len(labels)))
+        axes[-1, 0].set_xticklabels(labels, rotation=60, ha="right", fontsize=7)
+        figs.append(("Spread over realizations (dots) with mean ± sd (black) for every parameter "
+                     "combination", _png(fig)))
+        plt.close(fig)
+    return figs
+
+
+def _params_short(params: dict) -> str:
+    return ", ".join(f"{k.rsplit('.', 1)[-1]}={_label(v)}" for k, v in params.items())
+
+
+def _fmt(v, digits=4) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, float):
+        return f"{v:.{digits}g}" if math.isfinite(v) else ""
+    if isinstance(v, (list, dict)):
+        return json.dumps(v)
+    return str(v)
+
+
+def _table(header: list[str], rows: list[list[str]]) -> str:
+    head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>" for r in rows)
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def write_report(path, document, cases, finished: dict, failed: dict, summary: dict,
+                 config_path) -> None:
+    """Write ``report.html`` (atomically)."""
+    from .atomic import atomic_write_text
+    from .study import csv_text, results_rows  # noqa: F401
+
+    study = document.study
+    key = _disp_key(study)
+    figs = _figures(study, cases, finished) if finished else []
+    grouped = groups(cases, finished)
+    srows = []
+    for members in grouped.values():
+        c0 = members[0][0]
+        row = [_params_short(c0.params) or "base", str(len(members))]
+        for k, scale in (("d_box", 1.0), ("d_box_r2", 1.0), ("p21_per_m", 1.0), ("n_blocks", 1.0),
+                         (key, 1e3)):
+            m, sd, n = _mean_sd([(r.get(k) * scale) if r.get(k) is not None else None
+                                 for _, r in members])
+            row.append("" if m is None else f"{m:.4g} ± {sd:.2g}")
+        row.append(f"{sum(1 for _, r in members if r.get('converged') is True)}/{len(members)}")
+        srows.append(row)
+    sheader = ["parameters", "n", "D_box", "R²", "P21 (1/m)", "blocks", "max displacement (mm)",
+               "converged"]
+    header, rows = results_rows(cases, {**finished, **failed}, study.displacement)
+    rows = [[_fmt(float(x)) if _is_float(x) else x for x in r] for r in rows]
+    images = "".join(f'<figure><img alt="{html.escape(cap)}" src="data:image/png;base64,{b64}">'
+                     f"<figcaption>{html.escape(cap)}</figcaption></figure>" for cap, b64 in figs)
+    info = (f"{summary['finished']} of {summary['cases']} cases finished, {summary['failed']} "
+            f"failed, {summary['skipped']} reused from an earlier run; executor: "
+            f"{summary['executor']}; status: {summary['status']}")
+    page = f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>rockmass study report</title>
+<style>
+body {{ font-family: sans-serif; margin: 2em; max-width: 1200px; color: #222; }}
+table {{ border-collapse: collapse; font-size: 12px; margin: 1em 0; }}
+th, td {{ border: 1px solid #ccc; padding: 2px 6px; text-align: right; }}
+th {{ background: #f2f2f2; }}
+figure {{ margin: 1em 0; }} img {{ max-width: 100%; }}
+figcaption {{ font-size: 13px; color: #555; }}
+</style></head><body>
+<h1>rockmass study</h1>
+<p>Config: <code>{html.escape(str(config_path))}</code>. {html.escape(info)}.</p>
+<p>D_box: box counting of the joint network (joint sets and traces clipped to the domain, without
+excavation outlines or dangling-end extensions) rasterised on a {(document.fractal.grid if document.fractal else 360)}
+× {(document.fractal.grid if document.fractal else 360)} grid (Jiang et al. §4.1). Maximum displacement:
+{'of the blocks on the excavation boundary' if study.displacement == 'boundary' else 'of any block'}
+after the last DEM stage, from the initial equilibrium.</p>
+<h2>Plots</h2>
+{images or '<p>No finished case yet.</p>'}
+<h2>Per parameter combination (mean ± sd over realizations)</h2>
+{_table(sheader, srows)}
+<h2>All cases (results.csv)</h2>
+{_table(header, rows)}
+</body></html>
+"""
+    atomic_write_text(path, page)
+
+
+def _is_float(text: str) -> bool:
+    if not text or not any(ch in text for ch in ".e") or text.startswith(("[", "{")):
+        return False
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True

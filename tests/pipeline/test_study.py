@@ -1,0 +1,348 @@
+"""``rockmass study``: cases from a grid / list x realizations, executors, resume, report, bad input."""
+
+from __future__ import annotations
+
+import base64
+import csv
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rockmass.cli import main
+
+SAMPLES = Path(__file__).resolve().parents[2] / "samples"
+
+# a 12 m square with two joint sets and a circular tunnel: about 30 blocks, a few hundred steps
+BASE = """[blocks]
+dangling = "glued"
+[blocks.domain]
+width_m = 12.0
+height_m = 12.0
+origin_xy_m = [-6.0, -6.0]
+[blocks.two_sets]
+alpha_deg = 30.0
+theta_deg = 60.0
+spacing_m = [3.0, 4.0]
+[[blocks.excavations]]
+shape = "circle"
+name = "tunnel"
+center_xy_m = [0.0, 0.0]
+radius_m = 2.0
+n_sides = 12
+
+[fractal]
+n_offsets = 2
+
+[solve]
+[solve.material]
+density_kg_m3 = 2650.0
+[solve.joints.default]
+model = "coulomb"
+kn_pa_m = 1e9
+ks_pa_m = 5e8
+friction_deg = 30.0
+[solve.insitu]
+syy_pa = 1e6
+sxx_pa = 1e6
+[[solve.fixes]]
+where = "bottom"
+dofs = "y"
+[[solve.fixes]]
+where = "left"
+dofs = "x"
+[[solve.fixes]]
+where = "right"
+dofs = "x"
+[[solve.boundary_stress]]
+sides = ["top"]
+from_insitu = true
+[[solve.stages]]
+name = "equilibrium"
+max_steps = 150
+[[solve.stages]]
+name = "tunnel"
+excavate = ["tunnel"]
+max_steps = 250
+"""
+
+STUDY = """
+[study]
+realizations = 2
+seed = 7
+[study.grid]
+blocks.two_sets.theta_deg = [60.0, 90.0]
+"""
+
+
+def _write(tmp_path, text, name="study.toml") -> Path:
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def _rows(path: Path) -> list[dict]:
+    with open(path, newline="", encoding="utf-8") as f:
+        return list(csv.DictReader(f))
+
+
+def _without_time(rows):
+    return [{k: v for k, v in r.items() if k != "wall_time_s"} for r in rows]
+
+
+@pytest.fixture(scope="module")
+def serial_run(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("study")
+    cfg = _write(tmp, BASE + STUDY)
+    out = tmp / "serial"
+    assert main(["study", str(cfg), "--out", str(out), "--workers", "1"]) == 0
+    return cfg, out
+
+
+def test_results_one_row_per_case_with_the_measures(serial_run):
+    cfg, out = serial_run
+    rows = _rows(out / "results.csv")
+    assert [int(r["case"]) for r in rows] == [0, 1, 2, 3]
+    assert [float(r["blocks.two_sets.theta_deg"]) for r in rows] == [60.0, 60.0, 90.0, 90.0]
+    assert [int(r["realization"]) for r in rows] == [0, 1, 0, 1]
+    # common random numbers: realization r has the same seed in every parameter combination
+    assert rows[0]["seed"] == rows[2]["seed"] != rows[1]["seed"]
+    for r in rows:
+        assert r["status"] == "ok" and r["error"] == ""
+        assert 1.0 < float(r["d_box"]) < 2.0 and 0.9 < float(r["d_box_r2"]) <= 1.0
+        assert float(r["p21_per_m"]) > 0 and int(r["n_blocks"]) > 10
+        assert float(r["max_displacement_m"]) == float(r["max_displacement_boundary_m"]) > 0
+        assert r["converged"] in ("true", "false") and r["solve_status"]
+        assert float(r["wall_time_s"]) > 0
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["extra"]["cases"] == 4 and manifest["extra"]["finished"] == 4
+    assert manifest["extra"]["executor"] == "serial"
+    case = json.loads((out / "cases" / rows[0]["case_id"] / "case.json").read_text())
+    assert case["config"]["blocks"]["seed"] == int(rows[0]["seed"])
+    assert case["config"]["blocks"]["two_sets"]["theta_deg"] == 60.0
+
+
+def test_two_local_workers_give_the_same_results_as_serial(serial_run, tmp_path):
+    cfg, out = serial_run
+    out2 = tmp_path / "pool"
+    assert main(["study", str(cfg), "--out", str(out2), "--workers", "2"]) == 0
+    assert _without_time(_rows(out2 / "results.csv")) == _without_time(_rows(out / "results.csv"))
+    manifest = json.loads((out2 / "manifest.json").read_text())
+    assert manifest["extra"]["executor"].startswith("local process pool (2 workers)")
+
+
+def test_rerun_skips_finished_cases_and_reruns_a_missing_one(serial_run, tmp_path, capsys):
+    import shutil
+
+    cfg, out = serial_run
+    copy = tmp_path / "resume"
+    shutil.copytree(out, copy)
+    rows = _rows(copy / "results.csv")
+    shutil.rmtree(copy / "cases" / rows[2]["case_id"])  # as if killed before case 2 was written
+    kept = {r["case_id"]: (copy / "cases" / r["case_id"] / "case.json").read_bytes()
+            for r in rows if r is not rows[2]}
+    capsys.readouterr()
+    assert main(["study", str(cfg), "--out", str(copy), "--workers", "1"]) == 0
+    err = capsys.readouterr().err
+    assert "3 already finished (skipped), 1 to run" in err
+    for cid, content in kept.items():  # untouched
+        assert (copy / "cases" / cid / "case.json").read_bytes() == content
+    assert _without_time(_rows(copy / "results.csv")) == _without_time(rows)
+
+
+def test_interrupted_study_resumes_without_losing_cases(serial_run, tmp_path, monkeypatch, capsys):
+    import rockmass.study as study
+
+    cfg, out = serial_run
+    real = study.run_case
+    calls = []
+
+    def interrupted(task):
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        calls.append(task["case"])
+        return real(task)
+
+    monkeypatch.setattr(study, "run_case", interrupted)
+    target = tmp_path / "killed"
+    assert main(["study", str(cfg), "--out", str(target), "--workers", "1"]) == 130
+    assert len(_rows(target / "results.csv")) == 2  # what finished is on disk
+    monkeypatch.setattr(study, "run_case", real)
+    capsys.readouterr()
+    assert main(["study", str(cfg), "--out", str(target), "--workers", "1"]) == 0
+    assert "2 already finished (skipped), 2 to run" in capsys.readouterr().err
+    assert _without_time(_rows(target / "results.csv")) == _without_time(_rows(out / "results.csv"))
+
+
+def test_case_ids_do_not_depend_on_the_order_of_the_grid(serial_run, tmp_path, capsys):
+    import shutil
+
+    cfg, out = serial_run
+    reordered = _write(tmp_path, BASE + STUDY.replace("[60.0, 90.0]", "[90.0, 60.0]"))
+    copy = tmp_path / "reordered"
+    shutil.copytree(out, copy)
+    capsys.readouterr()
+    assert main(["study", str(reordered), "--out", str(copy), "--workers", "1"]) == 0
+    assert "4 already finished (skipped), 0 to run" in capsys.readouterr().err
+    ids = [r["case_id"] for r in _rows(copy / "results.csv")]
+    old = [r["case_id"] for r in _rows(out / "results.csv")]
+    assert ids == [old[2], old[3], old[0], old[1]]
+
+
+def test_report_is_self_contained_with_embedded_pngs(serial_run):
+    _, out = serial_run
+    page = (out / "report.html").read_text(encoding="utf-8")
+    images = re.findall(r'<img [^>]*src="([^"]+)"', page)
+    assert len(images) >= 2
+    for src in images:
+        assert src.startswith("data:image/png;base64,")
+        assert base64.b64decode(src.split(",", 1)[1])[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not re.search(r'(src|href)="(https?:)?//', page)  # nothing fetched from the network
+    assert "<script" not in page
+    assert "θ = 60°" not in page  # the legend is inside the image, the table in the page
+    assert page.count("<tr>") >= 1 + 4 + 1 + 2  # header + 4 cases, header + 2 combinations
+
+
+def test_list_form_and_grid_combine(tmp_path, capsys):
+    cfg = _write(tmp_path, BASE + """
+[study]
+[study.grid]
+blocks.two_sets.theta_deg = [60.0, 90.0]
+[[study.cases]]
+"blocks.two_sets.alpha_deg" = 0.0
+[[study.cases]]
+blocks.two_sets.alpha_deg = 30.0
+blocks.two_sets.spacing_m = [4.0, 4.0]
+""")
+    assert main(["study", str(cfg), "--out", str(tmp_path / "o"), "--list"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert len(lines) == 4
+    assert "alpha_deg=0.0, theta_deg=60.0" in lines[0]
+    assert "alpha_deg=30.0, spacing_m=[4.0, 4.0], theta_deg=90.0" in lines[3]
+    assert not (tmp_path / "o").exists()  # --list writes nothing
+
+
+@pytest.mark.parametrize("study, field, expected", [
+    ('[study.grid]\nblocks.two_sets.thetaa_deg = [40.0]\n', "study.grid.blocks.two_sets.thetaa_deg",
+     'unknown key .*did you mean "theta_deg"'),
+    ('[study.grid]\nblocks.two_sets.theta_deg = [40.0, 95.0]\n', "study.grid.blocks.two_sets.theta_deg",
+     r"must be <= 90.*study case 1"),
+    ('[study.grid]\nblocks.two_sets.theta_deg = []\n', "study.grid", "empty list"),
+    ('[study.grid]\nblocks.two_sets.theta_deg = 40.0\n', "study.grid", "must be a list"),
+    ('[study.grid]\n"blocks.excavations[3].radius_m" = [1.0]\n',
+     r"study.grid.blocks.excavations\[3\].radius_m", "index out of range"),
+    ('[study.grid]\nblocks.seed = [1, 2]\n', "study.seed_fields", "also varied"),
+    ('[study]\nrealizations = 0\n', "study.realizations", "must be >= 1"),
+    ('[study]\nworkers = 2\n', "study.workers", "unknown key"),
+])
+def test_bad_study_exits_2_before_any_case_runs(tmp_path, capsys, study, field, expected):
+    if not study.startswith("[study]"):
+        study = "[study]\n" + study
+    cfg = _write(tmp_path, BASE + "\n" + study)
+    out = tmp_path / "out"
+    assert main(["study", str(cfg), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert str(cfg) in err
+    assert re.search(re.escape(field) if "\\" not in field else field, err), err
+    assert re.search(expected, err), err
+    assert not out.exists()
+
+
+def test_solve_that_does_not_fit_the_model_exits_2_before_any_case_runs(tmp_path, capsys):
+    cfg = _write(tmp_path, BASE.replace('excavate = ["tunnel"]', 'excavate = ["cavern"]') + STUDY)
+    out = tmp_path / "out"
+    assert main(["study", str(cfg), "--out", str(out)]) == 2
+    assert "cavern" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_a_failing_case_is_recorded_and_the_others_finish(tmp_path, monkeypatch, capsys):
+    import rockmass.study as study
+
+    cfg = _write(tmp_path, BASE + STUDY)
+    real = study._fractal
+
+    def boom(document, path, model):
+        if document.blocks.two_sets.theta_deg == 90.0:
+            raise RuntimeError("simulated failure")
+        return real(document, path, model)
+
+    monkeypatch.setattr(study, "_fractal", boom)
+    out = tmp_path / "out"
+    assert main(["study", str(cfg), "--out", str(out), "--workers", "1"]) == 1
+    rows = _rows(out / "results.csv")
+    assert [r["status"] for r in rows] == ["ok", "ok", "failed", "failed"]
+    assert "simulated failure" in rows[2]["error"]
+    assert "2 of 4 cases failed" in capsys.readouterr().err
+    monkeypatch.setattr(study, "_fractal", real)  # a re-run retries only the failed cases
+    assert main(["study", str(cfg), "--out", str(out), "--workers", "1"]) == 0
+    assert "2 already finished (skipped), 2 to run" in capsys.readouterr().err
+    assert [r["status"] for r in _rows(out / "results.csv")] == ["ok"] * 4
+
+
+def test_joint_network_is_the_models_joints(tmp_path):
+    """The box-counted segments are the joints the builder cut: same total length as the model's
+    joint contacts (persistent sets, so every joint segment is a contact)."""
+    from rockmass.blockgen import CONTACT_KINDS
+    from rockmass.config import RockmassConfig
+    from rockmass.study import _build_model, joint_network_segments
+    import tomllib
+
+    data = tomllib.loads(BASE)
+    for seed in (0, 5):
+        data["blocks"]["seed"] = seed
+        doc = RockmassConfig.model_validate(data)
+        model = _build_model(doc, tmp_path / "x.toml")
+        segs = joint_network_segments(doc, tmp_path / "x.toml", model)
+        length = np.hypot(segs[:, 2] - segs[:, 0], segs[:, 3] - segs[:, 1]).sum()
+        joint = model.contact_kind == CONTACT_KINDS.index("joint")
+        # the builder snaps end points to its grid and collapses short edges (mm-scale moves)
+        assert length == pytest.approx(model.contact_length_m[joint].sum(), rel=1e-4)
+
+
+def test_realization_seeds_follow_the_seed_sequence_rule():
+    from rockmass.study_config import realization_seed
+
+    seeds = [realization_seed(3, r) for r in range(5)]
+    assert len(set(seeds)) == 5 and all(0 <= s < 2 ** 63 for s in seeds)
+    words = np.random.SeedSequence(3, spawn_key=(2,)).generate_state(2, np.uint32)
+    assert seeds[2] == ((int(words[0]) << 31) ^ int(words[1])) & (2 ** 63 - 1)
+
+
+def test_dask_local_cluster_gives_the_same_results(serial_run, tmp_path):
+    distributed = pytest.importorskip("dask.distributed")
+    cfg, out = serial_run
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        target = tmp_path / "dask"
+        assert main(["study", str(cfg), "--out", str(target), "--scheduler",
+                     cluster.scheduler_address]) == 0
+    assert _without_time(_rows(target / "results.csv")) == _without_time(_rows(out / "results.csv"))
+    assert json.loads((target / "manifest.json").read_text())["extra"]["executor"].startswith("dask")
+
+
+def test_unreachable_scheduler_exits_2_before_any_case_runs(tmp_path, capsys):
+    pytest.importorskip("dask.distributed")
+    cfg = _write(tmp_path, BASE + STUDY)
+    out = tmp_path / "out"
+    assert main(["study", str(cfg), "--out", str(out), "--scheduler", "tcp://127.0.0.1:9"]) == 2
+    assert "cannot reach the Dask scheduler" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_scheduler_without_dask_exits_2(tmp_path, capsys, monkeypatch):
+    import builtins
+
+    real_import = builtins.__import__
+
+    def no_dask(name, *args, **kwargs):
+        if name.startswith("dask"):
+            raise ImportError("No module named 'dask'")
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_dask)
+    cfg = _write(tmp_path, BASE + STUDY)
+    assert main(["study", str(cfg), "--out", str(tmp_path / "o"), "--scheduler", "tcp://x:1"]) == 2
+    assert "rockmass[dask]" in capsys.readouterr().err
