@@ -565,9 +565,8 @@ def fit_sizes(samples: CensoredTraces | Sequence[CensoredTraces], *, families: S
     Windows are taken as independent samples. Faces that cut the same disks (faces that meet, or
     lie closer than the largest disk diameter) share traces, so their errors are positively
     correlated and the stated sd is then too small by up to √(number of faces); the estimate itself
-    stays unbiased (checked on six realizations: mean z = 0.3 ± 0.4 on one face, while three
-    faces meeting at a point and fitted together gave z = 5.5 for a realization whose single-face
-    z values were 1.7, 2.0 and 2.0).
+    stays unbiased. (Seen in development: three faces meeting at a point, fitted together, gave
+    z = (α̂ − α)/sd well above 3 on a realization whose single-face z values were each about 2.)
     """
     if isinstance(samples, CensoredTraces):
         samples = [samples]
