@@ -448,6 +448,14 @@ class SolveConfig(StrictModel):
             except ValueError as exc:
                 raise InputError(f"{shown}: solve{'.' + field if field else ''}: {exc}") from exc
 
+        from .blockgen.model import CONTACT_KINDS
+
+        known = ["default", *model.set_names, *(k for k in CONTACT_KINDS if k != "domain")]
+        for label in self.joints:
+            if label not in known:
+                raise InputError(f"{shown}: solve.joints.{label}: no contact has this label (a "
+                                 f"joint set name of the block model, a contact kind or default: "
+                                 f"{', '.join(map(repr, known))})")
         joints = {label: build(f"joints.{label}", j.to_solver) for label, j in self.joints.items()}
         stages = []
         for i, s in enumerate(self.stages):

@@ -288,6 +288,14 @@ def test_unknown_excavation_and_empty_selector_exit_2(tmp_path, capsys):
     assert not (tmp_path / "out2").exists()
 
 
+def test_joint_label_that_matches_no_contact_exits_2(tmp_path, capsys):
+    path = _tiny(tmp_path, extra='[solve.joints.hh]\nmodel = "coulomb"\nkn_pa_m = 1e9\n'
+                                  'ks_pa_m = 1e9\nfriction_deg = 20.0\n')
+    assert main(["solve", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "solve.joints.hh" in err and "'h'" in err
+
+
 def test_csv_acceleration_history_is_integrated(tmp_path):
     from rockmass.solve_config import read_history_csv
 
