@@ -457,7 +457,61 @@ def _nelder_mead(negative, x: np.ndarray, names) -> tuple[np.ndarray, float, dic
     return best.x, float(best.fun), sd
 
 
-def _profile_power_law(negative, lengths: np.ndarray, r_max: float) -> tuple[np.ndarray, float, dict]:
+def _power_law_at_r_min(samples: Sequence[CensoredTraces], r_min: float, r_max: float):
+    """−ℓ(ln α) of a power law at fixed r_min and r_max, the α-free part of every integral cached.
+
+    With r_min, r_max fixed the quadrature nodes r_ik and the class integrands K_ik do not depend on
+    α, and g(r) = (r_min/r)^α / (r Λ exprel(−αΛ)), so each integral is
+    Σ_k w_k K_ik / r_ik · exp(α ln(r_min/r_ik)) / (Λ exprel(−αΛ)): one exp per node and step.
+    Equals :func:`_log_likelihood` of ``PowerLawSize(r_min, r_max, α)`` (tested).
+    """
+    from scipy.special import exprel
+
+    lam = float(np.log(r_max) - np.log(r_min))
+    parts = []          # (weights (n, N), log ratios (n, N)) per window and class, plus per window data
+    windows = []
+    for sample in samples:
+        if sample.n_traces == 0:
+            continue
+        for ends, integrand in enumerate(_INTEGRANDS):
+            half = sample.length_m[sample.ends_inside == ends] / 2.0
+            if half.size == 0:
+                continue
+            if (half >= r_max).any():
+                return lambda log_alpha: _PENALTY        # a trace longer than 2 r_max: h = 0
+            t0 = np.arccosh(np.maximum(1.0, r_min / half))
+            t1 = np.arccosh(r_max / half)
+            mid, rad = 0.5 * (t1 + t0), 0.5 * (t1 - t0)
+            t = mid[:, None] + rad[:, None] * _NODES[None, :]
+            r = half[:, None] * np.cosh(t)
+            base = integrand(r, half[:, None], t) / r * _WEIGHTS[None, :] * rad[:, None]
+            parts.append((base, np.log(r_min / np.clip(r, r_min, r_max))))
+        windows.append((sample.n_traces, sample.area_m2, sample.trace_width_m))
+
+    def negative(log_alpha: float) -> float:
+        alpha = float(np.exp(log_alpha))
+        try:
+            size = PowerLawSize(r_min, r_max, alpha)
+        except ValueError:
+            return _PENALTY
+        scale = 1.0 / (lam * exprel(-alpha * lam) * size.mean())
+        total = 0.0
+        for base, log_ratio in parts:
+            values = np.sum(base * np.exp(alpha * log_ratio), axis=1) * scale
+            if not (values > 0).all():
+                return _PENALTY
+            total += float(np.sum(np.log(values)))
+        mu = mean_trace_length_m(size)
+        for n, area, width in windows:
+            w = 1.0 / (area + mu * width)
+            total -= n * np.log(area + mu * float(np.sum(w * width) / np.sum(w)))
+        return -total
+
+    return negative
+
+
+def _profile_power_law(negative, samples: Sequence[CensoredTraces], lengths: np.ndarray,
+                       r_max: float) -> tuple[np.ndarray, float, dict]:
     """Power law: profile −ℓ over r_min on a log grid, α by a bounded 1-D search at each r_min.
 
     ℓ has a square-root cusp in r_min at every half trace length (h(l) jumps in slope when r_min
@@ -470,8 +524,8 @@ def _profile_power_law(negative, lengths: np.ndarray, r_max: float) -> tuple[np.
     from scipy.optimize import minimize_scalar
 
     def inner(log_rmin: float) -> tuple[float, float]:
-        res = minimize_scalar(lambda la: negative(np.array([la, log_rmin])), bounds=(np.log(0.02), np.log(20.0)),
-                              method="bounded", options={"xatol": 1e-4})
+        res = minimize_scalar(_power_law_at_r_min(samples, float(np.exp(log_rmin)), r_max),
+                              bounds=(np.log(0.02), np.log(20.0)), method="bounded", options={"xatol": 1e-4})
         return float(res.x), float(res.fun)
 
     lo = np.log(0.01 * float(np.median(lengths)))
@@ -522,7 +576,7 @@ def _fit_family(family: str, samples: list[CensoredTraces], r_max: float) -> Siz
         return -value if np.isfinite(value) else _PENALTY
 
     if family == "power_law":
-        x, fun, sd = _profile_power_law(negative, lengths, r_max)
+        x, fun, sd = _profile_power_law(negative, samples, lengths, r_max)
     else:
         x, fun, sd = _nelder_mead(negative, np.log(start(float(lengths.mean()))), names)
     if fun >= _PENALTY:

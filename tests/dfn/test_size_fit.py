@@ -150,3 +150,16 @@ def test_fit_does_not_modify_its_input():
     np.testing.assert_array_equal(ct.length_m, before)
     with pytest.raises(ValueError, match="family must be"):
         fit_sizes(ct, families=("weibull",))
+
+
+def test_power_law_fast_path_equals_the_generic_likelihood():
+    from rockmass.dfn.size_fit import _log_likelihood, _power_law_at_r_min
+
+    rng = np.random.default_rng(3)  # fixed seed
+    biased = PowerLawSize(1.0, 20.0, 1.5)
+    windows = [censored_traces(_simulate(lambda n: biased.sample(rng, n), rng, 300, 30.0, 20.0)) for _ in range(2)]
+    for r_min in (0.5, 1.0, 1.7):
+        fast = _power_law_at_r_min(windows, r_min, 20.0)
+        for alpha in (0.5, 2.5, 4.0):
+            generic = -_log_likelihood(PowerLawSize(r_min, 20.0, alpha), windows)
+            assert fast(np.log(alpha)) == pytest.approx(generic, rel=1e-12)
