@@ -12,7 +12,8 @@ this process, in a local process pool or on a Dask worker:
    with the domain as the face: D_box with R², its spread over shifted grids, and P21;
 3. run the DEM stages of ``[solve]`` when the base has one (:func:`rockmass.solver.run`): the
    maximum displacement after the last stage (of the blocks on the excavation boundary, and of any
-   block), whether every stage converged.
+   block), whether every stage converged, and how many blocks ended inside the opening (fallen
+   or falling: their displacement is a fall, and while they fall the stage does not converge).
 
 Numba runs one thread per task (``numba.set_num_threads(1)``; pools also get
 ``NUMBA_NUM_THREADS=1``): the workers are the parallelism, and a case's numbers do not depend on
@@ -45,7 +46,7 @@ RESULTS_FILE = "results.csv"
 CSV_COLUMNS = ("d_box", "d_box_r2", "d_box_stderr", "d_box_offset_sd", "p21_per_m",
                "n_joint_segments", "n_blocks", "n_contacts", "max_displacement_m",
                "max_displacement_boundary_m", "max_displacement_overall_m", "converged",
-               "solve_status", "steps", "broken_contacts", "status", "error", "wall_time_s")
+               "solve_status", "steps", "broken_contacts", "detached_blocks", "status", "error", "wall_time_s")
 
 
 # ------------------------------------------------------------------------------------ workers
@@ -200,7 +201,8 @@ def _solve(document, config_path, model) -> dict:
             "max_displacement_overall_m": float(last.max_displacement_m),
             "converged": bool(converged), "solve_status": str(result.status),
             "steps": int(sum(s.steps for s in result.stages)),
-            "broken_contacts": int(last.broken_contacts), "stages": stages,
+            "broken_contacts": int(last.broken_contacts),
+            "detached_blocks": int(last.detached_blocks), "stages": stages,
             "diagnostic": result.diagnostic}
 
 

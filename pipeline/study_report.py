@@ -107,26 +107,41 @@ def _figures(study, cases, finished) -> list[tuple[str, str]]:
     fig, ax = plt.subplots(figsize=(7.0, 5.0))
     ylab = f"maximum displacement {'around the excavation' if study.displacement == 'boundary' else ''} (mm)"
     series: dict[str, list] = {}
+    scale = 1e3 if has_disp else 1.0
+    all_y = [r.get(key if has_disp else "p21_per_m") * scale for r in finished.values()
+             if r.get(key if has_disp else "p21_per_m") is not None]
+    positive = [y for y in all_y if y > 0]
+    log_y = bool(positive) and max(positive) > 100 * min(positive)
     for members in grouped.values():
         c0 = members[0][0]
         cv = _label(_value(c0, cfield)) if cfield else "all"
         ds = [r.get("d_box") for _, r in members]
         ys = [r.get(key) if has_disp else r.get("p21_per_m") for _, r in members]
-        scale = 1e3 if has_disp else 1.0
         pts = [(d, y * scale) for d, y in zip(ds, ys) if d is not None and y is not None]
         if not pts:
             continue
-        ax.scatter([p[0] for p in pts], [p[1] for p in pts], s=12, alpha=0.35,
-                   color=colours[cv], linewidths=0)
+        settled = [r.get("converged") is not False for _, r in members
+                   if r.get("d_box") is not None and (r.get(key) if has_disp else r.get("p21_per_m")) is not None]
+        for filled in (True, False):
+            sel = [p for p, ok in zip(pts, settled) if ok == filled]
+            if sel:
+                ax.scatter([p[0] for p in sel], [p[1] for p in sel], s=16, alpha=0.5,
+                           facecolors=colours[cv] if filled else "none", edgecolors=colours[cv],
+                           linewidths=0 if filled else 1.0)
         md, sd_d, _ = _mean_sd([p[0] for p in pts])
         my, sd_y, _ = _mean_sd([p[1] for p in pts])
-        ax.errorbar(md, my, xerr=sd_d or None, yerr=sd_y or None, fmt="o", ms=6,
+        yerr = None
+        if sd_y:  # on a log axis the bar stops short of zero
+            yerr = [[min(sd_y, 0.9 * my) if log_y else sd_y], [sd_y]]
+        ax.errorbar(md, my, xerr=sd_d or None, yerr=yerr, fmt="o", ms=6,
                     color=colours[cv], capsize=3)
         series.setdefault(cv, []).append((md, my))
     for cv, pts in series.items():
         pts.sort()
         ax.plot([p[0] for p in pts], [p[1] for p in pts], "-", color=colours[cv], lw=1.2,
                 label=f"{symbol} = {cv}" + ("°" if cname.endswith("_deg") else ""))
+    if log_y:
+        ax.set_yscale("log")  # settled cases (mm) and falling blocks (m) on one plot
     ax.set_xlabel("fractal dimension D_box (360 × 360 box counting)")
     ax.set_ylabel(ylab if has_disp else "P21 (m/m²)")
     ax.set_title("Maximum displacement versus fractal dimension" if has_disp
@@ -135,7 +150,9 @@ def _figures(study, cases, finished) -> list[tuple[str, str]]:
         ax.legend(title=None, frameon=False)
     ax.grid(alpha=0.3)
     figs.append(("D_box versus maximum displacement, coloured by " + (cfield or "case")
-                 + "; dots: realizations, markers: mean ± sd over realizations", _png(fig)))
+                 + "; dots: realizations (hollow: a stage did not converge, e.g. blocks still "
+                 "falling), markers: mean ± sd over realizations" if has_disp else
+                 "D_box versus P21 (the base config has no [solve] section)", _png(fig)))
     plt.close(fig)
 
     # 2. spread over realizations, per combination
@@ -208,9 +225,10 @@ def write_report(path, document, cases, finished: dict, failed: dict, summary: d
                                  for _, r in members])
             row.append("" if m is None else f"{m:.4g} ± {sd:.2g}")
         row.append(f"{sum(1 for _, r in members if r.get('converged') is True)}/{len(members)}")
+        row.append(", ".join(str(r.get("detached_blocks", "")) for _, r in members))
         srows.append(row)
     sheader = ["parameters", "n", "D_box", "R²", "P21 (1/m)", "blocks", "max displacement (mm)",
-               "converged"]
+               "converged", "detached blocks"]
     header, rows = results_rows(cases, {**finished, **failed}, study.displacement)
     rows = [[_fmt(float(x)) if _is_float(x) else x for x in r] for r in rows]
     images = "".join(f'<figure><img alt="{html.escape(cap)}" src="data:image/png;base64,{b64}">'

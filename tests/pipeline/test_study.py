@@ -315,7 +315,7 @@ def test_dask_local_cluster_gives_the_same_results(serial_run, tmp_path):
     distributed = pytest.importorskip("dask.distributed")
     cfg, out = serial_run
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster:
+                                  dashboard_address=":0") as cluster:
         target = tmp_path / "dask"
         assert main(["study", str(cfg), "--out", str(target), "--scheduler",
                      cluster.scheduler_address]) == 0
@@ -346,3 +346,22 @@ def test_scheduler_without_dask_exits_2(tmp_path, capsys, monkeypatch):
     cfg = _write(tmp_path, BASE + STUDY)
     assert main(["study", str(cfg), "--out", str(tmp_path / "o"), "--scheduler", "tcp://x:1"]) == 2
     assert "rockmass[dask]" in capsys.readouterr().err
+
+
+def test_study_without_solve_reports_blocks_and_d_box_only(tmp_path):
+    cfg = _write(tmp_path, BASE.split("[solve]")[0] + STUDY)
+    out = tmp_path / "out"
+    assert main(["study", str(cfg), "--out", str(out), "--workers", "1"]) == 0
+    rows = _rows(out / "results.csv")
+    assert len(rows) == 4 and all(r["d_box"] and r["max_displacement_m"] == "" for r in rows)
+    assert "D_box versus P21" in (out / "report.html").read_text(encoding="utf-8")
+
+
+def test_cavern_sample_is_the_seed_000_study(capsys, tmp_path):
+    """samples/study_cavern.toml: theta 40/60/90 deg x 3 spacings x 2 realizations (validated only;
+    running it takes a few minutes)."""
+    assert main(["study", str(SAMPLES / "study_cavern.toml"), "--out", str(tmp_path / "o"),
+                 "--list"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert len(lines) == 18
+    assert {re.search(r"theta_deg=(\d+)", line).group(1) for line in lines} == {"40", "60", "90"}
