@@ -52,6 +52,7 @@ if TYPE_CHECKING:
     from .sets2d import trace_angles_deg, fit_sets_2d, fit_axial_mixture, JointSets2D
     from .intensity import sampling_window, SamplingWindow, clipped_lengths_m, trace_intensity, TraceIntensity, scanline_survey, ScanlineSurvey
     from .mauldon import mauldon_from_counts, mauldon_circle, MauldonEstimate, circle_window, CircleWindow
+    from .mauldon import InscribedCircles, MauldonCircles, inscribed_circles, mauldon_circles
     from .topology import trace_topology, TraceTopology
     from .trace_stats import trace_map_statistics
     from .orientation import angle_between, dip_from_normal, dip_from_pole_trend_plunge, dip_from_strike, normal_from_dip, pole_from_dip, pole_trend_plunge, strike_from_dip, to_lower_hemisphere, trend_plunge_from_vector, vector_from_trend_plunge
@@ -95,6 +96,10 @@ _SOURCES = {
     "MauldonEstimate": "mauldon",
     "circle_window": "mauldon",
     "CircleWindow": "mauldon",
+    "InscribedCircles": "mauldon",
+    "MauldonCircles": "mauldon",
+    "inscribed_circles": "mauldon",
+    "mauldon_circles": "mauldon",
     "trace_topology": "topology",
     "TraceTopology": "topology",
     "trace_map_statistics": "trace_stats",

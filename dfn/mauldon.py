@@ -27,9 +27,8 @@ import numpy as np
 from .intensity import SamplingWindow, _endpoints_xy, _floor_tolerance, _integer_at_least, _real, _real_at_least
 from .tracemap import TraceMap, _as_window, _require_trace_map
 
-__all__ = ["CircleWindow", "MauldonEstimate", "circle_window", "mauldon_circle", "mauldon_from_counts"]
-# also public, imported from this module until rockmass.dfn registers them (its __all__ must equal the
-# union of the modules' __all__): InscribedCircles, MauldonCircles, inscribed_circles, mauldon_circles
+__all__ = ["CircleWindow", "MauldonEstimate", "circle_window", "mauldon_circle", "mauldon_from_counts",
+           "InscribedCircles", "MauldonCircles", "inscribed_circles", "mauldon_circles"]
 
 #: Default largest radial deviation, relative to the radius, of a polygon still taken for a circle:
 #: a regular polygon inscribed in a circle deviates by 1 - cos(pi / k) at its edge midpoints, so 1 %
