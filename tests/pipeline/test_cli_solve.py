@@ -323,6 +323,39 @@ def test_csv_history_in_a_config(tmp_path):
     assert base["ux_m"] == pytest.approx(0.001, rel=0.03)
 
 
+def test_every_section_maps_onto_the_solver_settings(tmp_path):
+    """In-situ stress, boundary stress, quiet boundaries, a Ricker input, CY joints, rounding and
+    the time-step safety reach :class:`rockmass.solver.Settings` unchanged, and the run works."""
+    from rockmass import solver
+    from rockmass.blockgen import read_json
+    from rockmass.config import load_config
+
+    text = TINY.format(kn="1e9", ks="5e8").replace(
+        'history = { type = "sine", amplitude = 0.05, frequency_hz = 20.0, cycles = 2 }',
+        'history = { type = "ricker", amplitude = 0.01, peak_frequency_hz = 30.0 }').replace(
+        "[solve]\n", "[solve]\nrounding_m = 0.003\ntime_step_safety = 0.4\n"
+                     "[solve.insitu]\nsxx_pa = 1e4\nsyy_pa = 2e4\n"
+                     "[[solve.boundary_stress]]\nsides = [\"top\", \"left\", \"right\"]\n"
+                     "from_insitu = true\n[solve.quiet]\nsides = [\"left\", \"right\"]\n").replace(
+        "density_kg_m3 = 2700.0", "density_kg_m3 = 2700.0\nbulk_modulus_pa = 1e9\n"
+                                  "shear_modulus_pa = 6e8")
+    path = _write(tmp_path, text)
+    out = tmp_path / "out"
+    assert main(["solve", str(path), "--out", str(out)]) == 0
+    model = read_json(out / "blocks.json")
+    st = load_config(path).solve.to_settings(model, path)
+    assert st.insitu == solver.InSituStress(sxx_pa=1e4, syy_pa=2e4)
+    assert st.boundary_stress == (solver.BoundaryStress(("top", "left", "right"), from_insitu=True),)
+    assert st.quiet == solver.QuietBoundary(("left", "right"))
+    assert st.material == solver.Material(2700.0, 1e9, 6e8)
+    assert st.joints["v"] == solver.ContinuouslyYielding(1e9, 5e8)
+    assert st.rounding_m == 0.003 and st.time_step_safety == 0.4
+    assert st.velocity_inputs[0].history.history == solver.Ricker(0.01, 30.0)
+    assert [s.kind for s in st.stages] == ["static", "dynamic"]
+    result = json.loads((out / "result.json").read_text())
+    assert result["status"] == "ok" and result["info"]["rounding_m"] == 0.003
+
+
 def test_sample_configs_validate():
     from rockmass.config import load_config
 
