@@ -43,7 +43,7 @@ RESULTS_FILE = "results.csv"
 
 # the columns after the case's own parameters (wall_time_s last: the only one that varies between
 # runs of the same study, so the rest can be compared as they are)
-CSV_COLUMNS = ("d_box", "d_box_r2", "d_box_stderr", "d_box_offset_sd", "p21_per_m",
+CSV_COLUMNS = ("d_box", "d_box_r2", "d_box_stderr", "d_box_offset_sd", "p21_per_m", "p32",
                "n_joint_segments", "n_blocks", "n_contacts", "max_displacement_m",
                "max_displacement_boundary_m", "max_displacement_overall_m", "converged",
                "solve_status", "steps", "broken_contacts", "detached_blocks", "status", "error", "wall_time_s")
@@ -177,6 +177,17 @@ def _fractal(document, config_path, model) -> dict:
             "n_joint_segments": int(len(segs))}
 
 
+def _p32(document) -> float | None:
+    """Total P32 (m²/m³, one-sided) of the ``[dfn]`` sets when blocks are cut by a DFN section and
+    every set is given by P32; None otherwise (2D joint sets have no P32)."""
+    dfn = getattr(document, "dfn", None)
+    if dfn is None or document.blocks.dfn_section is None or not dfn.sets:
+        return None
+    if any(getattr(s.intensity, "measure", None) != "P32" for s in dfn.sets):
+        return None
+    return float(sum(s.intensity.value for s in dfn.sets))
+
+
 def _solve(document, config_path, model) -> dict:
     from .errors import InputError
     from .solver import run as solver_run
@@ -238,6 +249,7 @@ def run_case(task: dict) -> dict:
         out.update({"n_blocks": int(model.n_blocks), "n_contacts": int(model.n_contacts)})
         t = time.perf_counter()
         out.update(_fractal(document, path, model))
+        out["p32"] = _p32(document)
         timings["boxcount_s"] = time.perf_counter() - t
         t = time.perf_counter()
         out.update(_solve(document, path, model))

@@ -8,7 +8,9 @@ its joint network (D_box with R², P21) and runs its DEM stages (:mod:`rockmass.
 Writes under ``--out``:
 
 - ``cases/<case id>/case.json``: one per finished case (its config, parameters, seed, every value
-  measured, timings), written atomically as the case finishes;
+  measured, timings), written atomically as the case finishes, and beside it ``config.toml``, the
+  case as a config of its own (``rockmass solve cases/<id>/config.toml --out DIR`` reruns it with
+  every output of the single-stage commands);
 - ``results.csv``: one row per finished case in case order, rebuilt (atomically) after every case;
 - ``report.html``: self-contained (images embedded): D_box against the maximum displacement coloured
   by θ (Jiang et al., seed 000 Figs. 7–8), the spread over realizations, the table;
@@ -62,6 +64,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="Dask scheduler address (default: $DASK_SCHEDULER_ADDRESS; without "
                         "either, cases run locally)")
+    p.add_argument("--connect-timeout", type=float, default=30.0, metavar="SECONDS",
+                   help="how long to try to reach the Dask scheduler (default 30)")
     p.add_argument("--list", action="store_true",
                    help="validate, print the cases (id, parameters, seed, finished or not) and exit")
     p.add_argument("--json", action="store_true", help="print the study summary as JSON")
@@ -73,14 +77,14 @@ def _log(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
 
 
-def _connect(address: str):
+def _connect(address: str, timeout_s: float):
     try:
         from dask.distributed import Client
     except ImportError as exc:
         raise InputError(f"--scheduler {address}: Dask is not installed (pip install "
                          "'rockmass[dask]')") from exc
     try:
-        return Client(address, timeout="10s", set_as_default=False)
+        return Client(address, timeout=f"{max(timeout_s, 0.1)}s", set_as_default=False)
     except (OSError, TimeoutError, ValueError) as exc:
         raise InputError(f"--scheduler {address}: cannot reach the Dask scheduler: {exc}") from exc
 
@@ -101,6 +105,13 @@ def _preflight(case, config_path) -> None:
     solve.to_settings(model, config_path)
 
 
+def _case_header(case, config_path) -> str:
+    return (f"# study case {case.index} ({case.case_id}) of {os.path.abspath(config_path)}\n"
+            f"# {_params_text(case.params) or 'base config'}; realization {case.realization}, "
+            f"seed {case.seed}\n# rerun it alone with its outputs: rockmass solve config.toml "
+            "--out DIR (or rockmass blocks)\n")
+
+
 def _params_text(params: dict) -> str:
     return ", ".join(f"{k.rsplit('.', 1)[-1]}={v}" for k, v in params.items())
 
@@ -111,7 +122,7 @@ def run(args) -> int:
     from .manifest import build_manifest
     from .outputs import output_folder, print_json
     from .study import RESULTS_FILE, CASE_FILE, csv_text, load_finished, results_rows, run_tasks
-    from .study_config import expand_cases, load_study
+    from .study_config import expand_cases, load_study, standalone_config, toml_text
 
     t_start = time.perf_counter()
     document, raw = load_study(args.config)
@@ -136,7 +147,7 @@ def run(args) -> int:
     if pending:
         _preflight(pending[0], args.config)
         if scheduler is not None:
-            client = _connect(scheduler)
+            client = _connect(scheduler, args.connect_timeout)
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     workers = max(1, min(workers, len(pending) or 1))
 
@@ -156,7 +167,10 @@ def run(args) -> int:
         def on_done(result: dict) -> None:
             case = by_id[result["case_id"]]
             record = {**result, "case_id": case.case_id, "config": case.raw}
-            atomic_write_json(out / "cases" / case.short_id / CASE_FILE, record, nan_as_null=True)
+            folder = out / "cases" / case.short_id
+            atomic_write_text(folder / "config.toml", _case_header(case, args.config)
+                              + toml_text(standalone_config(case, args.config)))
+            atomic_write_json(folder / CASE_FILE, record, nan_as_null=True)  # last: marks it done
             if result["status"] == "ok":
                 finished[case.case_id] = record
                 failed.pop(case.case_id, None)
@@ -175,6 +189,11 @@ def run(args) -> int:
                  f"{_params_text(case.params)} r={case.realization}: {what} "
                  f"({result.get('wall_time_s') or 0.0:.1f} s)")
 
+        for case in cases:  # folders of an older rockmass, or copied without it
+            standalone = out / "cases" / case.short_id / "config.toml"
+            if case.case_id in finished and not standalone.exists():
+                atomic_write_text(standalone, _case_header(case, args.config)
+                                  + toml_text(standalone_config(case, args.config)))
         _log(f"rockmass study: {len(cases)} cases, {len(cases) - len(pending)} already finished "
              f"(skipped), {len(pending)} to run")
         write_results()

@@ -47,7 +47,8 @@ from .errors import ConfigError
 from .strict import StrictModel, field_problem
 
 __all__ = ["StudyConfig", "StudyDocument", "StudyCase", "load_study", "expand_cases",
-           "realization_seed", "parse_path", "set_path", "get_path", "flatten_overrides"]
+           "realization_seed", "parse_path", "set_path", "get_path", "flatten_overrides",
+           "toml_text", "standalone_config"]
 
 MAX_CASES = 100_000
 _PATH_TOKEN = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)|\[(\d+)\]")
@@ -376,3 +377,91 @@ def _case_problems(exc: ValidationError, data: dict, params: dict, entry: dict, 
         else:
             problems.append((fld, f"{message} (study case {index}: {_params_text(params)})"))
     return problems
+
+
+# ------------------------------------------------------------------------------------- TOML out
+
+_BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
+
+
+def _key(key: str) -> str:
+    import json
+
+    return key if _BARE_KEY.match(key) else json.dumps(key, ensure_ascii=False)
+
+
+def _inline(value: Any) -> str:
+    import json
+    import math
+
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise ValueError(f"TOML config values must be finite, got {value!r}")
+        return repr(value)
+    if isinstance(value, str):
+        return json.dumps(value, ensure_ascii=False)
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_inline(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{ " + ", ".join(f"{_key(k)} = {_inline(v)}" for k, v in value.items()) + " }"
+    raise TypeError(f"cannot write {type(value).__name__} as TOML")
+
+
+def _is_table_array(value: Any) -> bool:
+    return isinstance(value, list) and bool(value) and all(isinstance(v, dict) for v in value)
+
+
+def _emit(table: dict, prefix: list[str], lines: list[str]) -> None:
+    for k, v in table.items():
+        if not isinstance(v, dict) and not _is_table_array(v):
+            lines.append(f"{_key(k)} = {_inline(v)}")
+    for k, v in table.items():
+        if isinstance(v, dict):
+            lines.extend(["", "[" + ".".join(map(_key, [*prefix, k])) + "]"])
+            _emit(v, [*prefix, k], lines)
+        elif _is_table_array(v):
+            for item in v:
+                lines.extend(["", "[[" + ".".join(map(_key, [*prefix, k])) + "]]"])
+                _emit(item, [*prefix, k], lines)
+
+
+def toml_text(data: dict) -> str:
+    """TOML text of a config document (tables, arrays of tables, scalars and arrays), such that
+    ``tomllib.loads(toml_text(d)) == d``.
+
+    >>> print(toml_text({"blocks": {"seed": 1, "two_sets": {"spacing_m": [6.0, 8.0]},
+    ...                  "excavations": [{"shape": "circle"}]}}), end="")
+    <BLANKLINE>
+    [blocks]
+    seed = 1
+    <BLANKLINE>
+    [blocks.two_sets]
+    spacing_m = [6.0, 8.0]
+    <BLANKLINE>
+    [[blocks.excavations]]
+    shape = "circle"
+    """
+    lines: list[str] = []
+    _emit(data, [], lines)
+    return "\n".join(lines) + "\n"
+
+
+def standalone_config(case: StudyCase, config_path) -> dict:
+    """The case's config as a file of its own: the TOML data with the files it names made absolute
+    (they were relative to the study's config), ready for ``rockmass blocks`` / ``rockmass solve``."""
+    data = copy.deepcopy(case.raw)
+    base = Path(os.path.abspath(config_path)).parent
+    fields = ["blocks.traces", "solve.blocks_file"]
+    for i, v in enumerate(get_path(data, "solve.velocity_inputs") or []):
+        if isinstance(v, dict) and isinstance(v.get("history"), dict) \
+                and v["history"].get("type") == "csv":
+            fields.append(f"solve.velocity_inputs[{i}].history.file")
+    for path in fields:
+        value = get_path(data, path)
+        if isinstance(value, str) and not Path(value).is_absolute():
+            set_path(data, path, str(base / value))
+    return data

@@ -172,8 +172,14 @@ def _figures(study, cases, finished) -> list[tuple[str, str]]:
                 ax.scatter([i] * len(v), v, s=14, color=col, alpha=0.7, linewidths=0)
                 m, sd, n = _mean_sd(v)
                 if m is not None:
-                    ax.errorbar(i + 0.18, m, yerr=sd or None, fmt="_", ms=10, color="k", capsize=3)
+                    err = None
+                    if sd:
+                        err = [[min(sd, 0.9 * m) if (log_y and name.startswith("max")) else sd],
+                               [sd]]
+                    ax.errorbar(i + 0.18, m, yerr=err, fmt="_", ms=10, color="k", capsize=3)
             ax.set_ylabel(name)
+            if log_y and name.startswith("max"):
+                ax.set_yscale("log")
             ax.grid(alpha=0.3)
         axes[-1, 0].set_xticks(range(len(labels)))
         axes[-1, 0].set_xticklabels(labels, rotation=60, ha="right", fontsize=7)
@@ -181,6 +187,45 @@ def _figures(study, cases, finished) -> list[tuple[str, str]]:
                      "combination", _png(fig)))
         plt.close(fig)
     return figs
+
+
+def _model_thumbnails(study, cases, finished, config_path, limit: int = 6) -> list[tuple[str, str]]:
+    """Block plots of representative cases: for each colour value, the realization-0 cases with
+    the smallest and the largest D_box (models rebuilt from their configs, a second or so each)."""
+    import tempfile
+    from pathlib import Path
+
+    from .blockgen import plot_blocks
+    from .study import _build_model
+
+    cfield = colour_field(study, cases)
+    key = _disp_key(study)
+    picks: dict[str, list] = {}
+    for c in cases:
+        rec = finished.get(c.case_id)
+        if rec is None or rec.get("d_box") is None or c.realization != 0:
+            continue
+        picks.setdefault(_label(_value(c, cfield)) if cfield else "all", []).append((c, rec))
+    chosen = []
+    for members in picks.values():
+        members.sort(key=lambda m: m[1]["d_box"])
+        for m in (members[0], members[-1]):
+            if m not in chosen:
+                chosen.append(m)
+    out = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for i, (c, rec) in enumerate(chosen[:limit]):
+            try:
+                model = _build_model(c.document, config_path)
+                path = plot_blocks(model, Path(tmp) / f"case{i}.png", dpi=50)
+            except Exception:  # noqa: BLE001 - a missing thumbnail must not stop the report
+                continue
+            disp = rec.get(key)
+            cap = (f"case {c.index}: {_params_short(c.params) or 'base'}; D_box "
+                   f"{rec['d_box']:.3f}, {model.n_blocks} blocks"
+                   + (f", max displacement {disp * 1e3:.3g} mm" if disp is not None else ""))
+            out.append((cap, base64.b64encode(path.read_bytes()).decode("ascii")))
+    return out
 
 
 def _params_short(params: dict) -> str:
@@ -231,6 +276,13 @@ def write_report(path, document, cases, finished: dict, failed: dict, summary: d
                "converged", "detached blocks"]
     header, rows = results_rows(cases, {**finished, **failed}, study.displacement)
     rows = [[_fmt(float(x)) if _is_float(x) else x for x in r] for r in rows]
+    try:
+        thumbs = _model_thumbnails(study, cases, finished, config_path) if finished else []
+    except Exception:  # noqa: BLE001
+        thumbs = []
+    thumbs_html = "".join(f'<figure class="thumb"><img alt="{html.escape(cap)}" '
+                          f'src="data:image/png;base64,{b64}"><figcaption>{html.escape(cap)}'
+                          "</figcaption></figure>" for cap, b64 in thumbs)
     images = "".join(f'<figure><img alt="{html.escape(cap)}" src="data:image/png;base64,{b64}">'
                      f"<figcaption>{html.escape(cap)}</figcaption></figure>" for cap, b64 in figs)
     info = (f"{summary['finished']} of {summary['cases']} cases finished, {summary['failed']} "
@@ -245,6 +297,8 @@ th, td {{ border: 1px solid #ccc; padding: 2px 6px; text-align: right; }}
 th {{ background: #f2f2f2; }}
 figure {{ margin: 1em 0; }} img {{ max-width: 100%; }}
 figcaption {{ font-size: 13px; color: #555; }}
+.thumbs {{ display: flex; flex-wrap: wrap; gap: 1em; }}
+figure.thumb {{ width: 360px; margin: 0; }}
 </style></head><body>
 <h1>rockmass study</h1>
 <p>Config: <code>{html.escape(str(config_path))}</code>. {html.escape(info)}.</p>
@@ -255,6 +309,10 @@ excavation outlines or dangling-end extensions) rasterised on a {(document.fract
 after the last DEM stage, from the initial equilibrium.</p>
 <h2>Plots</h2>
 {images or '<p>No finished case yet.</p>'}
+<h2>Block models</h2>
+<p>For each {html.escape(colour_field(study, cases) or 'case')} value, the realization-0 cases with the
+smallest and largest D_box (excavation stages shaded; edges coloured by joint set).</p>
+<div class="thumbs">{thumbs_html or '<p>None.</p>'}</div>
 <h2>Per parameter combination (mean ± sd over realizations)</h2>
 {_table(sheader, srows)}
 <h2>All cases (results.csv)</h2>

@@ -311,14 +311,15 @@ def test_realization_seeds_follow_the_seed_sequence_rule():
     assert seeds[2] == ((int(words[0]) << 31) ^ int(words[1])) & (2 ** 63 - 1)
 
 
-def test_dask_local_cluster_gives_the_same_results(serial_run, tmp_path):
+def test_dask_local_cluster_gives_the_same_results(serial_run, tmp_path, capsys):
     distributed = pytest.importorskip("dask.distributed")
     cfg, out = serial_run
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=":0") as cluster:
         target = tmp_path / "dask"
-        assert main(["study", str(cfg), "--out", str(target), "--scheduler",
-                     cluster.scheduler_address]) == 0
+        code = main(["study", str(cfg), "--out", str(target), "--scheduler",
+                     cluster.scheduler_address])
+        assert code == 0, capsys.readouterr().err
     assert _without_time(_rows(target / "results.csv")) == _without_time(_rows(out / "results.csv"))
     assert json.loads((target / "manifest.json").read_text())["extra"]["executor"].startswith("dask")
 
@@ -327,7 +328,8 @@ def test_unreachable_scheduler_exits_2_before_any_case_runs(tmp_path, capsys):
     pytest.importorskip("dask.distributed")
     cfg = _write(tmp_path, BASE + STUDY)
     out = tmp_path / "out"
-    assert main(["study", str(cfg), "--out", str(out), "--scheduler", "tcp://127.0.0.1:9"]) == 2
+    assert main(["study", str(cfg), "--out", str(out), "--scheduler", "tcp://127.0.0.1:9",
+                 "--connect-timeout", "2"]) == 2
     assert "cannot reach the Dask scheduler" in capsys.readouterr().err
     assert not out.exists()
 
@@ -365,3 +367,81 @@ def test_cavern_sample_is_the_seed_000_study(capsys, tmp_path):
     lines = capsys.readouterr().out.strip().splitlines()
     assert len(lines) == 18
     assert {re.search(r"theta_deg=(\d+)", line).group(1) for line in lines} == {"40", "60", "90"}
+
+
+def test_case_config_toml_reruns_the_case_alone_with_the_same_numbers(serial_run, tmp_path):
+    """cases/<id>/config.toml is the case as a config of its own: rockmass solve on it gives the
+    study's maximum displacement to the last bit (the same code path, one numba thread or not)."""
+    import tomllib
+
+    _, out = serial_run
+    row = _rows(out / "results.csv")[3]
+    case_cfg = out / "cases" / row["case_id"] / "config.toml"
+    data = tomllib.loads(case_cfg.read_text(encoding="utf-8"))
+    assert "study" not in data and data["blocks"]["seed"] == int(row["seed"])
+    assert main(["solve", str(case_cfg), "--out", str(tmp_path / "solo")]) == 0
+    result = json.loads((tmp_path / "solo" / "result.json").read_text())
+    assert result["stages"][-1]["max_displacement_boundary_m"] == float(row["max_displacement_m"])
+    assert int(row["steps"]) == sum(s["steps"] for s in result["stages"])
+
+
+def _chromium():
+    import shutil
+
+    return next((shutil.which(n) for n in ("chromium", "chromium-browser", "google-chrome")
+                 if shutil.which(n)), None)
+
+
+@pytest.mark.skipif(_chromium() is None, reason="headless Chromium is not installed")
+def test_report_renders_in_headless_chromium_with_every_image_loaded(serial_run, tmp_path):
+    """Open report.html in headless Chromium (no network): every <img> decodes; a screenshot is
+    kept as an artifact (in $ROCKMASS_TEST_ARTIFACTS when set)."""
+    import os
+    import shutil
+    import subprocess
+
+    _, out = serial_run
+    probe = tmp_path / "probe.html"
+    probe.write_text(
+        '<!DOCTYPE html><html><body><iframe id="f" src="' + (out / "report.html").as_uri()
+        + '" width="1200" height="800"></iframe><script>document.getElementById("f").onload = '
+        "function () { var im = this.contentDocument.images, ok = 0; for (var i = 0; i < "
+        "im.length; i++) if (im[i].complete && im[i].naturalWidth > 0) ok++; "
+        'document.body.setAttribute("data-result", ok + "/" + im.length); };</script></body>'
+        "</html>", encoding="utf-8")
+    flags = [_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+             "--allow-file-access-from-files", "--virtual-time-budget=15000"]
+    dom = subprocess.run([*flags, "--dump-dom", probe.as_uri()], capture_output=True, text=True,
+                         timeout=120).stdout
+    loaded, total = map(int, re.search(r'data-result="(\d+)/(\d+)"', dom).groups())
+    assert total >= 3 and loaded == total
+    shot = tmp_path / "study_report.png"
+    subprocess.run([*flags, "--window-size=1250,2400", f"--screenshot={shot}",
+                    (out / "report.html").as_uri()], capture_output=True, timeout=120)
+    assert shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    if os.environ.get("ROCKMASS_TEST_ARTIFACTS"):
+        target = Path(os.environ["ROCKMASS_TEST_ARTIFACTS"])
+        target.mkdir(parents=True, exist_ok=True)
+        shutil.copy(shot, target / shot.name)
+
+
+def test_dfn_section_study_varies_p32_and_reseeds_the_dfn(tmp_path):
+    """Seed 001 kind of study: DFN sets cut by a plane, P32 of one set varied, realizations reseed
+    [dfn] (and [blocks]); P32 is in results.csv and denser networks give a larger D_box."""
+    text = (SAMPLES / "blocks_dfn_section.toml").read_text(encoding="utf-8") + """
+[study]
+realizations = 2
+[study.grid]
+"dfn.sets[0].intensity.value" = [0.3333333333333333, 1.0]
+"""
+    cfg = _write(tmp_path, text)
+    out = tmp_path / "out"
+    assert main(["study", str(cfg), "--out", str(out), "--workers", "1"]) == 0
+    rows = _rows(out / "results.csv")
+    assert [float(r["p32"]) for r in rows] == pytest.approx([1.0, 1.0, 1 + 2 / 3, 1 + 2 / 3])
+    assert rows[0]["d_box"] != rows[1]["d_box"]  # realizations differ: the DFN was reseeded
+    case = json.loads((out / "cases" / rows[1]["case_id"] / "case.json").read_text())
+    assert case["config"]["dfn"]["seed"] == case["config"]["blocks"]["seed"] == int(rows[1]["seed"])
+    low = np.mean([float(r["d_box"]) for r in rows[:2]])
+    high = np.mean([float(r["d_box"]) for r in rows[2:]])
+    assert high > low and all(r["max_displacement_m"] == "" for r in rows)
