@@ -159,6 +159,7 @@ def run(args) -> int:
     counter = {"done": 0}
     executor = "none"
     status = "interrupted"
+    interrupted = False
     with output_folder(args.out) as out:
         def write_results():
             header, rows = results_rows(cases, {**finished, **failed}, study.displacement)
@@ -202,6 +203,8 @@ def run(args) -> int:
             executor = run_tasks(tasks, on_done, workers=workers, scheduler=scheduler,
                                  client=client)
             status = "complete" if not failed else "failed cases"
+        except KeyboardInterrupt:
+            interrupted = True
         finally:
             if client is not None:
                 client.close()
@@ -231,6 +234,11 @@ def run(args) -> int:
                        "scheduler": scheduler,
                        "case_ids": {c.short_id: c.index for c in cases}})
             atomic_write_json(out / "manifest.json", manifest)
+    if interrupted:
+        _log(f"rockmass study: interrupted: {len(finished)} of {len(cases)} cases are finished and "
+             f"kept in {out_path} (results.csv, report.html); run the same command again to "
+             "resume")
+        return 130
     if args.json:
         print_json(summary)
     else:

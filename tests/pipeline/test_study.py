@@ -168,7 +168,9 @@ def test_interrupted_study_resumes_without_losing_cases(serial_run, tmp_path, mo
     monkeypatch.setattr(study, "run_case", interrupted)
     target = tmp_path / "killed"
     assert main(["study", str(cfg), "--out", str(target), "--workers", "1"]) == 130
+    assert "2 of 4 cases are finished and kept" in capsys.readouterr().err
     assert len(_rows(target / "results.csv")) == 2  # what finished is on disk
+    assert json.loads((target / "manifest.json").read_text())["extra"]["status"] == "interrupted"
     monkeypatch.setattr(study, "run_case", real)
     capsys.readouterr()
     assert main(["study", str(cfg), "--out", str(target), "--workers", "1"]) == 0
