@@ -307,23 +307,26 @@ def _activate_slot(S, p, k, prop, broken):
 
 
 @njit(cache=True)
+def _add_slot_force(fpair, p, fn, fs, nx, ny, px, py, ax, ay, bx, by):
+    """Add a slot's force (−F_n n + F_s t on block a at (px, py), the opposite on b) and its
+    moments about the centroids (ax, ay), (bx, by) to ``fpair[p]``."""
+    fx = -fn * nx - fs * ny
+    fy = -fn * ny + fs * nx
+    fpair[p, 0] += fx
+    fpair[p, 1] += fy
+    fpair[p, 2] += (px - ax) * fy - (py - ay) * fx
+    fpair[p, 3] -= fx
+    fpair[p, 4] -= fy
+    fpair[p, 5] -= (px - bx) * fy - (py - by) * fx
+
+
+@njit(cache=True)
 def _forces_from_slots(S, p, ax, ay, bx, by, fpair):
     """Force and moment on both blocks of pair p from its slots' stored F_n, F_s (no dashpots)."""
     for k in range(2):
-        if S[p, k, ACT] == 0.0:
-            continue
-        nx = S[p, k, NX]
-        ny = S[p, k, NY]
-        fx = -S[p, k, FN] * nx - S[p, k, FS] * ny
-        fy = -S[p, k, FN] * ny + S[p, k, FS] * nx
-        px = S[p, k, PX]
-        py = S[p, k, PY]
-        fpair[p, 0] += fx
-        fpair[p, 1] += fy
-        fpair[p, 2] += (px - ax) * fy - (py - ay) * fx
-        fpair[p, 3] -= fx
-        fpair[p, 4] -= fy
-        fpair[p, 5] -= (px - bx) * fy - (py - by) * fx
+        if S[p, k, ACT] != 0.0:
+            _add_slot_force(fpair, p, S[p, k, FN], S[p, k, FS], S[p, k, NX], S[p, k, NY],
+                            S[p, k, PX], S[p, k, PY], ax, ay, bx, by)
 
 
 @njit(cache=True)
@@ -515,14 +518,8 @@ def contact_forces(wv, off, pos, vel, omg, radius, still, pa, pb, pprop, pref, p
                 fn -= beta * prop[P_KN] * length * vn
                 fs += beta * prop[P_KS] * length * vt
                 E[E_VISCOUS] -= beta * length * (prop[P_KN] * vn * vn + prop[P_KS] * vt * vt) * dt
-            fx = -fn * nx + fs * tx
-            fy = -fn * ny + fs * ty
-            fpair[p, 0] += fx
-            fpair[p, 1] += fy
-            fpair[p, 2] += rax * fy - ray * fx
-            fpair[p, 3] -= fx
-            fpair[p, 4] -= fy
-            fpair[p, 5] -= rbx * fy - rby * fx
+            _add_slot_force(fpair, p, fn, fs, nx, ny, px, py, pos[a, 0], pos[a, 1], pos[b, 0],
+                            pos[b, 1])
             if pdel[q] > max_ovl:
                 max_ovl = pdel[q]
                 max_pair = p

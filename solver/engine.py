@@ -171,6 +171,7 @@ class Engine:
         self.fpair = np.zeros((0, 6))
         self.E = np.zeros(K.N_ENERGY)
         self.time_s = 0.0
+        self.n_rebuilds = -1  # the set-up build below is not counted
         self.set_stage_modes(dynamic=False)
         self.rebuild()
 
@@ -217,14 +218,14 @@ class Engine:
         self.ref_pos = self.pos.copy()
         self.ref_rot = self.rot.copy()
         self.margin = margin
-        self.n_rebuilds = getattr(self, "n_rebuilds", -1) + 1
+        self.n_rebuilds += 1
 
     def detect(self):
         """Run the narrow phase once without motion: establishes the contact slots."""
         K.world_vertices(self.loc, self.lnrm, self.off, self.pos, self.rot, self.active, self.wv)
         K.contact_forces(self.wv, self.off, self.pos, self.vel, self.omg, self.radius,
-                         np.zeros(self.nb, np.int8), self.pa, self.pb, self.pprop, self.pref, self.pinit, self.init_brk, self.props, self.S, 0.0,
-                         self.ctol_m, self.hysteresis_m, self.rounding_m, 0.0, self.fpair,
+                         np.zeros(self.nb, np.int8), self.pa, self.pb, self.pprop, self.pref,
+                         self.pinit, self.init_brk, self.props, self.S, 0.0, self.ctol_m, self.hysteresis_m, self.rounding_m, 0.0, self.fpair,
                          np.zeros(K.N_ENERGY))
 
     def excavate(self, regions):
@@ -239,6 +240,11 @@ class Engine:
         self.wake_all()
         self.rebuild()
 
+    def _active_slots(self):
+        """(pair, slot, state rows) of the active contact slots."""
+        p, k = np.nonzero(self.S[:, :, K.ACT] != 0)
+        return p, k, self.S[p, k]
+
     # ------------------------------------------------------------------------- time step --
     def stable_time_step(self, beta: float = 0.0) -> float:
         """Critical time step 2/ω_max from a Gershgorin bound on M^(-1/2) K M^(-1/2).
@@ -249,11 +255,9 @@ class Engine:
         contacts. With stiffness-proportional damping β: Δt ≤ (2/ω)(√(1 + ξ²) − ξ), ξ = βω/2
         (REFERENCE.md §5).
         """
-        act = self.S[:, :, K.ACT] != 0
-        p, k = np.nonzero(act)
+        p, k, slot = self._active_slots()
         if not len(p):
             return math.inf
-        slot = self.S[p, k]
         length = slot[:, K.LEN]
         props = self.props[self.pprop[p]]
         kn = props[:, K.P_KN] * length
@@ -289,11 +293,9 @@ class Engine:
     # ---------------------------------------------------------------------- state summaries --
     def strain_energy(self) -> float:
         """Elastic energy in the contacts: Σ l(∫σ du_n + τ²/2k_s) over active slots (J per m)."""
-        act = self.S[:, :, K.ACT] != 0
-        p, k = np.nonzero(act)
+        p, k, slot = self._active_slots()
         if not len(p):
             return 0.0
-        slot = self.S[p, k]
         props = self.props[self.pprop[p]]
         length = slot[:, K.LEN]
         sig = slot[:, K.FN] / np.maximum(length, 1e-300)
@@ -311,10 +313,9 @@ class Engine:
         Δδ = −v_rel·n Δt (closure), Δu_s = v_rel·t Δt. With the leapfrog, the strain energy that
         matches the work of the contact forces is the 'shadow' ½ F_{n}·u_{n+1} (½k u_n u_{n+1} for a
         linear spring), which differs from ½k u_n² by half of this term (see the runner's ledger)."""
-        p, k = np.nonzero(self.S[:, :, K.ACT] != 0)
+        p, k, slot = self._active_slots()
         if not len(p):
             return 0.0, 0.0
-        slot = self.S[p, k]
         a, b = self.pa[p], self.pb[p]
         pt = slot[:, [K.PX, K.PY]]
         ra, rb = pt - self.pos[a], pt - self.pos[b]
@@ -354,8 +355,7 @@ class Engine:
     def contact_table(self) -> dict:
         """Active contact slots: blocks, point, normal (a to b), length, σ_n (compression +),
         τ, plastic slip, slipping / broken flags."""
-        p, k = np.nonzero(self.S[:, :, K.ACT] != 0)
-        slot = self.S[p, k]
+        p, k, slot = self._active_slots()
         length = np.maximum(slot[:, K.LEN], 1e-300)
         return {"block_a": self.pa[p], "block_b": self.pb[p], "x_m": slot[:, K.PX],
                 "y_m": slot[:, K.PY], "nx": slot[:, K.NX], "ny": slot[:, K.NY],
@@ -369,8 +369,7 @@ class Engine:
                                         self.init_brk)) + (self.time_s,)
 
     def restore(self, snap):
-        (self.pos, self.rot, self.vel, self.omg, S, self.E, self.init_brk, self.time_s) = \
+        """Back to a :meth:`snapshot` taken since the last rebuild (same pair list)."""
+        (self.pos, self.rot, self.vel, self.omg, self.S, self.E, self.init_brk, self.time_s) = \
             tuple(a.copy() if isinstance(a, np.ndarray) else a for a in snap)
-        if S.shape == self.S.shape:
-            self.S = S
         self.rebuild()
