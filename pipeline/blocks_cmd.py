@@ -17,7 +17,7 @@ from .errors import ConfigError, InputError, RunError
 from .inputs import read_trace_file
 from .outputs import output_folder, print_json
 
-__all__ = ["add_parser", "run", "compute"]
+__all__ = ["add_parser", "run", "compute", "produce"]
 
 # library argument names -> config keys, for messages that name the field
 _FIELD_NAMES = (("joint_sets[", "sets["), ("domain_xy_m", "domain"))
@@ -77,14 +77,21 @@ def dfn_section_traces(document, config_path):
     return traces, [tuple(p) for p in sec.window_uv_m]
 
 
-def compute(args):
-    """Load, validate and build; return (document, model, invariants, timings)."""
+def compute(args, document=None, section=None):
+    """Load (unless ``document`` is given), validate and build; return (document, model,
+    invariants, timings).
+
+    ``section``: ``(TraceMap, window)`` that replaces the traces of ``[blocks.dfn_section]`` (the
+    ``run`` stage passes the section of its own DFN realization); files are relative to
+    ``args.config``.
+    """
     from .blockgen import build, check_model
     from .config import load_config
 
     t0 = time.perf_counter()
     # the whole document is validated (a file may hold other stages too); this command reads [blocks]
-    document = load_config(args.config)
+    if document is None:
+        document = load_config(args.config)
     if document.blocks is None:
         raise ConfigError(args.config, [("blocks", "required section is missing (rockmass blocks "
                                                    "reads the [blocks] section)")])
@@ -98,7 +105,7 @@ def compute(args):
         if path is not None:
             traces = read_trace_file(path, "blocks.traces")
         if cfg.dfn_section is not None:
-            traces, window = dfn_section_traces(document, args.config)
+            traces, window = section or dfn_section_traces(document, args.config)
             domain_xy = window if domain_xy is None else domain_xy
         t1 = time.perf_counter()
         model = build(domain_xy, joint_sets, traces, excavations, dangling=cfg.dangling,
@@ -118,20 +125,24 @@ def compute(args):
     return document, model, invariants, {"load_s": t1 - t0, "build_s": t2 - t1, "check_s": t3 - t2}
 
 
-def run(args) -> int:
-    """Handler of ``rockmass blocks``."""
+def produce(args, out_dir, document=None, section=None):
+    """Build (:func:`compute`) and write every output into the folder ``out_dir``; return what
+    :func:`compute` returns.
+
+    The work of ``rockmass blocks`` (and of the ``blocks`` stage of ``rockmass run``).
+    """
     from contextlib import ExitStack
 
     from .atomic import atomic_path, atomic_write_json
     from .blockgen import plot_blocks, write_json, write_vtu
     from .manifest import build_manifest
 
-    document, model, invariants, timings = compute(args)
+    document, model, invariants, timings = computed = compute(args, document, section)
     inputs = [args.config]
     path = document.blocks.traces_path(args.config)
     if path is not None:
         inputs.append(str(path))
-    with output_folder(args.out) as out, ExitStack() as stack:
+    with output_folder(out_dir) as out, ExitStack() as stack:
         paths = {name: stack.enter_context(atomic_path(out / name))
                  for name in ("blocks.json", "blocks.vtu", "blocks.png", "manifest.json")}
         write_json(model, paths["blocks.json"])
@@ -145,6 +156,12 @@ def run(args) -> int:
         manifest = build_manifest(command=args.argv, config=document, inputs=inputs, seeds=seeds,
                                   timings_s=timings, extra={"invariants": invariants})
         atomic_write_json(paths["manifest.json"], manifest)
+    return computed
+
+
+def run(args) -> int:
+    """Handler of ``rockmass blocks``."""
+    _, model, _, _ = produce(args, args.out)
     q = model.quality
     if args.json:
         print_json(q)

@@ -18,7 +18,7 @@ from .errors import InputError
 from .inputs import read_polygon_file, read_trace_file
 from .outputs import output_folder, print_json
 
-__all__ = ["add_parser", "run", "TRACE_SUFFIXES", "IMAGE_SUFFIXES"]
+__all__ = ["add_parser", "run", "compute", "produce", "TRACE_SUFFIXES", "IMAGE_SUFFIXES"]
 
 TRACE_SUFFIXES = (".geojson", ".json", ".csv")
 IMAGE_SUFFIXES = (".png", ".tif", ".tiff", ".jpg", ".jpeg", ".bmp")
@@ -174,18 +174,22 @@ def summary_line(result) -> str:
     return text
 
 
-def run(args) -> int:
-    """Handler of ``rockmass boxcount``."""
+def produce(args, out_dir=None):
+    """Count and fit, and write every output into the folder ``out_dir`` when given; return
+    (document, BoxCount).
+
+    The work of ``rockmass boxcount`` (and of the ``boxcount`` stage of ``rockmass run``).
+    """
     from contextlib import ExitStack
 
     document, result, extra = compute(args)
-    if args.out:
+    if out_dir:
         from .atomic import atomic_path, atomic_write_json
         from .fractal.plot import plot_box_count
         from .manifest import build_manifest
 
         t0 = time.perf_counter()
-        with output_folder(args.out) as out, ExitStack() as stack:
+        with output_folder(out_dir) as out, ExitStack() as stack:
             # every file is renamed into place only if all of them were written
             png = stack.enter_context(atomic_path(out / "boxcount.png"))
             js = stack.enter_context(atomic_path(out / "boxcount.json"))
@@ -198,6 +202,12 @@ def run(args) -> int:
                                       extra={"dimension": result.dimension})
             mf = stack.enter_context(atomic_path(out / "manifest.json"))
             atomic_write_json(mf, manifest)
+    return document, result
+
+
+def run(args) -> int:
+    """Handler of ``rockmass boxcount``."""
+    document, result = produce(args, args.out)
     if args.json:
         print_json(document)
     else:

@@ -225,6 +225,9 @@ class RockmassConfig(StrictModel):
         ``[blocks]`` section (block model of a 2D section).
     solve : rockmass.solve_config.SolveConfig or None
         ``[solve]`` section (DEM run of a block model).
+    run : rockmass.run_config.RunConfig or None
+        ``[run]`` section (field inputs and wanted stages of ``rockmass run``); not in
+        ``model_dump`` (nor so in :func:`config_hash`): ``rockmass run`` records and hashes it.
     """
 
     imaging: ImagingConfig | None = None
@@ -232,6 +235,9 @@ class RockmassConfig(StrictModel):
     dfn: DFNSection = None
     blocks: BlocksSection = None
     solve: SolveSection = None
+    # left out of dumps and hashes (exclude=True): it names the inputs of ``rockmass run``, which
+    # hashes them itself, so adding it changed no existing config hash (study resume keeps working)
+    run: Annotated[Stage("run_config", "RunConfig"), Field(exclude=True)] = None
 
 
 # ------------------------------------------------------------------------------------------ loading

@@ -24,7 +24,7 @@ import time
 from .errors import InputError
 from .outputs import output_folder
 
-__all__ = ["add_parser", "compute", "realization_summary", "run"]
+__all__ = ["add_parser", "compute", "produce", "realization_summary", "run"]
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -123,8 +123,9 @@ def _section(network, specs, sec, k: int) -> dict:
     return {"name": sec.name or f"section {k}", **result}
 
 
-def compute(args):
-    """Load, fit if asked, generate, validate if asked.
+def compute(args, document=None):
+    """Load (unless ``document``, a validated document with a ``dfn`` section, is given), fit if
+    asked, generate, validate if asked; files named in ``[dfn.fit]`` are relative to ``args.config``.
 
     Returns (config, specs, seed, [(index, network, summary, validation rows or None)], timings, fit).
     """
@@ -136,7 +137,8 @@ def compute(args):
     _check_flag(args.realizations, "--realizations", 1)
     _check_flag(args.first, "--first", 0)
     t0 = time.perf_counter()
-    document = load_config(args.config, model=DFNDocument)
+    if document is None:
+        document = load_config(args.config, model=DFNDocument)
     cfg = document.dfn
     specs, fit, field = [], None, None
     if cfg.fit is not None:
@@ -187,17 +189,21 @@ def validation_document(rows: list[dict], index: int) -> dict:
             "rows": [{k: clean(v) for k, v in r.items()} for r in rows]}
 
 
-def run(args) -> int:
-    """Handler of ``rockmass dfn``."""
+def produce(args, out_dir, document=None):
+    """Compute (:func:`compute`) and write every output into the folder ``out_dir``; return what
+    :func:`compute` returns.
+
+    The work of ``rockmass dfn`` (and of the ``dfn`` stage of ``rockmass run``).
+    """
     from contextlib import ExitStack
 
     from .atomic import atomic_path, atomic_write_json
     from .dfn.network_io import write_fractures_csv, write_fractures_vtu
     from .manifest import build_manifest
 
-    document, specs, seed, results, timings, fit = compute(args)
+    document, specs, seed, results, timings, fit = computed = compute(args, document)
     t0 = time.perf_counter()
-    with output_folder(args.out) as out, ExitStack() as stack:
+    with output_folder(out_dir) as out, ExitStack() as stack:
         if fit is not None:
             atomic_write_json(stack.enter_context(atomic_path(out / "fitted.json")), fit.as_dict())
         for index, network, summary, rows in results:
@@ -219,6 +225,12 @@ def run(args) -> int:
             timings_s=timings,
             extra={"counts": {f"realization_{i:04d}": s["total"]["count"] for i, _, s, _ in results}})
         atomic_write_json(manifest_path, manifest)
+    return computed
+
+
+def run(args) -> int:
+    """Handler of ``rockmass dfn``."""
+    _, _, _, results, _, fit = produce(args, args.out)
     if fit is not None:
         for s in fit.sets:
             size = "no size law" if s.size is None or not s.size.ok else s.size.family

@@ -24,7 +24,7 @@ from .inputs import read_polygon_file
 from .outputs import output_folder, print_json
 from .traces_cmd import dimension_entry
 
-__all__ = ["add_parser", "run", "compute"]
+__all__ = ["add_parser", "run", "compute", "produce"]
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -140,8 +140,11 @@ def compute(args):
     return summary, result, traces, image, set_ids, timings, settings
 
 
-def run(args) -> int:
-    """Handler of ``rockmass extract``."""
+def produce(args, out_dir):
+    """Extract, analyse and write every output into the folder ``out_dir``; return the summary.
+
+    The work of ``rockmass extract`` (and of the ``extract`` stage of ``rockmass run``).
+    """
     from contextlib import ExitStack
 
     import numpy as np
@@ -154,7 +157,7 @@ def run(args) -> int:
     from .manifest import build_manifest
 
     name = Path(args.photo).name
-    with output_folder(args.out) as out, ExitStack() as stack:
+    with output_folder(out_dir) as out, ExitStack() as stack:
         files = ["traces.geojson", "summary.json", "overlay.png", "rose.png", "manifest.json"]
         files += [f"debug_{key}.png" for key in result.debug]
         paths = {f: stack.enter_context(atomic_path(out / f)) for f in files}
@@ -173,6 +176,12 @@ def run(args) -> int:
         atomic_write_json(paths["manifest.json"], build_manifest(
             command=args.argv, inputs=[args.photo] + [p for p in (args.roi, args.roi_px, args.config) if p],
             config={"imaging": settings}, timings_s=timings))
+    return summary
+
+
+def run(args) -> int:
+    """Handler of ``rockmass extract``."""
+    summary = produce(args, args.out)
     if args.json:
         print_json(summary)
     else:

@@ -19,7 +19,7 @@ from pathlib import Path
 from .errors import InputError
 from .outputs import output_folder, print_json
 
-__all__ = ["add_parser", "run", "compute"]
+__all__ = ["add_parser", "run", "compute", "produce"]
 
 #: Seed of the set clustering's initialisations (the fit is deterministic for a given seed).
 DEFAULT_SEED = 0
@@ -113,12 +113,15 @@ def summary_text(summary: dict) -> str:
     return "\n".join(lines)
 
 
-def run(args) -> int:
-    """Handler of ``rockmass scanline``."""
+def produce(args, out_dir=None):
+    """Analyse, and write every output into the folder ``out_dir`` when given; return the summary.
+
+    The work of ``rockmass scanline`` (and of the ``scanline`` stage of ``rockmass run``).
+    """
     from contextlib import ExitStack
 
     summary, scanline, sets, timings = compute(args)
-    if args.out:
+    if out_dir:
         from .atomic import atomic_path, atomic_write_json
         from .dfn.stereonet import plot_stereonet
         from .manifest import build_manifest
@@ -128,7 +131,7 @@ def run(args) -> int:
         if toml.is_file():
             inputs.append(str(toml))
         # all files renamed into place only when every one is written
-        with output_folder(args.out) as out, ExitStack() as stack:
+        with output_folder(out_dir) as out, ExitStack() as stack:
             paths = {name: stack.enter_context(atomic_path(out / name))
                      for name in ("stereonet.png", "summary.json", "manifest.json")}
             plot_stereonet(scanline.poles(), paths["stereonet.png"], membership=sets.membership,
@@ -140,6 +143,12 @@ def run(args) -> int:
                 config={"n_sets": args.n_sets, "terzaghi_cap_deg": args.terzaghi_cap_deg},
                 seeds={"sets": args.seed}, timings_s=timings)
             atomic_write_json(paths["manifest.json"], manifest)
+    return summary
+
+
+def run(args) -> int:
+    """Handler of ``rockmass scanline``."""
+    summary = produce(args, args.out)
     if args.json:
         print_json(summary)
     else:

@@ -34,7 +34,7 @@ from pathlib import Path
 from .errors import ConfigError, InputError, RunError
 from .outputs import output_folder, print_json
 
-__all__ = ["add_parser", "run", "prepare", "solve"]
+__all__ = ["add_parser", "run", "prepare", "solve", "produce"]
 
 _PVD_NUDGE_S = 1e-9
 
@@ -55,8 +55,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     return p
 
 
-def prepare(config_path):
-    """Load the config, the block model and the solver settings.
+def prepare(config_path, document=None, model=None):
+    """Load the config (unless ``document`` is given), the block model (unless ``model`` is given:
+    the ``run`` command passes the model its blocks stage built) and the solver settings.
 
     Returns ``(document, model, settings, inputs, timings)``; ``inputs`` are the files read (for the
     manifest). Raises ``ConfigError`` / ``InputError`` (exit 2) naming the file and field.
@@ -66,7 +67,8 @@ def prepare(config_path):
     from .config import load_config
 
     t0 = time.perf_counter()
-    document = load_config(config_path)
+    if document is None:
+        document = load_config(config_path)
     cfg = document.solve
     if cfg is None:
         raise ConfigError(config_path, [("solve", "required section is missing (rockmass solve "
@@ -77,7 +79,9 @@ def prepare(config_path):
         raise ConfigError(config_path, [("solve.blocks_file", "give either blocks_file or a "
                                                               "[blocks] section, not both")])
     t1 = time.perf_counter()
-    if path is not None:
+    if model is not None:
+        source = {"blocks_model": "given"}
+    elif path is not None:
         from .blockgen import check_model, read_json
 
         try:
@@ -115,13 +119,16 @@ def prepare(config_path):
     return document, model, settings, {"files": inputs, "source": source}, timings
 
 
-def solve(model, settings, config_path):
+def solve(model, settings, config_path, progress=None):
     """:func:`rockmass.solver.run`; a ``ValueError`` (settings that do not fit the model: a selector
-    choosing no block, a time step above the stable limit) becomes an ``InputError`` naming the file."""
+    choosing no block, a time step above the stable limit) becomes an ``InputError`` naming the file.
+    ``progress(done, total)`` is called while stepping (:func:`rockmass.solver.runner.run`)."""
     from .solver import run as solver_run
 
     try:
-        return solver_run(model, settings)
+        if progress is None:
+            return solver_run(model, settings)
+        return solver_run(model, settings, progress=progress)
     except ValueError as exc:
         raise InputError(f"{config_path}: solve: {exc}") from exc
 
@@ -289,18 +296,21 @@ def _summary_line(result, doc) -> str:
     return "; ".join(parts)
 
 
-def run(args) -> int:
-    """Handler of ``rockmass solve``."""
+def produce(args, out_dir, document=None, model=None, progress=None):
+    """Prepare (:func:`prepare`), solve and write every output into the folder ``out_dir``, also when
+    the run stopped (its status is in result.json); return ``(result, result.json document)``.
+
+    The work of ``rockmass solve`` (and of the ``solve`` stage of ``rockmass run``).
+    """
     from contextlib import ExitStack
 
     from .atomic import atomic_path, atomic_write_json, atomic_write_text
     from .blockgen import write_json
     from .manifest import build_manifest
-    from .solver.result import FAILED_STATUSES
 
-    document, model, settings, inputs, timings = prepare(args.config)
+    document, model, settings, inputs, timings = prepare(args.config, document, model)
     t0 = time.perf_counter()
-    result = solve(model, settings, args.config)
+    result = solve(model, settings, args.config, progress)
     timings["solve_s"] = time.perf_counter() - t0
     t1 = time.perf_counter()
     files = build_outputs(model, settings, result, timings)
@@ -310,7 +320,7 @@ def run(args) -> int:
     names = list(files) + ["blocks.json", "manifest.json"]
     import meshio
 
-    with output_folder(args.out) as out, ExitStack() as stack:
+    with output_folder(out_dir) as out, ExitStack() as stack:
         paths = {name: stack.enter_context(atomic_path(out / name)) for name in names}
         for name, content in files.items():
             if name == "result.json":
@@ -329,6 +339,14 @@ def run(args) -> int:
                                   extra={"status": result.status, "diagnostic": result.diagnostic,
                                          "blocks_source": inputs["source"]})
         atomic_write_json(paths["manifest.json"], manifest)
+    return result, doc
+
+
+def run(args) -> int:
+    """Handler of ``rockmass solve``."""
+    from .solver.result import FAILED_STATUSES
+
+    result, doc = produce(args, args.out)
     if args.json:
         print_json({k: doc[k] for k in ("status", "diagnostic", "stages", "max_displacement_m",
                                          "monitors")})

@@ -19,7 +19,7 @@ from .errors import InputError
 from .inputs import read_polygon_file, read_trace_file
 from .outputs import output_folder, print_json
 
-__all__ = ["add_parser", "run", "compute"]
+__all__ = ["add_parser", "run", "compute", "produce"]
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -91,12 +91,15 @@ def summary_text(summary: dict) -> str:
     return "\n".join(lines)
 
 
-def run(args) -> int:
-    """Handler of ``rockmass traces``."""
+def produce(args, out_dir=None):
+    """Analyse, and write every output into the folder ``out_dir`` when given; return the summary.
+
+    The work of ``rockmass traces`` (and of the ``traces`` stage of ``rockmass run``).
+    """
     from contextlib import ExitStack
 
     summary, trace_map, timings = compute(args)
-    if args.out:
+    if out_dir:
         import numpy as np
 
         from .atomic import atomic_path, atomic_write_json
@@ -106,7 +109,7 @@ def run(args) -> int:
         traces = summary["traces"]
         set_means = [s["Mean Angle"]["value"] for s in summary["sets"]]
         # all files renamed into place only when every one is written
-        with output_folder(args.out) as out, ExitStack() as stack:
+        with output_folder(out_dir) as out, ExitStack() as stack:
             paths = {name: stack.enter_context(atomic_path(out / name))
                      for name in ("rose.png", "traces.png", "summary.json", "manifest.json")}
             rose_diagram(np.array(traces["angle_deg"], dtype=float),
@@ -120,6 +123,12 @@ def run(args) -> int:
                 config={"n_sets": args.n_sets, "snap_tolerance_m": args.snap_tolerance_m},
                 timings_s=timings)
             atomic_write_json(paths["manifest.json"], manifest)
+    return summary
+
+
+def run(args) -> int:
+    """Handler of ``rockmass traces``."""
+    summary = produce(args, args.out)
     if args.json:
         print_json(summary)
     else:

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 
 import numpy as np
 
@@ -159,7 +160,8 @@ def _detached(eng: Engine, removed: np.ndarray) -> int:
     return int((inside & eng.active).sum())
 
 
-def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, ref) -> StageResult:
+def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, ref,
+               progress=None) -> StageResult:
     wall0 = time.perf_counter()
     eng.excavate(list(stage.excavate))
     dynamic = stage.kind == "dynamic"
@@ -235,6 +237,8 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
             break
         done += steps
         eng.time_s += steps * dt
+        if progress is not None:
+            progress(done, n_steps)
         ratio = out[1]
         if dynamic:
             rec.track_peaks()
@@ -293,8 +297,11 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
         contact_rebuilds=int(eng.n_rebuilds - rebuilds0), diagnostic=diagnostic)
 
 
-def run(model, settings: Settings) -> Result:
+def run(model, settings: Settings, *, progress: Callable[[int, int], None] | None = None) -> Result:
     """Solve a :class:`~rockmass.blockgen.BlockModel` stage by stage (see the module docstring).
+
+    ``progress(done, total)``, if given, is called after every chunk of steps (a few hundred) with
+    the steps done in the current stage and its step budget (a static stage may converge before it).
 
     Raises ``ValueError`` for settings that do not fit the model (a selector choosing no block, a
     time step above the stable limit, quiet boundaries without moduli); a run that fails while
@@ -310,7 +317,7 @@ def run(model, settings: Settings) -> Result:
     stages = []
     status, diagnostic = "ok", None
     for i, stage in enumerate(settings.stages):
-        res = _run_stage(eng, stage, settings, rec, ref)
+        res = _run_stage(eng, stage, settings, rec, ref, progress)
         stages.append(res)
         if res.status in ("overlap", "unstable"):
             status, diagnostic = res.status, res.diagnostic

@@ -1,0 +1,605 @@
+"""``rockmass run``: the whole chain, any subset of its stages, with stage reuse by content hash.
+
+A run is planned completely before anything runs (:func:`plan_run`): which stages are wanted
+(``[run] stages``, default every stage the inputs and sections allow) and which stages they read
+(:data:`rockmass.run_config.STAGES` order), every input file and every ``"@traces"`` /
+``"@scanline"`` reference (:mod:`rockmass.run_config` states the rule) — a problem is bad input
+(:class:`~rockmass.errors.InputError`, exit 2) naming the file, the field and what is expected.
+
+Each stage then runs the single-stage subcommand's own compute-and-write function
+(``produce`` of ``extract_cmd``, ``traces_cmd``, ...) into ``DIR/<stage>/``, so a stage folder holds
+exactly the files that subcommand writes into its ``--out``, plus ``stage.json``.
+
+Reuse. A stage's hash is the SHA-256 of its config section(s) (resolved: defaults filled in), the
+SHA-256 of every input file it reads, the hashes of the upstream stages it reads, and the rockmass
+version. ``DIR/<stage>/stage.json`` records it; when it matches and every output recorded there
+exists, the stage is reused (not recomputed) and the log says ``reused <stage> (hash …)``. A changed
+setting changes its stage's hash and so every downstream hash: exactly those stages rerun.
+
+Atomicity. A stage writes into ``DIR/<stage>.partial/`` (every file atomically, ``stage.json``
+last), which then replaces ``DIR/<stage>/``; a killed stage never looks finished. ``run.json`` is
+written atomically after the stages, then ``report.html`` (:func:`rockmass.run_report
+.write_run_report`), then ``manifest.json`` listing every file with its SHA-256.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import sys
+import time
+import types
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .errors import ConfigError, InputError, RunError
+from .run_config import REFERENCES, STAGES
+
+__all__ = ["RUN_FILE", "STAGE_FILE", "RunPlan", "StagePlan", "execute", "plan_run", "stage_hash"]
+
+STAGE_FILE = "stage.json"
+RUN_FILE = "run.json"
+_PARTIAL = ".partial"
+_OLD = ".old"
+
+
+@dataclass
+class StagePlan:
+    """One stage of a run: what it reads and how it is hashed (see the module docstring)."""
+
+    name: str
+    sections: dict[str, Any]          # config data that decides the stage (JSON-able)
+    files: list[Path]                 # input files read (hashed)
+    upstream: list[str]               # stages whose outputs it reads
+    hash: str = ""
+
+
+@dataclass
+class RunPlan:
+    """A validated run: the document with ``@`` references resolved, and the stages in order."""
+
+    config_path: Path
+    document: Any                     # RockmassConfig with @-references replaced by paths
+    stages: list[StagePlan]
+    trace_map: Path | None            # the run's trace map (extract's output or [run] traces)
+    scanline: Path | None
+    out_dir: Path
+    requested: list[str] = field(default_factory=list)
+    config: dict = field(default_factory=dict)  # the document as written, [run] included (JSON)
+
+
+# ----------------------------------------------------------------------------------- planning --
+
+
+def _problem(config_path, key: str, message: str) -> ConfigError:
+    return ConfigError(str(config_path), [(key, message)])
+
+
+def _resolve_refs(config_path, document, trace_map: Path | None, scanline: Path | None):
+    """The document with every ``"@..."`` file reference replaced by an absolute path. Unknown
+    references and references to data the run does not have are errors naming the field."""
+
+    def resolve(value: str, key: str) -> str:
+        if not value.startswith("@"):
+            return value
+        if value not in REFERENCES:
+            raise _problem(config_path, key, f"unknown reference {value!r} (a run knows: "
+                           + "; ".join(f"{k} = {v}" for k, v in REFERENCES.items()) + ")")
+        target = trace_map if value == "@traces" else scanline
+        if target is None:
+            need = ("[run] photo or [run] traces" if value == "@traces" else "[run] scanline")
+            raise _problem(config_path, key, f"{value} names {REFERENCES[value]}, but the config "
+                           f"has no {need}")
+        return str(Path(target).resolve())
+
+    updates = {}
+    dfn = document.dfn
+    if dfn is not None and dfn.fit is not None:
+        fit = dfn.fit
+        scanlines = [resolve(v, f"dfn.fit.scanlines[{i}]") for i, v in enumerate(fit.scanlines)]
+        faces = [f.model_copy(update={"file": resolve(f.file, f"dfn.fit.faces[{i}].file")})
+                 for i, f in enumerate(fit.faces)]
+        updates["dfn"] = dfn.model_copy(update={"fit": fit.model_copy(
+            update={"scanlines": scanlines, "faces": faces})})
+    blocks = document.blocks
+    if blocks is not None and blocks.traces is not None:
+        updates["blocks"] = blocks.model_copy(update={"traces": resolve(blocks.traces, "blocks.traces")})
+    solve = document.solve
+    if solve is not None and solve.blocks_file is not None and solve.blocks_file.startswith("@"):
+        raise _problem(config_path, "solve.blocks_file", "takes a file, not a reference: leave it "
+                       "out and the run solves its own blocks stage")
+    return document.model_copy(update=updates)
+
+
+def _check_file(config_path, key: str, path: Path | None) -> None:
+    if path is not None and not Path(path).is_file():
+        raise InputError(f"{config_path}: {key}: {path}: no such file (paths are relative to the "
+                         "config file)")
+
+
+def plan_run(config_path, out_dir, document=None) -> RunPlan:
+    """Validate a run config and plan its stages; raise before anything runs.
+
+    Parameters
+    ----------
+    config_path : path-like
+        The TOML file (:class:`rockmass.config.RockmassConfig` with a ``[run]`` section).
+    out_dir : path-like
+        The run's output folder.
+    document : RockmassConfig, optional
+        The loaded document (loaded from ``config_path`` if not given).
+
+    Returns
+    -------
+    RunPlan
+
+    Raises
+    ------
+    ConfigError, InputError
+        Exit code 2: the message names the file, the field and what is expected.
+    """
+    from . import __version__
+    from .config import load_config
+
+    config_path = Path(config_path)
+    out_dir = Path(out_dir)
+    if document is None:
+        document = load_config(config_path)
+    run = document.run
+    if run is None:
+        raise _problem(config_path, "run", "required section is missing (rockmass run reads [run]: "
+                       "photo / traces / scanline and optionally stages)")
+    if run.photo is not None and run.traces is not None:
+        raise _problem(config_path, "run.traces", "give either photo or traces, not both (the run "
+                       "has one trace map)")
+    photo, traces_file, scanline = (run.path(k, config_path) for k in ("photo", "traces", "scanline"))
+    for key, path in (("run.photo", photo), ("run.traces", traces_file), ("run.scanline", scanline)):
+        _check_file(config_path, key, path)
+    trace_map = (out_dir.resolve() / "extract" / "traces.geojson" if photo is not None
+                 else traces_file)
+    as_written = {**document.model_dump(mode="json"), "run": run.model_dump(mode="json")}
+    document = _resolve_refs(config_path, document, trace_map, scanline)
+
+    # what each stage needs, and which stages it reads
+    why_not: dict[str, str] = {}
+    if photo is None:
+        why_not["extract"] = "needs [run] photo"
+    if trace_map is None:
+        why_not["traces"] = why_not["boxcount"] = "needs a trace map: give [run] photo or [run] traces"
+    if scanline is None:
+        why_not["scanline"] = "needs [run] scanline (a scanline survey CSV)"
+    if document.dfn is None:
+        why_not["dfn"] = "needs a [dfn] section"
+    if document.blocks is None:
+        why_not["blocks"] = "needs a [blocks] section"
+    if document.solve is None:
+        why_not["solve"] = "needs a [solve] section"
+    elif document.blocks is None and document.solve.blocks_file is None:
+        why_not["solve"] = "needs blocks: a [blocks] section (the run's blocks stage) or solve.blocks_file"
+    elif document.blocks is not None and document.solve.blocks_file is not None:
+        raise _problem(config_path, "solve.blocks_file", "give either blocks_file or a [blocks] "
+                       "section, not both")
+    via_extract = ["extract"] if photo is not None else []
+    upstream: dict[str, list[str]] = {s: [] for s in STAGES}
+    upstream["traces"] = upstream["boxcount"] = list(via_extract)
+    dfn_refs, blocks_refs = _references(document, trace_map)
+    if "@traces" in dfn_refs:
+        upstream["dfn"] += via_extract
+    if document.blocks is not None:
+        if "@traces" in blocks_refs:
+            upstream["blocks"] += via_extract
+        if document.blocks.dfn_section is not None:
+            upstream["blocks"].append("dfn")
+            _check_dfn_section(config_path, document)
+    if document.solve is not None and document.solve.blocks_file is None:
+        upstream["solve"].append("blocks")
+
+    requested = list(run.stages) if run.stages else [s for s in STAGES if s not in why_not]
+    if not requested:
+        raise _problem(config_path, "run", "nothing to run: give [run] photo, traces or scanline, or "
+                       "a [dfn], [blocks] or [solve] section")
+    needed: set[str] = set()
+
+    def need(name: str, wanted_by: str | None) -> None:
+        if name in why_not:
+            who = "[run] stages" if wanted_by is None else f"stage {wanted_by!r} (it reads {name!r})"
+            key = "run.stages" if run.stages else "run"
+            raise _problem(config_path, key, f"{who}: stage {name!r} {why_not[name]}")
+        needed.add(name)
+        for up in upstream[name]:
+            need(up, name)
+
+    for name in requested:
+        need(name, None)
+
+    # input files of every needed stage exist
+    stage_files: dict[str, list[Path]] = {s: [] for s in STAGES}
+    if photo is not None:
+        stage_files["extract"].append(photo)
+    if traces_file is not None:
+        stage_files["traces"].append(traces_file)
+        stage_files["boxcount"].append(traces_file)
+    if scanline is not None:
+        stage_files["scanline"].append(scanline)
+    if "dfn" in needed and document.dfn.fit is not None:
+        fit = document.dfn.fit
+        for i, name in enumerate(fit.scanlines):
+            p = fit.path(name, config_path)
+            _check_file(config_path, f"dfn.fit.scanlines[{i}]", p)
+            stage_files["dfn"].append(p)
+        for i, face in enumerate(fit.faces):
+            p = fit.path(face.file, config_path)
+            if p != trace_map or photo is None:
+                _check_file(config_path, f"dfn.fit.faces[{i}].file", p)
+                stage_files["dfn"].append(p)
+            # scanline TOML beside a CSV is read by read_scanline: hash it too
+        for p in list(stage_files["dfn"]):
+            toml = p.with_suffix(".toml")
+            if toml.is_file():
+                stage_files["dfn"].append(toml)
+    if scanline is not None and scanline.with_suffix(".toml").is_file():
+        stage_files["scanline"].append(scanline.with_suffix(".toml"))
+    if "blocks" in needed:
+        p = document.blocks.traces_path(config_path)
+        if p is not None and (p != trace_map or photo is None):
+            _check_file(config_path, "blocks.traces", p)
+            stage_files["blocks"].append(p)
+    if "solve" in needed:
+        cfg = document.solve
+        p = cfg.blocks_path(config_path)
+        if p is not None:
+            _check_file(config_path, "solve.blocks_file", p)
+            stage_files["solve"].append(p)
+        base = config_path.parent
+        for i, v in enumerate(cfg.velocity_inputs):
+            if v.history.type == "csv":
+                hp = v.history.path(base)
+                _check_file(config_path, f"solve.velocity_inputs[{i}].history.file", hp)
+                stage_files["solve"].append(hp)
+
+    sections = {
+        "extract": {"imaging": _dump(document.imaging), "run.trace_sets": run.trace_sets},
+        "traces": {"run.trace_sets": run.trace_sets},
+        "boxcount": {"fractal": _dump(document.fractal)},
+        "scanline": {"run.scanline_sets": run.scanline_sets},
+        "dfn": {"dfn": _dump(document.dfn)},
+        "blocks": {"blocks": _dump(document.blocks),
+                   "dfn.sections": (_dump(document.dfn)["sections"]
+                                    if document.blocks is not None and document.blocks.dfn_section
+                                    is not None else None)},
+        "solve": {"solve": _dump(document.solve)},
+    }
+    plans: list[StagePlan] = []
+    hashes: dict[str, str] = {}
+    for name in STAGES:
+        if name not in needed:
+            continue
+        sp = StagePlan(name, sections[name], stage_files[name], upstream[name])
+        sp.hash = stage_hash(sp, {u: hashes[u] for u in sp.upstream}, __version__, config_path,
+                             out_dir)
+        hashes[name] = sp.hash
+        plans.append(sp)
+    return RunPlan(config_path=config_path, document=document, stages=plans, trace_map=trace_map,
+                   scanline=scanline, out_dir=out_dir, requested=requested, config=as_written)
+
+
+def _references(run_document, trace_map) -> tuple[set[str], set[str]]:
+    """Which stage sections read the run's trace map (after resolution: the path equals it)."""
+    dfn_refs, blocks_refs = set(), set()
+    if trace_map is None:
+        return dfn_refs, blocks_refs
+    target = str(Path(trace_map).resolve())
+    dfn = run_document.dfn
+    if dfn is not None and dfn.fit is not None and any(f.file == target for f in dfn.fit.faces):
+        dfn_refs.add("@traces")
+    blocks = run_document.blocks
+    if blocks is not None and blocks.traces == target:
+        blocks_refs.add("@traces")
+    return dfn_refs, blocks_refs
+
+
+def _check_dfn_section(config_path, document) -> None:
+    choice = document.blocks.dfn_section
+    dfn = document.dfn
+    if dfn is None:
+        raise _problem(config_path, "blocks.dfn_section", "needs the [dfn] section (a run cuts the "
+                       "section from its own DFN realization)")
+    names = [s.name for s in dfn.sections]
+    if choice.section not in names:
+        raise _problem(config_path, "blocks.dfn_section.section",
+                       f"no [[dfn.sections]] entry named {choice.section!r} (names: {names})")
+    if choice.realization >= dfn.realizations:
+        raise _problem(config_path, "blocks.dfn_section.realization",
+                       f"must be < dfn.realizations ({dfn.realizations}), got {choice.realization}")
+
+
+def _dump(section) -> Any:
+    return None if section is None else section.model_dump(mode="json")
+
+
+def _file_digest(path: Path) -> str:
+    from .manifest import file_sha256
+
+    return file_sha256(path)[0]
+
+
+def stage_hash(stage: StagePlan, upstream_hashes: dict[str, str], version: str, config_path,
+               out_dir) -> str:
+    """SHA-256 of the stage's sections, input-file contents, upstream hashes and rockmass version.
+
+    File paths are hashed relative to the config's folder where they can be, so moving a project
+    folder keeps its hashes; a run's own outputs (``@traces`` of a photo) enter through the upstream
+    hash, not as files.
+    """
+    from .config import canonical_json
+
+    base = Path(config_path).resolve().parent
+    files = []
+    for p in stage.files:
+        rp = Path(p).resolve()
+        shown = os.path.relpath(rp, base)
+        files.append([shown, _file_digest(rp)])
+    sections = _relative_paths(stage.sections, base, Path(out_dir).resolve())
+    doc = {"stage": stage.name, "sections": sections, "files": files,
+           "upstream": upstream_hashes, "rockmass_version": version}
+    return hashlib.sha256(canonical_json(doc).encode("utf-8")).hexdigest()
+
+
+def _relative_paths(obj: Any, base: Path, out_dir: Path) -> Any:
+    """Absolute paths inside a section (resolved ``@`` references) written so that a hash does not
+    depend on where the project or the run folder is (file contents are hashed separately): a run
+    output as ``<run>/<stage>/<file>``, anything else relative to the config's folder."""
+    if isinstance(obj, dict):
+        return {k: _relative_paths(v, base, out_dir) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [_relative_paths(v, base, out_dir) for v in obj]
+    if isinstance(obj, str) and os.path.isabs(obj):
+        path = Path(obj)
+        if path.is_relative_to(out_dir):
+            return "<run>/" + path.relative_to(out_dir).as_posix()
+        return os.path.relpath(path, base)
+    return obj
+
+
+# ---------------------------------------------------------------------------------- executing --
+
+
+def _progress_enabled() -> bool:
+    return sys.stderr.isatty() and not os.environ.get("ROCKMASS_QUIET")
+
+
+class _SolveBar:
+    """A tqdm bar per solver stage on stderr, fed by ``progress(done, total)``."""
+
+    def __init__(self) -> None:
+        self.bar = None
+        self.last = -1
+
+    def __call__(self, done: int, total: int) -> None:
+        from tqdm import tqdm
+
+        if self.bar is None or done < self.last or total != self.bar.total:
+            self.close()
+            self.bar = tqdm(total=total, desc="solve", unit="step", file=sys.stderr, leave=False)
+            self.last = 0
+        self.bar.update(done - self.last)
+        self.last = done
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
+
+
+def _ns(plan: RunPlan, argv, **kwargs) -> types.SimpleNamespace:
+    return types.SimpleNamespace(argv=list(argv), config=str(plan.config_path), json=False, **kwargs)
+
+
+def _run_stage(plan: RunPlan, stage: StagePlan, folder: Path, argv) -> dict:
+    """Run one stage into ``folder`` with its subcommand's compute-and-write function; return
+    notes for the log (e.g. a solver run that stopped)."""
+    doc = plan.document
+    run = doc.run
+    notes: dict = {}
+    if stage.name == "extract":
+        from .extract_cmd import produce
+
+        produce(_ns(plan, argv, photo=str(run.path("photo", plan.config_path)), out=str(folder),
+                    m_per_px=None, control_points=None, joint_width_px=None, face_dip_deg=None,
+                    face_dip_direction_deg=None, roi=None, roi_px=None, bright_lines=False,
+                    n_sets=run.trace_sets, debug=False), folder)
+    elif stage.name == "traces":
+        from .traces_cmd import produce
+
+        produce(_ns(plan, argv, file=str(plan.trace_map), area=None, n_sets=run.trace_sets,
+                    snap_tolerance_m=None, out=str(folder)), folder)
+    elif stage.name == "boxcount":
+        from .boxcount_cmd import produce
+
+        produce(_ns(plan, argv, file=str(plan.trace_map), grid=None, method=None, range_px=None,
+                    n_offsets=None, line_rule=None, window=None, mask="auto", threshold=None,
+                    invert=None, skeletonize=None, out=str(folder)), folder)
+    elif stage.name == "scanline":
+        from .scanline_cmd import DEFAULT_SEED, produce
+
+        produce(_ns(plan, argv, file=str(plan.scanline), n_sets=run.scanline_sets,
+                    terzaghi_cap_deg=15.0, seed=DEFAULT_SEED, out=str(folder)), folder)
+    elif stage.name == "dfn":
+        from .dfn_cmd import produce
+        from .dfn_config import DFNDocument
+
+        produce(_ns(plan, argv, seed=None, realizations=None, first=0, out=str(folder)), folder,
+                document=DFNDocument(dfn=doc.dfn))
+    elif stage.name == "blocks":
+        from .blocks_cmd import produce
+
+        section = _dfn_section(plan) if doc.blocks.dfn_section is not None else None
+        produce(_ns(plan, argv, out=str(folder)), folder, document=doc, section=section)
+    elif stage.name == "solve":
+        from .solve_cmd import produce
+        from .solver.result import FAILED_STATUSES
+
+        model = None
+        if doc.solve.blocks_file is None:
+            model = _read_blocks(plan.out_dir / "blocks" / "blocks.json")
+        bar = _SolveBar() if _progress_enabled() else None
+        try:
+            result, _ = produce(_ns(plan, argv, out=str(folder)), folder, document=doc, model=model,
+                                progress=bar)
+        finally:
+            if bar is not None:
+                bar.close()
+        if result.status in FAILED_STATUSES:
+            notes["failed"] = f"the solver stopped ({result.status}): {result.diagnostic}"
+    return notes
+
+
+def _read_blocks(path: Path):
+    from .blockgen import read_json
+
+    try:
+        return read_json(path)
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise RunError(f"{path}: cannot read the blocks stage's model: {exc}") from exc
+
+
+def _dfn_section(plan: RunPlan):
+    """(TraceMap, window) of ``[blocks.dfn_section]``: its ``[[dfn.sections]]`` plane cut through
+    the run's realization (``dfn/realization_NNNN/fractures.csv``)."""
+    from .dfn.network_io import read_fractures_csv
+    from .dfn.orientation import normal_from_dip
+    from .dfn.sampling import sample_plane
+
+    doc = plan.document
+    choice = doc.blocks.dfn_section
+    sec = next(s for s in doc.dfn.sections if s.name == choice.section)
+    path = plan.out_dir / "dfn" / f"realization_{choice.realization:04d}" / "fractures.csv"
+    try:
+        network = read_fractures_csv(path, domain_m=doc.dfn.domain_m())
+    except (OSError, ValueError) as exc:
+        raise RunError(f"{path}: cannot read the dfn stage's realization: {exc}") from exc
+    traces = sample_plane(network, sec.point_m, normal_from_dip(sec.dip_deg, sec.dip_direction_deg),
+                          sec.window_uv_m)
+    return traces, [tuple(p) for p in sec.window_uv_m]
+
+
+def _outputs(folder: Path) -> list[str]:
+    """Every file below ``folder`` except stage.json, relative, sorted (POSIX separators)."""
+    return sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*")
+                  if p.is_file() and p.name != STAGE_FILE)
+
+
+def _reusable(folder: Path, digest: str) -> list[str] | None:
+    """The outputs recorded in ``folder/stage.json`` when its hash is ``digest`` and all exist."""
+    try:
+        record = json.loads((folder / STAGE_FILE).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    outputs = record.get("outputs")
+    if record.get("hash") != digest or not isinstance(outputs, list):
+        return None
+    if not all((folder / name).is_file() for name in outputs):
+        return None
+    return outputs
+
+
+def _log(message: str) -> None:
+    print(f"rockmass run: {message}", file=sys.stderr, flush=True)
+
+
+def execute(plan: RunPlan, *, force: bool = False, argv=("rockmass", "run"),
+            log: Callable[[str], None] = _log) -> dict:
+    """Run (or reuse) every planned stage, then write run.json, report.html and manifest.json.
+
+    Returns the ``run.json`` document. Raises :class:`RunError` (exit 1) after writing everything
+    when the solver stopped (overlap, unstable); its outputs say why.
+    """
+    from . import __version__
+    from .atomic import atomic_write_json
+    from .config import config_hash
+
+    t_start = time.perf_counter()
+    out = plan.out_dir
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise RunError(f"{out}: cannot create the output folder: {exc.strerror or exc}") from exc
+    records, failures = [], []
+    for stage in plan.stages:
+        folder = out / stage.name
+        t0 = time.perf_counter()
+        outputs = None if force else _reusable(folder, stage.hash)
+        if outputs is not None:
+            status = "reused"
+            log(f"reused {stage.name} (hash {stage.hash[:12]})")
+        else:
+            status = "ran"
+            log(f"running {stage.name} ...")
+            partial = out / (stage.name + _PARTIAL)
+            shutil.rmtree(partial, ignore_errors=True)
+            notes = _run_stage(plan, stage, partial, argv)
+            if notes.get("failed"):
+                failures.append(f"{stage.name}: {notes['failed']}")
+            outputs = _outputs(partial)
+            wall = time.perf_counter() - t0
+            atomic_write_json(partial / STAGE_FILE, {
+                "stage": stage.name, "hash": stage.hash, "rockmass_version": __version__,
+                "sections": stage.sections, "upstream": stage.upstream,
+                "inputs": [str(p) for p in stage.files], "outputs": outputs, "wall_s": wall})
+            _replace_folder(partial, folder)
+            log(f"ran {stage.name} in {wall:.2f} s (hash {stage.hash[:12]})")
+        records.append({"name": stage.name, "dir": stage.name, "status": status, "hash": stage.hash,
+                        "wall_s": time.perf_counter() - t0, "outputs": outputs})
+    document = {"config": str(plan.config_path), "config_hash": config_hash(plan.config),
+                "rockmass_version": __version__, "stages": records,
+                "total_wall_s": time.perf_counter() - t_start}
+    atomic_write_json(out / RUN_FILE, document)
+    _write_report(out, log)
+    _write_manifest(plan, document, argv, failures)
+    if failures:
+        raise RunError("; ".join(failures) + f" (every output is in {out})")
+    return document
+
+
+def _replace_folder(partial: Path, folder: Path) -> None:
+    """Put the finished ``partial`` folder in place of ``folder`` (the old one removed after)."""
+    old = folder.with_name(folder.name + _OLD)
+    shutil.rmtree(old, ignore_errors=True)
+    if folder.exists():
+        os.replace(folder, old)
+    os.replace(partial, folder)
+    shutil.rmtree(old, ignore_errors=True)
+
+
+def _write_report(out: Path, log) -> None:
+    try:
+        from .run_report import write_run_report
+    except ImportError:
+        log("report.html not written: rockmass.run_report is not installed in this version")
+        return
+    write_run_report(out)
+
+
+def _write_manifest(plan: RunPlan, document: dict, argv, failures: list[str]) -> None:
+    from .atomic import atomic_write_json
+    from .manifest import MANIFEST_NAME, build_manifest, file_sha256
+
+    out = plan.out_dir
+    files = []
+    for p in sorted(out.rglob("*")):
+        rel = p.relative_to(out).as_posix()
+        if not p.is_file() or rel == MANIFEST_NAME or rel.split("/")[0].endswith((_PARTIAL, _OLD)):
+            continue
+        sha, size = file_sha256(p)
+        files.append({"path": rel, "sha256": sha, "bytes": size})
+    inputs = [plan.config_path] + sorted({p for s in plan.stages for p in s.files}, key=str)
+    manifest = build_manifest(
+        command=list(argv), config=plan.config, inputs=inputs,
+        timings_s={s["name"]: s["wall_s"] for s in document["stages"]} | {"total": document["total_wall_s"]},
+        extra={"stages": [{k: s[k] for k in ("name", "status", "hash")} for s in document["stages"]],
+               "files": files, "failures": failures})
+    atomic_write_json(out / MANIFEST_NAME, manifest)

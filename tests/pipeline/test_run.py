@@ -1,0 +1,201 @@
+"""``rockmass run``: the whole chain in one command, stage reuse by content hash, bad input.
+
+The run is the quickstart sample (``samples/quickstart.toml``: synthetic face photo and scanline ->
+extract -> traces -> boxcount -> scanline -> DFN fit + realization + section -> blocks -> solve),
+shrunk to a few hundred solver steps. Oracles: the single-stage subcommands on the same inputs
+(the run must give their numbers), the files of a first run (a reuse run must leave them
+byte-identical), and which stages a changed setting must rerun (exactly it and its downstream).
+"""
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+from rockmass.cli import main
+
+SAMPLES = Path(__file__).resolve().parents[2] / "samples"
+STAGES = ["extract", "traces", "boxcount", "scanline", "dfn", "blocks", "solve"]
+
+
+def _config_text(steps: int = 200, grid: int = 360, friction: float = 30.0) -> str:
+    text = (SAMPLES / "quickstart.toml").read_text()
+    for name in ("quickstart_face.png", "quickstart_scanline.csv"):
+        text = text.replace(f'"{name}"', json.dumps(str(SAMPLES / name)))
+    text = text.replace("max_steps = 3000", f"max_steps = {steps}")
+    text = text.replace("[fractal]\ngrid = 360", f"[fractal]\ngrid = {grid}")
+    return text.replace("friction_deg = 30.0\n\n[solve.joints.glued]",
+                        f"friction_deg = {friction!r}\n\n[solve.joints.glued]")
+
+
+def _write(folder: Path, text: str, name: str = "run.toml") -> Path:
+    path = folder / name
+    path.write_text(text)
+    return path
+
+
+def _snapshot(out: Path) -> dict:
+    """Bytes of every stage output (not run.json / manifest.json / report.html of the run)."""
+    return {p.relative_to(out).as_posix(): p.read_bytes() for p in sorted(out.rglob("*"))
+            if p.is_file() and p.parent != out}
+
+
+def _statuses(out: Path) -> dict:
+    return {s["name"]: s["status"] for s in json.loads((out / "run.json").read_text())["stages"]}
+
+
+@pytest.fixture(scope="module")
+def first_run(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("run")
+    config = _write(folder, _config_text())
+    out = folder / "out"
+    assert main(["run", str(config), "--out", str(out)]) == 0
+    return config, out
+
+
+def _has_report() -> bool:
+    import importlib.util
+
+    return importlib.util.find_spec("rockmass.run_report") is not None
+
+
+def test_run_writes_every_stage_folder_run_json_manifest_and_report(first_run):
+    _, out = first_run
+    report = ["report.html"] if _has_report() else []  # rockmass.run_report is another change
+    assert sorted(p.name for p in out.iterdir()) == sorted(STAGES + ["run.json", "manifest.json",
+                                                                     *report])
+    run = json.loads((out / "run.json").read_text())
+    assert set(run) == {"config", "config_hash", "rockmass_version", "stages", "total_wall_s"}
+    assert [s["name"] for s in run["stages"]] == STAGES
+    for s in run["stages"]:
+        assert set(s) == {"name", "dir", "status", "hash", "wall_s", "outputs"}
+        assert s["status"] == "ran" and len(s["hash"]) == 64
+        folder = out / s["dir"]
+        listed = sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*")
+                        if p.is_file() and p.name != "stage.json")
+        assert listed == s["outputs"]
+        assert json.loads((folder / "stage.json").read_text())["hash"] == s["hash"]
+    # exactly the files each single-stage subcommand writes
+    assert set(run["stages"][0]["outputs"]) == {"traces.geojson", "summary.json", "overlay.png",
+                                                "rose.png", "manifest.json"}
+    assert set(run["stages"][2]["outputs"]) == {"boxcount.json", "boxcount.png", "manifest.json"}
+    manifest = json.loads((out / "manifest.json").read_text())
+    listed = {f["path"] for f in manifest["extra"]["files"]}
+    assert {"run.json", "solve/result.json", "dfn/fitted.json"} <= listed
+    assert ("report.html" in listed) == _has_report()
+    assert len(list(out.glob("*.partial"))) == 0
+
+
+def test_run_numbers_equal_the_single_stage_subcommands(first_run, tmp_path, capsys):
+    config, out = first_run
+    capsys.readouterr()
+    traces = out / "extract" / "traces.geojson"
+    assert main(["boxcount", str(traces), "--config", str(config), "--json"]) == 0
+    alone = json.loads(capsys.readouterr().out)
+    in_run = json.loads((out / "boxcount" / "boxcount.json").read_text())
+    assert in_run["dimension"] == alone["dimension"] and in_run["r2"] == alone["r2"]
+
+    assert main(["traces", str(traces), "--json"]) == 0
+    alone = json.loads(capsys.readouterr().out)
+    in_run = json.loads((out / "traces" / "summary.json").read_text())
+    assert in_run["Fracture Intensity P21"] == alone["Fracture Intensity P21"]
+    assert in_run["sets"] == alone["sets"]
+
+    assert main(["scanline", str(SAMPLES / "quickstart_scanline.csv"), "--json"]) == 0
+    alone = json.loads(capsys.readouterr().out)
+    in_run = json.loads((out / "scanline" / "summary.json").read_text())
+    assert in_run["all"] == alone["all"] and in_run["sets"] == alone["sets"]
+
+    # solve the run's block model alone: same displacements to the last bit
+    text = _config_text()
+    _, solve = text.split("\n[solve]\n", 1)
+    alone_cfg = _write(tmp_path, f'[solve]\nblocks_file = {json.dumps(str(out / "blocks" / "blocks.json"))}\n'
+                       + solve, "solve.toml")
+    assert main(["solve", str(alone_cfg), "--out", str(tmp_path / "solve"), "--json"]) == 0
+    capsys.readouterr()
+    a = json.loads((tmp_path / "solve" / "result.json").read_text())
+    b = json.loads((out / "solve" / "result.json").read_text())
+    assert a["max_displacement_m"] == b["max_displacement_m"]
+    assert a["monitors"] == b["monitors"]
+    assert (tmp_path / "solve" / "history.csv").read_bytes() == (out / "solve" / "history.csv").read_bytes()
+
+
+def test_photo_extraction_finds_the_synthetic_faces_two_sets(first_run):
+    _, out = first_run
+    summary = json.loads((out / "traces" / "summary.json").read_text())
+    truth = json.loads((SAMPLES / "quickstart_face_meta.json").read_text())["trace_angles_deg"]
+    means = sorted(s["Mean Angle"]["value"] for s in summary["sets"])
+    assert len(means) >= 2
+    for angle in truth:  # every true set has an extracted set within 10 degrees (axial)
+        assert min(min(abs(angle - m), 180 - abs(angle - m)) for m in means) < 10.0
+
+
+@pytest.fixture
+def copy_of_run(first_run, tmp_path):
+    config, out = first_run
+    copy = tmp_path / "out"
+    shutil.copytree(out, copy)
+    return config, copy
+
+
+def test_second_run_reuses_every_stage_and_leaves_outputs_byte_identical(copy_of_run, capfd):
+    config, out = copy_of_run
+    before = _snapshot(out)
+    assert main(["run", str(config), "--out", str(out)]) == 0
+    err = capfd.readouterr().err
+    assert _statuses(out) == {s: "reused" for s in STAGES}
+    for s in STAGES:
+        assert f"reused {s} (hash " in err
+    assert _snapshot(out) == before
+
+
+def test_changing_solve_only_reruns_solve(copy_of_run, tmp_path):
+    _, out = copy_of_run
+    before = _snapshot(out)
+    changed = _write(tmp_path, _config_text(friction=35.0), "changed.toml")
+    assert main(["run", str(changed), "--out", str(out)]) == 0
+    assert _statuses(out) == {**{s: "reused" for s in STAGES}, "solve": "ran"}
+    after = _snapshot(out)
+    assert all(after[k] == v for k, v in before.items() if not k.startswith("solve/"))
+    assert after["solve/history.csv"] != before["solve/history.csv"]
+
+
+def test_changing_fractal_only_reruns_boxcount(copy_of_run, tmp_path):
+    _, out = copy_of_run
+    changed = _write(tmp_path, _config_text(grid=256), "changed.toml")
+    assert main(["run", str(changed), "--out", str(out)]) == 0
+    assert _statuses(out) == {**{s: "reused" for s in STAGES}, "boxcount": "ran"}
+    assert json.loads((out / "boxcount" / "boxcount.json").read_text())["grid"] == 256
+
+
+def test_force_recomputes_every_stage_with_the_same_numbers(copy_of_run):
+    config, out = copy_of_run
+    before = json.loads((out / "solve" / "result.json").read_text())["max_displacement_m"]
+    assert main(["run", str(config), "--out", str(out), "--force"]) == 0
+    assert _statuses(out) == {s: "ran" for s in STAGES}
+    assert json.loads((out / "solve" / "result.json").read_text())["max_displacement_m"] == before
+
+
+def test_requested_stages_run_only_what_they_need(tmp_path):
+    text = _config_text().replace('[run]\n', '[run]\nstages = ["boxcount"]\n', 1)
+    out = tmp_path / "out"
+    assert main(["run", str(_write(tmp_path, text)), "--out", str(out)]) == 0
+    assert _statuses(out) == {"extract": "ran", "boxcount": "ran"}
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda t: t.replace("quickstart_face.png", "no_such_photo.png"), "run.photo"),
+    (lambda t: t.replace("[run]\n", "[run]\nphotograph = \"x.png\"\n", 1), "run.photograph"),
+    (lambda t: t.replace('[run]\n', '[run]\nstages = ["solve"]\n', 1).split("\n[blocks]\n")[0]
+     + "\n" + "[solve]\n" + t.split("\n[solve]\n", 1)[1], "needs blocks"),
+    (lambda t: f'[run]\nscanline = {json.dumps(str(SAMPLES / "quickstart_scanline.csv"))}\n'
+     'stages = ["boxcount"]\n', "stage 'boxcount' needs a trace map"),
+    (lambda t: t.replace('file = "@traces"', 'file = "@trace"'), "dfn.fit.faces[0].file"),
+], ids=["missing-photo", "unknown-key", "solve-without-blocks", "boxcount-without-traces", "unknown-ref"])
+def test_bad_input_exits_2_naming_the_field_before_any_stage_runs(tmp_path, capsys, edit, message):
+    config = _write(tmp_path, edit(_config_text()))
+    out = tmp_path / "out"
+    assert main(["run", str(config), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and str(config) in err
+    assert not out.exists()
