@@ -15,9 +15,16 @@ this process, in a local process pool or on a Dask worker:
    block), whether every stage converged, and how many blocks ended inside the opening (fallen
    or falling: their displacement is a fall, and while they fall the stage does not converge).
 
-Numba runs one thread per task (``numba.set_num_threads(1)``; pools also get
-``NUMBA_NUM_THREADS=1``): the workers are the parallelism, and a case's numbers do not depend on
-how many threads computed them. The results are the same whatever the executor and worker count.
+Numba runs one thread per task (``numba.set_num_threads(1)``), and worker processes get
+``NUMBA_NUM_THREADS``, ``OMP_NUM_THREADS``, ``MKL_NUM_THREADS`` and ``OPENBLAS_NUM_THREADS`` = 1
+before they import numpy (local pool: set when the processes are spawned; Dask: its nanny's
+defaults, and again by the worker plugin): the workers are the parallelism, and a case's numbers do
+not depend on how many threads computed them. Each worker loads the compiled kernels once, before
+its first case (:func:`init_worker`: a tiny case through blocks, box counting and a few DEM steps;
+the local pool's initializer, a Dask worker plugin, which also covers workers that join later).
+Local pools and Dask get the cases longest first (:func:`case_cost`, an estimate from the config:
+blocks x step cap), so that a long case does not start last and leave the other workers idle. The
+results are the same whatever the executor, worker count and order.
 
 The parent process is the only writer: each finished case goes to ``cases/<id>/case.json``
 (atomically), then ``results.csv`` is rebuilt from all finished cases in case order (atomically), so
@@ -36,7 +43,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 __all__ = ["run_case", "joint_network_segments", "CSV_COLUMNS", "results_rows", "csv_text",
-           "run_tasks", "init_worker", "load_finished"]
+           "run_tasks", "init_worker", "load_finished", "case_cost"]
 
 CASE_FILE = "case.json"
 RESULTS_FILE = "results.csv"
@@ -64,18 +71,102 @@ def limit_threads() -> int | None:
     return previous
 
 
-def init_worker() -> None:
-    """Initializer of a local worker process: one numba thread, kernels loaded once (from numba's
-    on-disk cache when it has them) so that the first case does not pay for them."""
-    os.environ["NUMBA_NUM_THREADS"] = "1"
-    os.environ["OMP_NUM_THREADS"] = "1"
-    try:
-        import numba
+# one thread per worker process for every threaded library (set before numpy is imported)
+THREAD_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
+              "OPENBLAS_NUM_THREADS": "1"}
 
-        numba.set_num_threads(1)
-        from .solver import _kernels  # noqa: F401  (compiled lazily per signature; import is cheap)
+_WARM = {"count": 0, "seconds": None}  # init_worker calls in this process, time of the first
+
+# a tiny case (12 m square, two sets, a tunnel, a few steps of each stage): loads every kernel the
+# chain uses from numba's on-disk cache (or compiles it) without any case paying for it
+_WARMUP_CONFIG = {
+    "blocks": {"domain": {"width_m": 12.0, "height_m": 12.0, "origin_xy_m": [-6.0, -6.0]},
+               "two_sets": {"alpha_deg": 30.0, "theta_deg": 60.0, "spacing_m": [3.0, 4.0]},
+               "excavations": [{"shape": "circle", "name": "t", "center_xy_m": [0.0, 0.0],
+                                "radius_m": 2.0, "n_sides": 12}]},
+    "fractal": {"grid": 64, "n_offsets": 2},
+    "solve": {"material": {"density_kg_m3": 2650.0},
+              "joints": {"default": {"model": "coulomb", "kn_pa_m": 1e9, "ks_pa_m": 5e8,
+                                     "friction_deg": 30.0}},
+              "insitu": {"syy_pa": 1e6, "sxx_pa": 1e6},
+              "fixes": [{"where": "bottom", "dofs": "y"}, {"where": "left", "dofs": "x"},
+                        {"where": "right", "dofs": "x"}],
+              "boundary_stress": [{"sides": ["top"], "from_insitu": True}],
+              "stages": [{"name": "equilibrium", "max_steps": 20},
+                         {"name": "t", "excavate": ["t"], "max_steps": 20}]},
+}
+
+
+def init_worker() -> None:
+    """Set up a worker process, once: one thread per threaded library (:data:`THREAD_ENV`; numba's
+    is also set per task by :func:`run_case`), then warm the compiled kernels with a tiny case so
+    that the first real case does not pay for loading them. Never raises (warming is an
+    optimisation); a second call in the same process only counts itself."""
+    os.environ.update(THREAD_ENV)
+    _WARM["count"] += 1
+    if _WARM["count"] > 1:
+        return
+    t0 = time.perf_counter()
+    try:
+        limit_threads()
+        from .config import RockmassConfig
+
+        document = RockmassConfig.model_validate(_WARMUP_CONFIG)
+        path = Path(os.getcwd()) / "warmup.toml"  # names no file
+        model = _build_model(document, path)
+        _fractal(document, path, model)
+        _solve(document, path, model)
     except Exception:  # noqa: BLE001 - warming is an optimisation, never a failure
         pass
+    _WARM["seconds"] = time.perf_counter() - t0
+
+
+def dask_worker_plugin():
+    """A Dask ``WorkerPlugin`` that runs :func:`init_worker` once on every worker of the cluster,
+    including workers that join later (``client.register_plugin``)."""
+    from distributed.diagnostics.plugin import WorkerPlugin
+
+    class RockmassWorkerInit(WorkerPlugin):
+        name = "rockmass-init-worker"
+        idempotent = True  # registering it again (another study on the cluster) is a no-op
+
+        def setup(self, worker):
+            init_worker()
+
+    return RockmassWorkerInit()
+
+
+def case_cost(document) -> float:
+    """Relative cost of a case, from its config alone, to order cases longest first: an estimate
+    of the block count (1 + the joint crossings in the domain: area x sum over pairs of sets of
+    P21_i P21_j |sin(angle between them)|; a DFN section counts as area x P32^2 / 2) times the
+    solver's step cap (the sum of the stages' max_steps; 1 without [solve]). Only the order of the
+    cases of one study depends on it, never a result."""
+    cfg = document.blocks
+    try:
+        if cfg.domain is not None:
+            xy = cfg.domain.xy_m()
+        else:
+            xy = next(s.window_uv_m for s in document.dfn.sections
+                      if s.name == cfg.dfn_section.section)
+        area = 0.5 * abs(sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1) in zip(xy, [*xy[1:], xy[0]])))
+        sets = []  # (P21 per m, angle rad)
+        for js in cfg.joint_sets():
+            persistence = 1.0
+            if js.trace_length_m is not None and js.gap_length_m is not None:
+                persistence = js.trace_length_m / (js.trace_length_m + js.gap_length_m)
+            sets.append((persistence / js.spacing_m, math.radians(js.angle_deg)))
+        crossings = sum(p * q * abs(math.sin(a - b)) for i, (p, a) in enumerate(sets)
+                        for q, b in sets[i + 1:])
+        if cfg.dfn_section is not None and document.dfn is not None:
+            p32 = sum(s.intensity.value for s in document.dfn.sets)
+            crossings += 0.5 * p32 * p32
+        blocks = 1.0 + area * crossings
+        solve = getattr(document, "solve", None)
+        steps = float(sum(st.max_steps for st in solve.stages)) if solve is not None else 1.0
+        return blocks * steps
+    except Exception:  # noqa: BLE001 - an estimate: a config it does not understand costs 1
+        return 1.0
 
 
 def joint_network_segments(document, config_path, model=None):
@@ -236,7 +327,10 @@ def run_case(task: dict) -> dict:
     from .config import RockmassConfig
 
     limit_threads()
+    numba_threads = _numba_threads()
     t0 = time.perf_counter()
+    cpu0 = time.process_time()
+    started = time.time()
     out = {k: task[k] for k in ("case", "case_id", "params", "realization", "seed")}
     out.update({"status": "ok", "error": None})
     timings = {}
@@ -260,8 +354,21 @@ def run_case(task: dict) -> dict:
         out["traceback"] = traceback.format_exc(limit=8)
     out["timings_s"] = timings
     out["wall_time_s"] = time.perf_counter() - t0
+    # CPU time of the worker process during the case (wall >> CPU: the worker waited for a core)
+    out["cpu_time_s"] = time.process_time() - cpu0
+    out["started_at"], out["finished_at"] = started, time.time()  # epoch s: the schedule
     out["worker_pid"] = os.getpid()
+    out["numba_threads"] = numba_threads  # in the thread that ran the case
+    out["worker_warmups"] = _WARM["count"]  # init_worker calls in this process (1 on a worker)
     return out
+
+
+def _numba_threads() -> int | None:
+    try:
+        import numba
+    except ImportError:  # pragma: no cover - numba is a dependency
+        return None
+    return int(numba.get_num_threads())
 
 
 # ------------------------------------------------------------------------------------ results
@@ -345,22 +452,32 @@ def _result(future, task: dict) -> dict:
         return out
 
 
+def _longest_first(tasks: list[dict]) -> list[dict]:
+    """Tasks by decreasing estimated cost (``task["cost"]``, :func:`case_cost`), then case order:
+    the longest-processing-time-first rule, so that the last case to start is a short one."""
+    return sorted(tasks, key=lambda t: (-float(t.get("cost") or 0.0), t["case"]))
+
+
 def run_tasks(tasks: list[dict], on_done: Callable[[dict], None], *, workers: int = 1,
               scheduler: str | None = None, client=None) -> str:
     """Run ``run_case`` over ``tasks`` and call ``on_done(result)`` in this process as each one
     finishes (any order). Returns a description of the executor.
 
     ``scheduler`` (or an already connected Dask ``client``): a Dask cluster; else ``workers`` > 1: a
-    local process pool (spawned processes, one numba thread each); else serially in this process.
+    local process pool (spawned processes, one thread each); else serially in this process, in case
+    order. Pools and Dask get the tasks longest first (``task["cost"]``).
     """
     if not tasks:
         return "none (every case was finished)"
     if client is not None or scheduler is not None:
         from dask.distributed import as_completed
 
-        client.run(init_worker)  # one numba thread and the kernels loaded, once per worker
+        # one thread per library and the kernels loaded, once per worker (and on workers that join)
+        client.register_plugin(dask_worker_plugin())
+        ordered = _longest_first(tasks)
         futures = {client.submit(run_case, t, key=f"rockmass-case-{t['case_id'][:16]}-{i}",
-                                 pure=False): t for i, t in enumerate(tasks)}
+                                 pure=False, priority=len(ordered) - i): t
+                   for i, t in enumerate(ordered)}
         try:
             for fut in as_completed(list(futures), loop=client.loop):
                 on_done(_result(fut, futures[fut]))
@@ -382,17 +499,28 @@ def run_tasks(tasks: list[dict], on_done: Callable[[dict], None], *, workers: in
     import multiprocessing
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                               initializer=init_worker)
+    # spawned processes inherit this environment: one thread per library before numpy loads
+    saved = {k: os.environ.get(k) for k in THREAD_ENV}
+    os.environ.update(THREAD_ENV)
     try:
-        futures = {pool.submit(run_case, t): t for t in tasks}
-        pending = set(futures)
-        while pending:
-            done, pending = wait(pending, return_when=FIRST_COMPLETED)
-            for fut in sorted(done, key=lambda f: futures[f]["case"]):
-                on_done(_result(fut, futures[fut]))
-    except BaseException:
-        pool.shutdown(wait=False, cancel_futures=True)
-        raise
-    pool.shutdown(wait=True)
+        pool = ProcessPoolExecutor(max_workers=workers,
+                                   mp_context=multiprocessing.get_context("spawn"),
+                                   initializer=init_worker)
+        try:
+            futures = {pool.submit(run_case, t): t for t in _longest_first(tasks)}
+            pending = set(futures)
+            while pending:
+                done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                for fut in sorted(done, key=lambda f: futures[f]["case"]):
+                    on_done(_result(fut, futures[fut]))
+        except BaseException:
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+        pool.shutdown(wait=True)
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
     return f"local process pool ({workers} workers)"

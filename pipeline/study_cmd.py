@@ -121,7 +121,8 @@ def run(args) -> int:
     from .atomic import atomic_write_json, atomic_write_text
     from .manifest import build_manifest
     from .outputs import output_folder, print_json
-    from .study import RESULTS_FILE, CASE_FILE, csv_text, load_finished, results_rows, run_tasks
+    from .study import (RESULTS_FILE, CASE_FILE, case_cost, csv_text, load_finished, results_rows,
+                        run_tasks)
     from .study_config import expand_cases, load_study, standalone_config, toml_text
 
     t_start = time.perf_counter()
@@ -153,7 +154,8 @@ def run(args) -> int:
 
     config_path = os.path.abspath(args.config)
     tasks = [{"case": c.index, "case_id": c.case_id, "config": c.raw, "config_path": config_path,
-              "params": c.params, "realization": c.realization, "seed": c.seed} for c in pending]
+              "params": c.params, "realization": c.realization, "seed": c.seed,
+              "cost": case_cost(c.document)} for c in pending]  # cost: pools run longest first
     by_id = {c.case_id: c for c in cases}
     failed: dict[str, dict] = {}
     counter = {"done": 0}

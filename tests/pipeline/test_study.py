@@ -131,6 +131,7 @@ def test_two_local_workers_give_the_same_results_as_serial(serial_run, tmp_path)
     assert _without_time(_rows(out2 / "results.csv")) == _without_time(_rows(out / "results.csv"))
     manifest = json.loads((out2 / "manifest.json").read_text())
     assert manifest["extra"]["executor"].startswith("local process pool (2 workers)")
+    _assert_one_thread_and_warmed_once(out2, n_workers=2)
 
 
 def test_rerun_skips_finished_cases_and_reruns_a_missing_one(serial_run, tmp_path, capsys):
@@ -324,6 +325,17 @@ def test_dask_local_cluster_gives_the_same_results(serial_run, tmp_path, capsys)
         assert code == 0, capsys.readouterr().err
     assert _without_time(_rows(target / "results.csv")) == _without_time(_rows(out / "results.csv"))
     assert json.loads((target / "manifest.json").read_text())["extra"]["executor"].startswith("dask")
+    _assert_one_thread_and_warmed_once(target, n_workers=2)
+
+
+def _assert_one_thread_and_warmed_once(target, n_workers):
+    """Every case ran with one numba thread in a worker process whose kernels were warmed exactly
+    once, before its first case (the pool's initializer / the Dask worker plugin)."""
+    records = [json.loads(p.read_text()) for p in (target / "cases").glob("*/case.json")]
+    assert len(records) == 4
+    assert {r["numba_threads"] for r in records} == {1}
+    assert {r["worker_warmups"] for r in records} == {1}
+    assert 1 <= len({r["worker_pid"] for r in records}) <= n_workers  # a slow starter may get none
 
 
 def test_unreachable_scheduler_exits_2_before_any_case_runs(tmp_path, capsys):
