@@ -12,10 +12,14 @@ from __future__ import annotations
 
 import base64
 import html
-import io
 import json
 import math
 from collections import OrderedDict
+
+from .html_report import BASE_CSS, figure, pyplot
+from .html_report import fmt as _fmt
+from .html_report import png_base64 as _png
+from .html_report import table as _table
 
 __all__ = ["write_report", "colour_field", "groups"]
 
@@ -71,23 +75,13 @@ def _mean_sd(values):
     return m, sd, len(vals)
 
 
-def _png(fig) -> str:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
-    return base64.b64encode(buf.getvalue()).decode("ascii")
-
-
 def _disp_key(study) -> str:
     return "max_displacement_boundary_m" if study.displacement == "boundary" else \
         "max_displacement_overall_m"
 
 
 def _figures(study, cases, finished) -> list[tuple[str, str]]:
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     figs = []
     key = _disp_key(study)
     cfield = colour_field(study, cases)
@@ -232,24 +226,6 @@ def _params_short(params: dict) -> str:
     return ", ".join(f"{k.rsplit('.', 1)[-1]}={_label(v)}" for k, v in params.items())
 
 
-def _fmt(v, digits=4) -> str:
-    if v is None:
-        return ""
-    if isinstance(v, bool):
-        return "yes" if v else "no"
-    if isinstance(v, float):
-        return f"{v:.{digits}g}" if math.isfinite(v) else ""
-    if isinstance(v, (list, dict)):
-        return json.dumps(v)
-    return str(v)
-
-
-def _table(header: list[str], rows: list[list[str]]) -> str:
-    head = "".join(f"<th>{html.escape(h)}</th>" for h in header)
-    body = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>" for r in rows)
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
-
-
 def write_report(path, document, cases, finished: dict, failed: dict, summary: dict,
                  config_path) -> None:
     """Write ``report.html`` (atomically)."""
@@ -280,24 +256,15 @@ def write_report(path, document, cases, finished: dict, failed: dict, summary: d
         thumbs = _model_thumbnails(study, cases, finished, config_path) if finished else []
     except Exception:  # noqa: BLE001
         thumbs = []
-    thumbs_html = "".join(f'<figure class="thumb"><img alt="{html.escape(cap)}" '
-                          f'src="data:image/png;base64,{b64}"><figcaption>{html.escape(cap)}'
-                          "</figcaption></figure>" for cap, b64 in thumbs)
-    images = "".join(f'<figure><img alt="{html.escape(cap)}" src="data:image/png;base64,{b64}">'
-                     f"<figcaption>{html.escape(cap)}</figcaption></figure>" for cap, b64 in figs)
+    thumbs_html = "".join(figure(cap, b64, "thumb") for cap, b64 in thumbs)
+    images = "".join(figure(cap, b64) for cap, b64 in figs)
     info = (f"{summary['finished']} of {summary['cases']} cases finished, {summary['failed']} "
             f"failed, {summary['skipped']} reused from an earlier run; executor: "
             f"{summary['executor']}; status: {summary['status']}")
     page = f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>rockmass study report</title>
 <style>
-body {{ font-family: sans-serif; margin: 2em; max-width: 1200px; color: #222; }}
-table {{ border-collapse: collapse; font-size: 12px; margin: 1em 0; }}
-th, td {{ border: 1px solid #ccc; padding: 2px 6px; text-align: right; }}
-th {{ background: #f2f2f2; }}
-figure {{ margin: 1em 0; }} img {{ max-width: 100%; }}
-figcaption {{ font-size: 13px; color: #555; }}
-.thumbs {{ display: flex; flex-wrap: wrap; gap: 1em; }}
+{BASE_CSS}.thumbs {{ display: flex; flex-wrap: wrap; gap: 1em; }}
 figure.thumb {{ width: 360px; margin: 0; }}
 </style></head><body>
 <h1>rockmass study</h1>

@@ -1,0 +1,566 @@
+"""``report.html`` of ``rockmass run``: one self-contained page for a run folder.
+
+``rockmass run CONFIG --out DIR`` writes each stage's files into ``DIR/<stage>/`` (exactly what the
+single-stage subcommand writes into its ``--out``), then ``DIR/run.json`` (config, its hash, the
+rockmass version and, per stage, status ``ran`` / ``reused``, hash, wall time and outputs), then
+calls :func:`write_run_report`. The page (no script, no network, every image embedded as a base64
+``data:`` URI, readable when printed) has one section per topic, shown only when the stage that
+feeds it is in the folder:
+
+========================  ==========================================================================
+section                   from
+========================  ==========================================================================
+run summary, timings      ``run.json``
+inputs                    each stage's ``manifest.json`` (paths, SHA-256, sizes)
+traces                    ``extract/overlay.png``, ``extract/rose.png``, ``traces/traces.png``,
+                          ``traces/rose.png``
+stereonet                 ``scanline/stereonet.png``
+box counting              ``boxcount/boxcount.png`` and ``boxcount.json``; D of traces / extract
+intensities               P10 (scanline), P20 / P21 (traces, extract, boxcount, DFN sections), P32 (DFN)
+DFN                       ``dfn/fitted.json``, ``dfn/manifest.json`` (config), realization summaries
+block model               ``blocks/blocks.png``, ``blocks/blocks.json``
+solver stages, energy     ``solve/result.json``
+displacement map          ``solve/blocks_NNNN.vtu`` of the last frame (drawn here)
+histories                 ``solve/history.csv`` (drawn here) and the monitors of ``result.json``
+========================  ==========================================================================
+
+A missing or unreadable file gives a short note in its section, never an exception: the report is
+written after the run's outputs and must not make a finished run fail.
+"""
+
+from __future__ import annotations
+
+import csv
+import html
+import json
+import math
+from pathlib import Path
+
+from .html_report import (BASE_CSS, PRINT_CSS, figure, file_data_uri, fmt, note, png_base64, pyplot,
+                          table)
+
+__all__ = ["STAGES", "write_run_report"]
+
+#: Stage folder names, in chain order.
+STAGES = ("extract", "traces", "scanline", "boxcount", "dfn", "blocks", "solve")
+
+
+class _Note(Exception):
+    """A file the section needs is missing or unreadable; the message is shown in its place."""
+
+
+class _Run:
+    """The run folder: ``run.json`` (or ``None`` and a note) and the stage folders present."""
+
+    def __init__(self, out: Path):
+        self.out = out
+        self.doc, self.note = None, None
+        try:
+            self.doc = _json(out / "run.json", out)
+            if not isinstance(self.doc.get("stages", []), list):
+                raise _Note("run.json: 'stages' is not a list")
+        except (_Note, AttributeError) as exc:
+            self.doc, self.note = None, str(exc) if isinstance(exc, _Note) else "run.json: not an object"
+        self.dirs: dict[str, Path] = {}
+        for name in STAGES:
+            folder = out / name
+            for entry in self.stage_entries():
+                if entry.get("name") == name and entry.get("dir"):
+                    folder = out / str(entry["dir"])  # an absolute dir replaces out
+            if folder.is_dir():
+                self.dirs[name] = folder
+
+    def stage_entries(self) -> list[dict]:
+        return [e for e in (self.doc or {}).get("stages", []) if isinstance(e, dict)]
+
+    def has(self, *names: str) -> bool:
+        return any(n in self.dirs for n in names)
+
+    def json(self, stage: str, name: str):
+        return _json(self.dirs[stage] / name, self.out)
+
+
+# ------------------------------------------------------------------------------------ helpers --
+
+
+def _rel(path: Path, out: Path) -> str:
+    try:
+        return str(path.relative_to(out))
+    except ValueError:
+        return path.name
+
+
+def _json(path: Path, out: Path):
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise _Note(f"{_rel(path, out)} is missing") from None
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise _Note(f"{_rel(path, out)} is not readable JSON ({exc})") from None
+
+
+def _image(run: _Run, stage: str, name: str, caption: str) -> str:
+    """An image of a stage folder as a figure, or a note when it is missing or broken."""
+    path = run.dirs[stage] / name
+    try:
+        return figure(caption, file_data_uri(path))
+    except FileNotFoundError:
+        return note(f"{_rel(path, run.out)} is missing.")
+    except (OSError, ValueError) as exc:
+        return note(f"{_rel(path, run.out)} cannot be shown ({exc}).")
+
+
+def _value(entry):
+    """The number of a summary entry: ``{"value": x, "unit": u}`` or a plain number."""
+    return entry.get("value") if isinstance(entry, dict) else entry
+
+
+def _stage_statistics(run: _Run, stage: str) -> dict:
+    """Trace-map statistics of ``traces`` (summary.json) or ``extract`` (summary.json "statistics")."""
+    doc = run.json(stage, "summary.json")
+    stats = doc.get("statistics") if stage == "extract" else doc
+    if not isinstance(stats, dict):
+        raise _Note(f"{stage}/summary.json has no trace statistics (no trace was found)")
+    return stats
+
+
+def _no_negative_zero(v):
+    return v + 0.0 if isinstance(v, float) else v  # -0.0 + 0.0 is 0.0: a ledger shows "0", not "-0"
+
+
+def _sub(title: str, body: str) -> str:
+    return f"<h3>{html.escape(title)}</h3>{body}"
+
+
+# ----------------------------------------------------------------------------------- sections --
+
+
+def _section_run(run: _Run) -> str:
+    """Config, hash, version, and per stage: status, wall time, outputs (the timings table)."""
+    if run.doc is None:
+        found = ", ".join(run.dirs) or "none"
+        return note(f"{run.note}; stage folders found: {found}.")
+    d = run.doc
+    rows = [["config", str(d.get("config", ""))], ["config hash", str(d.get("config_hash", ""))],
+            ["rockmass version", str(d.get("rockmass_version", ""))],
+            ["total wall time (s)", fmt(d.get("total_wall_s"))]]
+    info = table(["item", "value"], rows, "t-run")
+    stages = [[str(e.get("name", "")), str(e.get("status", "")), fmt(e.get("wall_s")),
+               str(len(e.get("outputs") or [])), str(e.get("hash", ""))[:12]]
+              for e in run.stage_entries()]
+    timings = table(["stage", "status", "wall time (s)", "outputs", "hash"], stages, "t-timings")
+    return info + _sub("Stages and timings (reused: unchanged inputs and settings, not rerun)", timings)
+
+
+def _section_inputs(run: _Run) -> str:
+    """Input files of every stage (from its manifest.json): path, SHA-256, size."""
+    rows, notes = [], []
+    for stage in run.dirs:
+        try:
+            manifest = run.json(stage, "manifest.json")
+        except _Note as exc:
+            notes.append(note(f"{exc}."))
+            continue
+        for item in manifest.get("inputs") or []:
+            if isinstance(item, dict):
+                rows.append([stage, str(item.get("path", "")), str(item.get("sha256", ""))[:16],
+                             fmt(item.get("bytes"))])
+    return (table(["stage", "file", "SHA-256 (first 16)", "bytes"], rows, "t-inputs") if rows
+            else note("No input file recorded.")) + "".join(notes)
+
+
+def _section_traces(run: _Run) -> str:
+    """Trace overlay on the photo, trace map by set, rose diagrams."""
+    parts = []
+    if run.has("extract"):
+        parts.append(_image(run, "extract", "overlay.png", "Extracted traces over the photograph, by set"))
+        parts.append(_image(run, "extract", "rose.png", "Rose diagram of the extracted traces "
+                                                        "(length-weighted)"))
+    if run.has("traces"):
+        parts.append(_image(run, "traces", "traces.png", "Digitised trace map, by set"))
+        parts.append(_image(run, "traces", "rose.png", "Rose diagram of the trace map (length-weighted)"))
+    return "".join(parts)
+
+
+def _section_stereonet(run: _Run) -> str:
+    """Poles of the scanline survey with the fitted sets."""
+    return _image(run, "scanline", "stereonet.png",
+                  "Poles to joints of the scanline (lower hemisphere, equal area), by set")
+
+
+def _section_boxcount(run: _Run) -> str:
+    """Box-count plot and D ± 95 % interval, R² (also the D of traces / extract, when present)."""
+    rows, notes = [], []
+
+    def add(source, d, ci, r2, fit_range, grid, method):
+        ci = ci if isinstance(ci, list) and len(ci) == 2 else [None, None]
+        rows.append([source, fmt(d), fmt(ci[0]), fmt(ci[1]), fmt(r2),
+                     "–".join(fmt(v) for v in fit_range or []), fmt(grid), fmt(method)])
+
+    doc = None
+    try:
+        doc = run.json("boxcount", "boxcount.json")
+        add("boxcount", doc.get("dimension"), doc.get("ci95"), doc.get("r2"), doc.get("fit_range_px"),
+            doc.get("grid"), doc.get("method"))
+    except _Note as exc:
+        notes.append(note(f"{exc}."))
+    for stage in ("traces", "extract"):
+        if run.has(stage):
+            try:
+                e = _stage_statistics(run, stage).get("Box-counting Dimension") or {}
+                add(stage, e.get("value"), e.get("ci95"), e.get("r2"), e.get("fit_range_px"),
+                    e.get("grid"), e.get("method"))
+            except _Note as exc:
+                notes.append(note(f"{exc}."))
+    caption = "Box counting: number of occupied boxes against box size, with the fitted line"
+    if doc is not None and isinstance(doc.get("dimension"), (int, float)):
+        lo, hi = (doc.get("ci95") or [None, None])[:2]
+        caption += (f"; D = {fmt(doc['dimension'])} (95 % interval {fmt(lo)}–{fmt(hi)}), "
+                    f"R² = {fmt(doc.get('r2'))}")
+    head = ["source", "D", "95 % CI low", "95 % CI high", "R²", "fit range (px)", "grid", "method"]
+    return (_image(run, "boxcount", "boxcount.png", caption) + table(head, rows, "t-boxcount")
+            + "".join(notes))
+
+
+def _intensity_rows_scanline(run: _Run) -> list[list[str]]:
+    doc = run.json("scanline", "summary.json")
+    rows = []
+    for label, entry in [("all", doc.get("all") or {})] + [(f"set {s.get('set')}", s)
+                                                          for s in doc.get("sets") or []]:
+        rows.append(["P10", fmt(entry.get("p10_per_m")), "1/m", f"scanline, {label}"])
+        rows.append(["P10 (Terzaghi)", fmt(entry.get("p10_terzaghi_per_m")), "1/m", f"scanline, {label}"])
+    return rows
+
+
+def _intensity_rows_traces(run: _Run, stage: str) -> list[list[str]]:
+    stats = _stage_statistics(run, stage)
+    rows = []
+    for measure, key in (("P20", "Areal Frequency P20"), ("P21", "Fracture Intensity P21"),
+                         ("P21 (Mauldon)", "Fracture Intensity (Mauldon)")):
+        entry = stats.get(key) or {}
+        rows.append([measure, fmt(_value(entry)), str(entry.get("unit", "")), f"{stage}, all"])
+    return rows
+
+
+def _intensity_rows_boxcount(run: _Run) -> list[list[str]]:
+    doc = run.json("boxcount", "boxcount.json")
+    if doc.get("p21_per_m") is None:
+        return []
+    return [["P21", fmt(doc["p21_per_m"]), "m/m²", "boxcount, counted window"]]
+
+
+def _intensity_rows_dfn(run: _Run) -> list[list[str]]:
+    rows = []
+    for i, summary in _realizations(run):
+        total = summary.get("total") or {}
+        rows.append(["P32 target", fmt(total.get("target_p32")), "m²/m³", f"dfn, realization {i}"])
+        rows.append(["P32 achieved", fmt(total.get("achieved_p32")), "m²/m³", f"dfn, realization {i}"])
+        for sec in summary.get("sections") or []:
+            where = f"dfn, realization {i}, section {sec.get('name')}"
+            rows.append(["P21", fmt(sec.get("p21")), "m/m²", where])
+            rows.append(["P21 expected (P32/C23)", fmt(sec.get("p21_expected")), "m/m²", where])
+    return rows
+
+
+def _section_intensities(run: _Run) -> str:
+    """P10 / P20 / P21 / P32 from whatever stages provide them."""
+    rows, notes = [], []
+    readers = [("scanline", _intensity_rows_scanline), ("extract", lambda r: _intensity_rows_traces(r, "extract")),
+               ("traces", lambda r: _intensity_rows_traces(r, "traces")),
+               ("boxcount", _intensity_rows_boxcount), ("dfn", _intensity_rows_dfn)]
+    for stage, reader in readers:
+        if run.has(stage):
+            try:
+                rows += reader(run)
+            except _Note as exc:
+                notes.append(note(f"{exc}."))
+    return (table(["measure", "value", "unit", "source"], rows, "t-intensity") if rows
+            else note("No intensity available.")) + "".join(notes)
+
+
+def _realizations(run: _Run) -> list[tuple[int, dict]]:
+    """(index, summary.json) of every ``dfn/realization_NNNN`` folder, in order."""
+    out = []
+    for folder in sorted(run.dirs["dfn"].glob("realization_*")):
+        if folder.is_dir() and folder.name[12:].isdigit():
+            out.append((int(folder.name[12:]), _json(folder / "summary.json", run.out)))
+    if not out:
+        raise _Note(f"{_rel(run.dirs['dfn'], run.out)} holds no realization_NNNN folder")
+    return out
+
+
+def _set_laws(run: _Run) -> dict[str, tuple[str, str, str]]:
+    """Set name -> (source, orientation text, size-law text), from fitted.json then the config."""
+    laws = {}
+    try:
+        config = (run.json("dfn", "manifest.json").get("config") or {}).get("dfn") or {}
+    except _Note:
+        config = {}
+    for s in config.get("sets") or []:
+        o, size = s.get("orientation") or {}, dict(s.get("size") or {})
+        laws[s.get("name")] = ("config", _orientation_text(o), _size_text(size.pop("distribution", ""), size))
+    if (run.dirs["dfn"] / "fitted.json").exists():
+        for s in run.json("dfn", "fitted.json").get("sets") or []:
+            size = s.get("size") or {}
+            law = (_size_text(size.get("family", ""), size.get("params") or {}) if size.get("ok", True)
+                   else f"none ({size.get('reason', '')})")
+            laws[s.get("name")] = ("fitted", _orientation_text(s.get("orientation") or {}), law)
+    return laws
+
+
+def _orientation_text(o: dict) -> str:
+    text = f"{o.get('distribution', '')} {fmt(o.get('dip_deg'), 3)}/{fmt(o.get('dip_direction_deg'), 3)}"
+    return text + (f", κ {fmt(o.get('kappa'), 3)}" if o.get("kappa") is not None else "")
+
+
+def _size_text(family: str, params: dict) -> str:
+    return f"{family} " + ", ".join(f"{k} {fmt(v, 4)}" for k, v in params.items())
+
+
+def _section_dfn(run: _Run) -> str:
+    """Per set: orientation and size law (fitted or given), P32 target and achieved per realization."""
+    realizations = _realizations(run)
+    try:
+        laws = _set_laws(run)
+        law_note = ""
+    except _Note as exc:
+        laws, law_note = {}, note(f"{exc}.")
+    rows = []
+    for i, summary in realizations:
+        for s in summary.get("sets") or []:
+            source, orient, size = laws.get(s.get("name"), ("", "", ""))
+            rows.append([str(i), str(s.get("name", s.get("set"))), source, orient, size,
+                         fmt(s.get("target_p32")), fmt(s.get("achieved_p32")), fmt(s.get("count"))])
+    head = ["realization", "set", "from", "orientation (dip/dip dir.)", "size law (radius)",
+            "P32 target (m²/m³)", "P32 achieved (m²/m³)", "disks"]
+    return table(head, rows, "t-dfn") + law_note
+
+
+def _section_blocks(run: _Run) -> str:
+    """The block plot and the model's counts."""
+    parts = [_image(run, "blocks", "blocks.png", "Block model (excavation stages shaded; edges coloured "
+                                                  "by joint set)")]
+    try:
+        q = run.json("blocks", "blocks.json").get("quality") or {}
+        rows = [[str(k), fmt(v)] for k, v in (q.get("n_blocks_by_region") or {}).items()]
+        parts.append(table(["region", "blocks"], rows, "t-blocks"))
+    except _Note as exc:
+        parts.append(note(f"{exc}."))
+    return "".join(parts)
+
+
+def _section_solver(run: _Run) -> str:
+    """Per DEM stage: steps, time step, convergence, unbalanced-force ratio, displacements."""
+    r = run.json("solve", "result.json")
+    rows = [[str(s.get("name", "")), str(s.get("kind", "")), str(s.get("status", "")), fmt(s.get("steps")),
+             fmt(s.get("time_step_s")), fmt(s.get("simulated_time_s")), fmt(s.get("converged")),
+             fmt(s.get("unbalanced_ratio")), fmt(s.get("max_displacement_m")),
+             fmt(s.get("max_displacement_boundary_m")), fmt(s.get("slipping_contacts")),
+             fmt(s.get("detached_blocks"))] for s in r.get("stages") or []]
+    head = ["stage", "kind", "status", "steps", "dt (s)", "simulated time (s)", "converged",
+            "unbalanced ratio", "max displacement (m)", "max displacement, boundary (m)",
+            "slipping contacts", "detached blocks"]
+    status = f"Run status: {r.get('status')}" + (f" — {r['diagnostic']}" if r.get("diagnostic") else "")
+    status += f"; largest displacement {fmt(r.get('max_displacement_m'))} m."
+    return f"<p>{html.escape(status)}</p>" + table(head, rows, "t-solver")
+
+
+def _section_energy(run: _Run) -> str:
+    """Energy ledger of every DEM stage (J): one row per term, one column per stage."""
+    stages = [s for s in run.json("solve", "result.json").get("stages") or [] if isinstance(s.get("energy"), dict)]
+    if not stages:
+        return note("result.json has no energy ledger.")
+    terms = []
+    for s in stages:
+        terms += [k for k in s["energy"] if k not in terms]
+    rows = [[t.removesuffix("_j")] + [fmt(_no_negative_zero(s["energy"].get(t))) for s in stages]
+            for t in terms]
+    return table(["term (J)"] + [str(s.get("name", "")) for s in stages], rows, "t-energy")
+
+
+def _last_frame(run: _Run) -> Path:
+    folder = run.dirs["solve"]
+    try:
+        frames = run.json("solve", "result.json").get("frames") or []
+        name = frames[-1]["file"] if frames else None
+    except (_Note, KeyError, TypeError):
+        name = None
+    if name is None:
+        found = sorted(folder.glob("blocks_[0-9][0-9][0-9][0-9].vtu"))
+        if not found:
+            raise _Note(f"{_rel(folder, run.out)} holds no blocks_NNNN.vtu frame")
+        return found[-1]
+    return folder / name
+
+
+def _section_displacement(run: _Run) -> str:
+    """Blocks at the final frame, coloured by displacement magnitude (drawn from the last .vtu)."""
+    import meshio.vtu  # its reader raises; meshio.read would print and exit on a bad file
+    import numpy as np
+    from matplotlib.collections import PolyCollection
+
+    path = _last_frame(run)
+    try:
+        mesh = meshio.vtu.read(str(path))
+    except FileNotFoundError:
+        raise _Note(f"{_rel(path, run.out)} is missing") from None
+    except Exception as exc:  # noqa: BLE001 - XML, zlib, base64 and meshio errors on a bad file
+        raise _Note(f"{_rel(path, run.out)} is not a readable VTU file "
+                    f"({type(exc).__name__}{': ' if str(exc) else ''}{exc})") from None
+    polys, mags, active = [], [], []
+    for k, block in enumerate(mesh.cells):
+        disp = np.asarray(mesh.cell_data["displacement"][k])
+        act = np.asarray(mesh.cell_data.get("active", [np.ones(len(block.data))])[k]).astype(bool)
+        polys += [mesh.points[c, :2] for c in block.data]
+        mags += list(np.hypot(disp[:, 0], disp[:, 1]))
+        active += list(act)
+    mags, active = np.asarray(mags) * 1e3, np.asarray(active)
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(7.5, 5.5))
+    on = [p for p, a in zip(polys, active) if a]
+    coll = PolyCollection(on, array=mags[active], cmap="viridis", edgecolors="k", linewidths=0.2)
+    ax.add_collection(coll)
+    off = [p for p, a in zip(polys, active) if not a]
+    if off:
+        ax.add_collection(PolyCollection(off, facecolors="none", edgecolors="0.7", linewidths=0.3,
+                                         linestyles="dotted"))
+    ax.autoscale_view()
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    fig.colorbar(coll, ax=ax, shrink=0.8, label="displacement (mm)")
+    src = png_base64(fig)
+    plt.close(fig)
+    peak = float(mags[active].max()) if active.any() else 0.0
+    caption = (f"Displacement magnitude at the final frame ({path.name}); largest {fmt(peak)} mm"
+               + ("; dotted outlines: removed (excavated) blocks" if off else ""))
+    return figure(caption, src)
+
+
+def _read_history(path: Path, out: Path) -> dict[str, list]:
+    try:
+        with path.open(newline="", encoding="utf-8") as fh:
+            rows = list(csv.DictReader(fh))
+    except FileNotFoundError:
+        raise _Note(f"{_rel(path, out)} is missing") from None
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise _Note(f"{_rel(path, out)} is not readable CSV ({exc})") from None
+    if not rows or "time_s" not in rows[0]:
+        raise _Note(f"{_rel(path, out)} has no rows or no time_s column")
+    cols = {k: [r[k] for r in rows] for k in rows[0]}
+    try:
+        return {k: (v if k == "stage" else [float(x) for x in v]) for k, v in cols.items()}
+    except (TypeError, ValueError) as exc:
+        raise _Note(f"{_rel(path, out)} holds a value that is not a number ({exc})") from None
+
+
+def _section_histories(run: _Run) -> str:
+    """Monitored blocks over time (history.csv) and their final displacements (result.json)."""
+    h = _read_history(run.dirs["solve"] / "history.csv", run.out)
+    monitors = [k[:-5] for k in h if k.endswith("_ux_m") and f"{k[:-5]}_uy_m" in h]
+    plt = pyplot()
+    panels = 2 if "unbalanced_ratio" in h else 1
+    fig, axes = plt.subplots(panels, 1, figsize=(7.5, 2.6 * panels + 0.6), sharex=True, squeeze=False)
+    t = h["time_s"]
+    ax = axes[0, 0]
+    for m in monitors:
+        ax.plot(t, [1e3 * math.hypot(x, y) for x, y in zip(h[f"{m}_ux_m"], h[f"{m}_uy_m"])], label=m)
+    ax.set_ylabel("displacement (mm)")
+    if monitors:
+        ax.legend(frameon=False, fontsize=8)
+    if panels == 2:
+        ratio = [v if v > 0 else math.nan for v in h["unbalanced_ratio"]]
+        axes[1, 0].plot(t, ratio, color="k", lw=0.8)
+        if any(v > 0 for v in h["unbalanced_ratio"]):
+            axes[1, 0].set_yscale("log")
+        axes[1, 0].set_ylabel("unbalanced ratio")
+    stages = h.get("stage") or []
+    for i in range(1, len(stages)):
+        if stages[i] != stages[i - 1]:
+            for a in axes[:, 0]:
+                a.axvline(t[i - 1], color="0.6", lw=0.8, ls="--")
+    for a in axes[:, 0]:
+        a.grid(alpha=0.3)
+    axes[-1, 0].set_xlabel("time (s)")
+    src = png_base64(fig)
+    plt.close(fig)
+    parts = [figure("Monitored blocks: displacement magnitude over time"
+                    + (", and the unbalanced-force ratio" if panels == 2 else "")
+                    + "; dashed lines: stage boundaries", src)]
+    try:
+        mons = run.json("solve", "result.json").get("monitors") or {}
+        rows = [[name, fmt(m.get("block")), fmt(m.get("final_ux_m")), fmt(m.get("final_uy_m")),
+                 fmt(m.get("final_displacement_m")), fmt(m.get("max_contact_plastic_slip_m"))]
+                for name, m in mons.items()]
+        if rows:
+            parts.append(table(["monitor", "block", "final ux (m)", "final uy (m)", "final |u| (m)",
+                                "max plastic slip on its contacts (m)"], rows, "t-monitors"))
+    except _Note as exc:
+        parts.append(note(f"{exc}."))
+    return "".join(parts)
+
+
+#: (id, title, stages that make the section appear or None for always, section function)
+SECTIONS = (
+    ("run", "Run summary and timings", None, _section_run),
+    ("inputs", "Inputs", None, _section_inputs),
+    ("traces", "Traces and rose diagrams", ("extract", "traces"), _section_traces),
+    ("stereonet", "Stereonet", ("scanline",), _section_stereonet),
+    ("boxcount", "Box-counting dimension", ("boxcount",), _section_boxcount),
+    ("intensity", "Intensities P10, P20, P21, P32", ("scanline", "extract", "traces", "boxcount", "dfn"),
+     _section_intensities),
+    ("dfn", "DFN sets", ("dfn",), _section_dfn),
+    ("blocks", "Block model", ("blocks",), _section_blocks),
+    ("solver", "Solver stages", ("solve",), _section_solver),
+    ("displacement", "Displacement map", ("solve",), _section_displacement),
+    ("histories", "Monitored histories", ("solve",), _section_histories),
+    ("energy", "Energy ledger", ("solve",), _section_energy),
+)
+
+
+def _render(run: _Run, sid: str, title: str, fn) -> str:
+    try:
+        body = fn(run)
+    except _Note as exc:
+        body = note(f"{exc}.")
+    except Exception as exc:  # noqa: BLE001 - one bad file must not cost the whole report
+        body = note(f"This section could not be drawn: {type(exc).__name__}: {exc}.")
+    return f'<section id="sec-{sid}"><h2>{html.escape(title)}</h2>{body}</section>\n'
+
+
+def write_run_report(out_dir: str | Path) -> Path:
+    """Write ``out_dir/report.html`` (atomically) from ``run.json`` and the stage folders.
+
+    Parameters
+    ----------
+    out_dir : str or path-like
+        The ``--out`` folder of ``rockmass run``.
+
+    Returns
+    -------
+    pathlib.Path
+        The report's path.
+    """
+    from .atomic import atomic_write_text
+
+    out = Path(out_dir)
+    run = _Run(out)
+    shown = [(sid, title, fn) for sid, title, stages, fn in SECTIONS if stages is None or run.has(*stages)]
+    nav = " · ".join(f'<a href="#sec-{sid}">{html.escape(title)}</a>' for sid, title, _ in shown)
+    body = "".join(_render(run, sid, title, fn) for sid, title, fn in shown)
+    config = (run.doc or {}).get("config", "")
+    page = f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>rockmass run report</title>
+<style>
+{BASE_CSS}td:first-child {{ text-align: left; }}
+figure img {{ max-width: min(100%, 880px); }}
+.note {{ color: #7a4a00; background: #fff6e0; padding: 4px 8px; font-size: 13px; }}
+nav {{ font-size: 13px; margin-bottom: 1em; }}
+{PRINT_CSS}</style></head><body>
+<h1>rockmass run</h1>
+<p>Config: <code>{html.escape(str(config))}</code>; stages in this folder:
+{html.escape(", ".join(run.dirs) or "none")}.</p>
+<nav>{nav}</nav>
+{body}</body></html>
+"""
+    return atomic_write_text(out / "report.html", page)

@@ -1,0 +1,384 @@
+"""``report.html`` of ``rockmass run`` (:func:`rockmass.run_report.write_run_report`).
+
+The run folder is built here without ``rockmass run``: each single-stage subcommand writes into its
+stage folder (``DIR/<stage>/``, the run's contract) on small inputs, and ``run.json`` is written by
+hand. The values the report shows are checked against the stage files read independently here.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import math
+import shutil
+from html.parser import HTMLParser
+from pathlib import Path
+
+import pytest
+
+from rockmass.cli import main
+from rockmass.run_report import SECTIONS, STAGES, write_run_report
+
+from . import _chromium
+from .test_cli_solve import TINY  # 8 blocks, gravity then a short shaking: about a second
+
+SAMPLES = Path(__file__).resolve().parents[2] / "samples"
+ALL_SECTIONS = {sid for sid, *_ in SECTIONS}
+IMAGES_PER_STAGE = {"extract": 2, "traces": 2, "scanline": 1, "boxcount": 1, "blocks": 1, "solve": 2}
+
+
+def _write_run_json(out: Path, stages, statuses=None) -> dict:
+    doc = {"config": "run.toml", "config_hash": "c0ffee" * 10 + "abcd", "rockmass_version": "test",
+           "stages": [], "total_wall_s": 0.0}
+    for k, name in enumerate(stages):
+        folder = out / name
+        doc["stages"].append({
+            "name": name, "dir": name, "status": (statuses or {}).get(name, "ran"),
+            "hash": f"{k:02d}" + "ab" * 31, "wall_s": 0.5 + 1.25 * k,
+            "outputs": sorted(str(p.relative_to(folder)) for p in folder.rglob("*") if p.is_file())})
+    doc["total_wall_s"] = sum(s["wall_s"] for s in doc["stages"])
+    (out / "run.json").write_text(json.dumps(doc), encoding="utf-8")
+    return doc
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory):
+    """Every stage run into its folder on small inputs, run.json by hand, report written once."""
+    from rockmass.imaging import save_synthetic_face, synthetic_face
+
+    root = tmp_path_factory.mktemp("run_report")
+    out = root / "out"
+    face = synthetic_face("easy", seed=11, shape_px=(300, 450), m_per_px=0.02)
+    photo = save_synthetic_face(face, root / "photo")["image"]
+    config = root / "tiny.toml"
+    config.write_text(TINY.format(kn="1e9", ks="5e8"), encoding="utf-8")
+    traces = str(SAMPLES / "face_traces.geojson")
+    commands = {
+        "extract": ["extract", str(photo), "--m-per-px", "0.02"],
+        "traces": ["traces", traces],
+        "scanline": ["scanline", str(SAMPLES / "scanline_seed001.csv")],
+        "boxcount": ["boxcount", traces],
+        "dfn": ["dfn", str(SAMPLES / "dfn_seed001.toml"), "--realizations", "2"],
+        "blocks": ["blocks", str(config)],
+        "solve": ["solve", str(config)],
+    }
+    for name, argv in commands.items():
+        assert main([*argv, "--out", str(out / name)]) == 0, name
+    doc = _write_run_json(out, STAGES, {"traces": "reused"})
+    path = write_run_report(out)
+    return out, doc, path, _Page.parse(path)
+
+
+class _Page(HTMLParser):
+    """Sections (id -> text), tables (id -> rows of cell text), images and every src / href."""
+
+    def __init__(self):
+        super().__init__()
+        self.sections, self.tables, self.images, self.links = {}, {}, [], []
+        self.notes: dict[str, list[str]] = {}
+        self._section = self._table = self._row = self._cell = self._note = None
+
+    @classmethod
+    def parse(cls, path: Path) -> _Page:
+        page = cls()
+        page.feed(path.read_text(encoding="utf-8"))
+        return page
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        self.links += [v for k, v in attrs if k in ("src", "href") and v is not None]
+        if tag == "section":
+            self._section = a["id"].removeprefix("sec-")
+            self.sections[self._section] = ""
+        elif tag == "table":
+            self._table = self.tables.setdefault(a.get("id") or f"anon{len(self.tables)}", [])
+        elif tag == "tr":
+            self._row = []
+        elif tag in ("td", "th"):
+            self._cell = ""
+        elif tag == "img":
+            self.images.append((self._section, a))
+        elif tag == "p" and a.get("class") == "note":
+            self._note = ""
+
+    def handle_endtag(self, tag):
+        if tag in ("td", "th"):
+            self._row.append(self._cell)
+            self._cell = None
+        elif tag == "tr":
+            self._table.append(self._row)
+        elif tag == "p" and self._note is not None:
+            self.notes.setdefault(self._section, []).append(self._note)
+            self._note = None
+        elif tag == "section":
+            self._section = None
+
+    def handle_data(self, data):
+        if self._cell is not None:
+            self._cell += data
+        if self._note is not None:
+            self._note += data
+        if self._section is not None:
+            self.sections[self._section] += data
+
+    def rows(self, table_id: str) -> dict[str, list[str]]:
+        """Rows of a table keyed by their first cell (header row included)."""
+        return {r[0]: r for r in self.tables[table_id]}
+
+    def cell(self, table_id: str, row: str, column: str) -> str:
+        header = self.tables[table_id][0]
+        return self.rows(table_id)[row][header.index(column)]
+
+
+def _same(cell: str, value, rel=5e-4) -> bool:
+    """A table cell shows ``value`` (4 significant digits)."""
+    if isinstance(value, bool) or value is None:
+        return cell == {True: "yes", False: "no", None: ""}[value]
+    return math.isclose(float(cell), value, rel_tol=rel, abs_tol=1e-300)
+
+
+def _copy(run_dir, tmp_path) -> Path:
+    target = tmp_path / "out"
+    shutil.copytree(run_dir[0], target)
+    (target / "report.html").unlink()
+    return target
+
+
+def _stage_json(out: Path, stage: str, name: str):
+    return json.loads((out / stage / name).read_text(encoding="utf-8"))
+
+
+# ---------------------------------------------------------------------------------- sections --
+
+
+def test_report_is_written_atomically_at_the_returned_path(run_dir):
+    out, _, path, _ = run_dir
+    assert path == out / "report.html" and path.is_file()
+    assert not list(out.glob(".tmp-*"))
+
+
+def test_every_section_appears_when_every_stage_is_present(run_dir):
+    page = run_dir[3]
+    assert set(page.sections) == ALL_SECTIONS
+    assert not page.notes, page.notes  # nothing missing, nothing unreadable
+
+
+def test_sections_of_absent_stages_are_left_out(run_dir, tmp_path):
+    out = tmp_path / "out"
+    for stage in ("scanline", "boxcount"):
+        shutil.copytree(run_dir[0] / stage, out / stage)
+    _write_run_json(out, ["scanline", "boxcount"])
+    page = _Page.parse(write_run_report(out))
+    assert set(page.sections) == {"run", "inputs", "stereonet", "boxcount", "intensity"}
+    assert len(page.images) == 2 and not page.notes
+    assert [r[0] for r in page.tables["t-timings"][1:]] == ["scanline", "boxcount"]
+
+
+def test_only_the_solver_stage_gives_the_solver_sections(run_dir, tmp_path):
+    out = tmp_path / "out"
+    shutil.copytree(run_dir[0] / "solve", out / "solve")
+    _write_run_json(out, ["solve"])
+    page = _Page.parse(write_run_report(out))
+    assert set(page.sections) == {"run", "inputs", "solver", "displacement", "histories", "energy"}
+
+
+def test_every_image_is_an_embedded_png_and_nothing_is_referenced(run_dir):
+    out, _, path, page = run_dir
+    assert len(page.images) == sum(IMAGES_PER_STAGE.values())
+    for section, attrs in page.images:
+        prefix = "data:image/png;base64,"
+        assert attrs["src"].startswith(prefix), (section, attrs["src"][:40])
+        assert base64.b64decode(attrs["src"][len(prefix):])[:8] == b"\x89PNG\r\n\x1a\n"
+        assert attrs.get("alt")
+    assert all(link.startswith(("data:", "#sec-")) for link in page.links)
+    text = path.read_text(encoding="utf-8")
+    for external in ("http:", "https:", "file:", "url(", "<script", "<link", "@import"):
+        assert external not in text, external
+    assert str(out) not in text  # no absolute path of the run folder either
+
+
+def test_images_per_section_follow_the_stages(run_dir):
+    counts = {}
+    for section, _ in run_dir[3].images:
+        counts[section] = counts.get(section, 0) + 1
+    assert counts == {"traces": 4, "stereonet": 1, "boxcount": 1, "blocks": 1, "displacement": 1,
+                      "histories": 1}
+
+
+# ------------------------------------------------------------------------------------ values --
+
+
+def test_run_summary_and_timings_equal_run_json(run_dir):
+    _, doc, _, page = run_dir
+    assert page.cell("t-run", "config hash", "value") == doc["config_hash"]
+    assert page.cell("t-run", "rockmass version", "value") == doc["rockmass_version"]
+    assert _same(page.cell("t-run", "total wall time (s)", "value"), doc["total_wall_s"])
+    for s in doc["stages"]:
+        assert page.cell("t-timings", s["name"], "status") == s["status"]
+        assert _same(page.cell("t-timings", s["name"], "wall time (s)"), s["wall_s"])
+        assert int(page.cell("t-timings", s["name"], "outputs")) == len(s["outputs"])
+    assert page.cell("t-timings", "traces", "status") == "reused"
+
+
+def test_inputs_table_lists_every_stage_manifest_input(run_dir):
+    out, _, _, page = run_dir
+    rows = page.tables["t-inputs"][1:]
+    for stage in STAGES:
+        for item in _stage_json(out, stage, "manifest.json")["inputs"]:
+            assert [stage, item["path"], item["sha256"][:16], str(item["bytes"])] in rows
+
+
+def test_box_count_table_equals_boxcount_json(run_dir):
+    out, _, _, page = run_dir
+    b = _stage_json(out, "boxcount", "boxcount.json")
+    assert _same(page.cell("t-boxcount", "boxcount", "D"), b["dimension"])
+    assert _same(page.cell("t-boxcount", "boxcount", "95 % CI low"), b["ci95"][0])
+    assert _same(page.cell("t-boxcount", "boxcount", "95 % CI high"), b["ci95"][1])
+    assert _same(page.cell("t-boxcount", "boxcount", "R²"), b["r2"])
+    t = _stage_json(out, "traces", "summary.json")["Box-counting Dimension"]
+    assert _same(page.cell("t-boxcount", "traces", "D"), t["value"])
+    e = _stage_json(out, "extract", "summary.json")["statistics"]["Box-counting Dimension"]
+    assert _same(page.cell("t-boxcount", "extract", "R²"), e["r2"])
+    assert f"D = {b['dimension']:.4g}" in page.sections["boxcount"]
+
+
+def test_intensity_table_equals_the_stage_summaries(run_dir):
+    out, _, _, page = run_dir
+    rows = {(r[0], r[3]): r for r in page.tables["t-intensity"][1:]}
+    s = _stage_json(out, "scanline", "summary.json")
+    assert _same(rows["P10", "scanline, all"][1], s["all"]["p10_per_m"])
+    assert _same(rows["P10 (Terzaghi)", "scanline, set 1"][1], s["sets"][1]["p10_terzaghi_per_m"])
+    t = _stage_json(out, "traces", "summary.json")
+    assert _same(rows["P20", "traces, all"][1], t["Areal Frequency P20"]["value"])
+    assert _same(rows["P21", "traces, all"][1], t["Fracture Intensity P21"]["value"])
+    e = _stage_json(out, "extract", "summary.json")["statistics"]
+    assert _same(rows["P21", "extract, all"][1], e["Fracture Intensity P21"]["value"])
+    assert _same(rows["P21", "boxcount, counted window"][1],
+                 _stage_json(out, "boxcount", "boxcount.json")["p21_per_m"])
+    for i in (0, 1):
+        d = _stage_json(out, "dfn", f"realization_{i:04d}/summary.json")
+        assert _same(rows["P32 achieved", f"dfn, realization {i}"][1], d["total"]["achieved_p32"])
+        sec = d["sections"][0]
+        assert _same(rows["P21", f"dfn, realization {i}, section {sec['name']}"][1], sec["p21"])
+
+
+def test_dfn_table_gives_every_set_of_every_realization(run_dir):
+    out, _, _, page = run_dir
+    rows = {(r[0], r[1]): r for r in page.tables["t-dfn"][1:]}
+    header = page.tables["t-dfn"][0]
+    config = _stage_json(out, "dfn", "manifest.json")["config"]["dfn"]["sets"]
+    assert len(rows) == 2 * len(config)
+    for i in (0, 1):
+        for s in _stage_json(out, "dfn", f"realization_{i:04d}/summary.json")["sets"]:
+            row = rows[str(i), s["name"]]
+            assert _same(row[header.index("P32 target (m²/m³)")], s["target_p32"])
+            assert _same(row[header.index("P32 achieved (m²/m³)")], s["achieved_p32"])
+            assert int(row[header.index("disks")]) == s["count"]
+            spec = next(c for c in config if c["name"] == s["name"])
+            orientation = row[header.index("orientation (dip/dip dir.)")]
+            assert f"{spec['orientation']['dip_deg']:g}/{spec['orientation']['dip_direction_deg']:g}" in orientation
+            assert f"r_min_m {spec['size']['r_min_m']:g}" in row[header.index("size law (radius)")]
+
+
+def test_solver_and_energy_tables_equal_result_json(run_dir):
+    out, _, _, page = run_dir
+    r = _stage_json(out, "solve", "result.json")
+    assert len(page.tables["t-solver"]) == 1 + len(r["stages"])
+    for s in r["stages"]:
+        name = s["name"]
+        assert int(page.cell("t-solver", name, "steps")) == s["steps"]
+        assert _same(page.cell("t-solver", name, "dt (s)"), s["time_step_s"])
+        assert _same(page.cell("t-solver", name, "converged"), s["converged"])
+        assert _same(page.cell("t-solver", name, "unbalanced ratio"), s["unbalanced_ratio"])
+        assert _same(page.cell("t-solver", name, "max displacement (m)"), s["max_displacement_m"])
+        for term, value in s["energy"].items():
+            assert _same(page.cell("t-energy", term.removesuffix("_j"), name), value), term
+    top = r["monitors"]["top"]
+    assert _same(page.cell("t-monitors", "top", "final |u| (m)"), top["final_displacement_m"])
+
+
+def test_displacement_map_is_the_last_frame_coloured_by_magnitude(run_dir):
+    import meshio
+    import numpy as np
+
+    out, _, _, page = run_dir
+    last = _stage_json(out, "solve", "result.json")["frames"][-1]["file"]
+    mesh = meshio.read(out / "solve" / last)
+    disp = np.concatenate([np.asarray(d) for d in mesh.cell_data["displacement"]])
+    peak_mm = 1e3 * float(np.hypot(disp[:, 0], disp[:, 1]).max())
+    text = page.sections["displacement"]
+    assert last in text
+    shown = float(text.split("largest ")[1].split(" mm")[0])
+    assert math.isclose(shown, peak_mm, rel_tol=5e-4)
+
+
+def test_blocks_table_equals_blocks_json(run_dir):
+    out, _, _, page = run_dir
+    q = _stage_json(out, "blocks", "blocks.json")["quality"]["n_blocks_by_region"]
+    assert {r[0]: int(r[1]) for r in page.tables["t-blocks"][1:]} == q
+
+
+# ---------------------------------------------------------------------------- bad or missing --
+
+
+def test_corrupt_and_missing_stage_files_give_notes_not_a_crash(run_dir, tmp_path):
+    out = _copy(run_dir, tmp_path)
+    (out / "boxcount" / "boxcount.json").write_text('{"dimension": 1.6', encoding="utf-8")
+    rose = out / "traces" / "rose.png"
+    rose.write_bytes(rose.read_bytes()[:500])
+    (out / "scanline" / "stereonet.png").unlink()
+    (out / "solve" / "history.csv").write_text("time_s,stage,top_ux_m\n0.0,gravity,abc\n")
+    (out / "solve" / "result.json").write_text("not json", encoding="utf-8")
+    last = max((out / "solve").glob("blocks_*.vtu"))
+    last.write_text("<VTKFile broken", encoding="utf-8")
+    (out / "dfn" / "realization_0001" / "summary.json").unlink()
+    page = _Page.parse(write_run_report(out))
+    assert set(page.sections) == ALL_SECTIONS
+    notes = {k: " ".join(v) for k, v in page.notes.items()}
+    assert "boxcount/boxcount.json is not readable JSON" in notes["boxcount"]
+    assert "traces/rose.png cannot be shown (truncated PNG" in notes["traces"]
+    assert "scanline/stereonet.png is missing" in notes["stereonet"]
+    assert "solve/history.csv holds a value that is not a number" in notes["histories"]
+    assert "solve/result.json is not readable JSON" in notes["solver"]
+    assert "solve/result.json is not readable JSON" in notes["energy"]
+    assert f"solve/{last.name} is not a readable VTU file" in notes["displacement"]
+    assert "dfn/realization_0001/summary.json is missing" in notes["dfn"]
+    # what is still readable is still shown
+    assert {s for s, _ in page.images} == {"traces", "boxcount", "blocks"}
+    assert len([s for s, _ in page.images if s == "traces"]) == 3
+    assert "t-intensity" in page.tables and "t-blocks" in page.tables
+
+
+def test_missing_or_corrupt_run_json_gives_a_note_and_the_stage_sections(run_dir, tmp_path):
+    out = _copy(run_dir, tmp_path)
+    (out / "run.json").unlink()
+    page = _Page.parse(write_run_report(out))
+    assert set(page.sections) == ALL_SECTIONS
+    assert "run.json is missing" in page.notes["run"][0]
+    (out / "run.json").write_text("[1, 2]", encoding="utf-8")
+    page = _Page.parse(write_run_report(out))
+    assert "run.json: not an object" in page.notes["run"][0]
+    assert set(page.sections) == ALL_SECTIONS
+
+
+def test_a_run_without_any_stage_gives_a_short_report(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    _write_run_json(out, [])
+    page = _Page.parse(write_run_report(out))
+    assert set(page.sections) == {"run", "inputs"}
+    assert page.notes["inputs"] == ["No input file recorded."]
+
+
+# ------------------------------------------------------------------------------------ browser --
+
+
+@pytest.mark.skipif(_chromium.chromium() is None, reason=_chromium.SKIP_REASON)
+def test_report_renders_in_headless_chromium_with_every_image_loaded(run_dir, tmp_path):
+    """Open report.html in headless Chromium (no network): every <img> decodes; a screenshot is
+    kept as an artifact (in $ROCKMASS_TEST_ARTIFACTS when set)."""
+    path = run_dir[2]
+    loaded, total = _chromium.count_loaded_images(path, tmp_path)
+    assert total == sum(IMAGES_PER_STAGE.values()) and loaded == total
+    shot = _chromium.screenshot(path, tmp_path / "run_report.png", size=(1250, 3000))
+    assert shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
