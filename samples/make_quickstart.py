@@ -92,23 +92,24 @@ def scanline_csv() -> str:
     return "\n".join(lines) + "\n"
 
 
-def main() -> None:
+def main(directory: Path = HERE) -> None:
+    """Write the quickstart's input files into ``directory``."""
     import cv2
     from rockmass.atomic import atomic_path, atomic_write_json, atomic_write_text
     from rockmass.dfn import write_traces
 
     f = face()
-    with atomic_path(HERE / "quickstart_face.png") as tmp:
+    with atomic_path(directory / "quickstart_face.png") as tmp:
         if not cv2.imwrite(str(tmp), f.image):
             raise OSError("could not write quickstart_face.png")
-    write_traces(f.truth, HERE / "quickstart_face_truth.geojson")
-    atomic_write_json(HERE / "quickstart_face_meta.json", {
+    write_traces(f.truth, directory / "quickstart_face_truth.geojson")
+    atomic_write_json(directory / "quickstart_face_meta.json", {
         "m_per_px": f.m_per_px, "difficulty": f.difficulty, "seed": f.seed, "shape_px": list(SHAPE_PX),
         "face_point_m": list(FACE_POINT_M), "face_normal": list(FACE_NORMAL),
         "trace_angles_deg": [trace_angle_deg(s["orientation"]["dip_deg"],
                                              s["orientation"]["dip_direction_deg"]) for s in TRUTH["sets"]],
         "truth_3d": TRUTH})
-    atomic_write_text(HERE / "quickstart_scanline.csv", scanline_csv())
+    atomic_write_text(directory / "quickstart_scanline.csv", scanline_csv())
 
 
 if __name__ == "__main__":

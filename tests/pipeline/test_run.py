@@ -22,7 +22,7 @@ def _config_text(steps: int = 200, grid: int = 360, friction: float = 30.0) -> s
     text = (SAMPLES / "quickstart.toml").read_text()
     for name in ("quickstart_face.png", "quickstart_scanline.csv"):
         text = text.replace(f'"{name}"', json.dumps(str(SAMPLES / name)))
-    text = text.replace("max_steps = 3000", f"max_steps = {steps}")
+    text = text.replace("max_steps = 20000", f"max_steps = {steps}")
     text = text.replace("[fractal]\ngrid = 360", f"[fractal]\ngrid = {grid}")
     return text.replace("friction_deg = 30.0\n\n[solve.joints.glued]",
                         f"friction_deg = {friction!r}\n\n[solve.joints.glued]")
@@ -199,3 +199,82 @@ def test_bad_input_exits_2_naming_the_field_before_any_stage_runs(tmp_path, caps
     err = capsys.readouterr().err
     assert message in err and str(config) in err
     assert not out.exists()
+
+
+def test_quickstart_inputs_are_what_make_quickstart_writes(tmp_path):
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("make_quickstart", SAMPLES / "make_quickstart.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    module.main(tmp_path)
+    for name in ("quickstart_face.png", "quickstart_face_truth.geojson", "quickstart_face_meta.json",
+                 "quickstart_scanline.csv"):
+        assert (tmp_path / name).read_bytes() == (SAMPLES / name).read_bytes(), name
+
+
+def test_dfn_fit_recovers_the_sets_the_scanline_was_drawn_from(first_run):
+    from rockmass.dfn.orientation import angle_between, pole_from_dip
+
+    _, out = first_run
+    truth = json.loads((SAMPLES / "quickstart_face_meta.json").read_text())["truth_3d"]["sets"]
+    fitted = json.loads((out / "dfn" / "fitted.json").read_text())["sets"]
+    assert len(fitted) == len(truth)
+    for t in truth:
+        o = t["orientation"]
+        angles = [float(angle_between(pole_from_dip(o["dip_deg"], o["dip_direction_deg"]),
+                                      pole_from_dip(f["orientation"]["dip_deg"],
+                                                    f["orientation"]["dip_direction_deg"])))
+                  for f in fitted]
+        best = fitted[angles.index(min(angles))]
+        # within 3 x alpha95 of the truth (a Fisher mean's 95 % cone, from the fit itself)
+        assert min(angles) < 3 * best["orientation"]["alpha95_deg"]
+
+
+def test_solver_progress_reports_every_stage_up_to_its_steps(first_run, tmp_path):
+    import types
+
+    from rockmass.blockgen import read_json
+    from rockmass.config import load_config
+    from rockmass.solve_cmd import produce
+
+    config, out = first_run
+    calls = []
+    document = load_config(config)
+    model = read_json(out / "blocks" / "blocks.json")
+    args = types.SimpleNamespace(config=str(config), argv=["test"])
+    _, doc = produce(args, tmp_path / "solve", document=document, model=model,
+                     progress=lambda done, total: calls.append((done, total)))
+    # one run of increasing counts per solver stage, ending at the stage's step count
+    runs, last = [], None
+    for done, total in calls:
+        if last is None or done <= last[0]:
+            runs.append([])
+        runs[-1].append((done, total))
+        last = (done, total)
+    assert [r[-1][0] for r in runs] == [s["steps"] for s in doc["stages"]]
+    assert all(done <= total for done, total in calls)
+
+
+def test_a_stage_killed_while_writing_never_looks_finished(copy_of_run, tmp_path, monkeypatch):
+    from rockmass import solve_cmd
+
+    _, out = copy_of_run
+    before = _snapshot(out)
+    old_hash = json.loads((out / "solve" / "stage.json").read_text())["hash"]
+
+    def killed(args, out_dir, **kwargs):
+        Path(out_dir).mkdir(parents=True, exist_ok=True)
+        (Path(out_dir) / "result.json").write_text("{")  # half written, then killed
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(solve_cmd, "produce", killed)
+    changed = _write(tmp_path, _config_text(friction=35.0), "changed.toml")
+    assert main(["run", str(changed), "--out", str(out)]) == 130
+    # the finished solve folder is the old one, whole; the partial one has no stage.json
+    assert {k: v for k, v in _snapshot(out).items() if not k.startswith("solve.partial/")} == before
+    assert json.loads((out / "solve" / "stage.json").read_text())["hash"] == old_hash
+    assert not (out / "solve.partial" / "stage.json").exists()
+    monkeypatch.undo()
+    assert main(["run", str(changed), "--out", str(out)]) == 0
+    assert _statuses(out)["solve"] == "ran" and not (out / "solve.partial").exists()
