@@ -31,6 +31,10 @@ from numba import njit
 ACT, U0, DIL, TAU, PHIM, RREV, DIR, COORD, BRK, LEN, FN, FS, SLIP, OVL, PX, PY, NX, NY, USP = range(19)
 N_SLOT_COLUMNS = 19
 
+# --- world vertex table columns (world_vertices) ------------------------------------------------
+W_X, W_Y, W_NX, W_NY, W_CX, W_CY, W_TAN, W_RAD = range(8)
+N_WV_COLUMNS = 8
+
 # --- joint model table columns ------------------------------------------------------------------
 (P_MODEL, P_KN, P_KS, P_TANPHI, P_COH, P_TEN, P_TANPSI, P_TANPHIR, P_MAXDIL,
  P_EN, P_ES, P_PHIM0, P_PHIB, P_ROUGH) = range(14)
@@ -51,18 +55,24 @@ _FACING_COS = -0.99  # edges whose normals are this close to anti-parallel face 
 
 @njit(cache=True)
 def world_vertices(loc, lnrm, off, pos, rot, active, wv):
-    """wv[k, :2] = pos[b] + R(rot[b]) loc[k] and wv[k, 2:] = R(rot[b]) lnrm[k] (the outward unit
-    normal of the edge starting at vertex k) for the vertices of active blocks."""
+    """World vertex table of the active blocks (columns ``W_*``): the vertex pos[b] + R(rot[b])
+    loc[k], the outward unit normal R lnrm[k, :2] of the edge starting at it, its rounded corner's
+    arc centre pos[b] + R lnrm[k, 2:4], tangent length lnrm[k, 4] and radius lnrm[k, 5]
+    (:func:`rockmass.solver.engine.rounded_corners`)."""
     for b in range(len(off) - 1):
         if not active[b]:
             continue
         c = math.cos(rot[b])
         s = math.sin(rot[b])
         for k in range(off[b], off[b + 1]):
-            wv[k, 0] = pos[b, 0] + c * loc[k, 0] - s * loc[k, 1]
-            wv[k, 1] = pos[b, 1] + s * loc[k, 0] + c * loc[k, 1]
-            wv[k, 2] = c * lnrm[k, 0] - s * lnrm[k, 1]
-            wv[k, 3] = s * lnrm[k, 0] + c * lnrm[k, 1]
+            wv[k, W_X] = pos[b, 0] + c * loc[k, 0] - s * loc[k, 1]
+            wv[k, W_Y] = pos[b, 1] + s * loc[k, 0] + c * loc[k, 1]
+            wv[k, W_NX] = c * lnrm[k, 0] - s * lnrm[k, 1]
+            wv[k, W_NY] = s * lnrm[k, 0] + c * lnrm[k, 1]
+            wv[k, W_CX] = pos[b, 0] + c * lnrm[k, 2] - s * lnrm[k, 3]
+            wv[k, W_CY] = pos[b, 1] + s * lnrm[k, 2] + c * lnrm[k, 3]
+            wv[k, W_TAN] = lnrm[k, 4]
+            wv[k, W_RAD] = lnrm[k, 5]
 
 
 @njit(cache=True)
@@ -330,17 +340,88 @@ def _forces_from_slots(S, p, ax, ay, bx, by, fpair):
 
 
 @njit(cache=True)
+def _closest_on_segment(px, py, ax, ay, bx, by):
+    """Squared distance from (px, py) to the segment a–b and the closest point on it."""
+    ex = bx - ax
+    ey = by - ay
+    ee = ex * ex + ey * ey
+    lam = 0.0
+    if ee > 0.0:
+        lam = min(max(((px - ax) * ex + (py - ay) * ey) / ee, 0.0), 1.0)
+    qx = ax + lam * ex
+    qy = ay + lam * ey
+    return (px - qx) ** 2 + (py - qy) ** 2, qx, qy
+
+
+@njit(cache=True)
+def _next_vertex(off, b, i):
+    return off[b] if i + 1 == off[b + 1] else i + 1
+
+
+@njit(cache=True)
+def _prev_vertex(off, b, i):
+    return off[b + 1] - 1 if i == off[b] else i - 1
+
+
+@njit(cache=True)
+def _rounded_corner(wv, off, rb, e, ib, inc):
+    """Distance between the inner polygons (arc centres, columns ``W_CX, W_CY``) of blocks rb and
+    ib near a contact, and its two closest points (on rb's, then on ib's).
+
+    The candidates are the local features: the two inner vertices of the incident edge ``inc``
+    against rb's inner edges before, along and after the reference edge ``e``, and the two inner
+    vertices of ``e`` against ib's inner edges around ``inc``. The rounded blocks are the inner
+    polygons grown by their radii, so their gap is this distance minus the two radii, along the
+    line through the two points: a corner against a face gives the face's normal, a corner against
+    a corner the line of the two arc centres, and the normal turns smoothly between the two as a
+    block rolls over a corner.
+    """
+    best = np.inf
+    rx = 0.0
+    ry = 0.0
+    qx = 0.0
+    qy = 0.0
+    for side in range(2):
+        own = ib if side == 0 else rb  # the block whose inner vertices are tested
+        other = rb if side == 0 else ib
+        v = inc if side == 0 else e
+        f = _prev_vertex(off, other, e if side == 0 else inc)
+        for _vv in range(2):
+            px = wv[v, W_CX]
+            py = wv[v, W_CY]
+            s0 = f
+            for _ee in range(3):
+                s1 = _next_vertex(off, other, s0)
+                d2, cx, cy = _closest_on_segment(px, py, wv[s0, W_CX], wv[s0, W_CY], wv[s1, W_CX],
+                                                 wv[s1, W_CY])
+                if d2 < best:
+                    best = d2
+                    if side == 0:
+                        rx, ry, qx, qy = cx, cy, px, py
+                    else:
+                        rx, ry, qx, qy = px, py, cx, cy
+                s0 = s1
+            v = _next_vertex(off, own, v)
+    return math.sqrt(best), rx, ry, qx, qy
+
+
+@njit(cache=True)
 def contact_forces(wv, off, pos, vel, omg, radius, still, pa, pb, pprop, pref, pinit, init_brk,
                    props, S, dt, ctol, hyst, rounding, beta, fpair, E):
     """Narrow phase and joint laws for every pair; writes per-pair force/moment on both blocks
     (``fpair[p] = fx_a, fy_a, m_a, fx_b, fy_b, m_b``) and returns (max overlap, its pair).
 
-    Narrow phase: separating-axis test on both polygons; the edge of least penetration is the
+    Narrow phase: separating-axis test on both polygons (the sharp polygons contain the rounded
+    blocks, so a pair the test separates is apart); the edge of least penetration is the
     reference (switching side only when the other is better by ``hyst``: no flicker on coincident
-    edges); the most anti-parallel edge of the other block is clipped to the reference edge's
-    extent (Box2D-style manifold) giving one or two points within the detection gap, each a slot of
-    length half the clipped overlap (a lone corner point: at least ``rounding``). ``beta`` > 0 adds the stiffness-
-    proportional Rayleigh dashpots β K v_rel. Pairs of two ``still`` blocks (asleep or fixed) do not
+    edges); the facing edge of the other block is clipped to the reference edge's extent
+    (Box2D-style manifold). A *face* contact — both clipped ends within the detection gap and the
+    flat parts of the two edges (between the rounded corners' tangent points) overlapping — has
+    two slots at the clipped ends, each of length half the clipped overlap. Anything else is a
+    *rounded corner* contact (:func:`_rounded_corner`): one slot whose gap, normal and point come
+    from the arcs of radius ``W_RAD`` (corner against face or corner against corner), of length
+    the face part it stands for (half the clipped overlap per end still touching, at least
+    ``rounding``). ``beta`` > 0 adds the stiffness-proportional Rayleigh dashpots β K v_rel. Pairs of two ``still`` blocks (asleep or fixed) do not
     move: their slots keep their state and only the forces are re-assembled from it.
     """
     max_ovl = 0.0
@@ -352,7 +433,6 @@ def contact_forces(wv, off, pos, vel, omg, radius, still, pa, pb, pprop, pref, p
     pty = np.empty(2)
     pco = np.empty(2)
     pdel = np.empty(2)
-    keep = np.empty(2, np.int64)
     slot_of = np.empty(2, np.int64)
     for p in range(len(pa)):
         a = pa[p]
@@ -415,54 +495,73 @@ def contact_forces(wv, off, pos, vel, omg, radius, still, pa, pb, pprop, pref, p
                     facing = i
         if facing >= 0:
             inc = facing
-        ix0, iy0, _iux, _iuy, _inx, _iny, ij = _edge(wv, off, ib, inc)
+        ix0, iy0, iux, iuy, _inx, _iny, ij = _edge(wv, off, ib, inc)
         ix1 = wv[ij, 0]
         iy1 = wv[ij, 1]
         t0 = (ix0 - x0) * ux + (iy0 - y0) * uy
         t1 = (ix1 - x0) * ux + (iy1 - y0) * uy
         tlo = max(0.0, min(t0, t1))
         thi = min(lref, max(t0, t1))
-        if thi < tlo:
-            _open_pair(S, p)
-            continue
-        # the two clipped points
-        for m in range(2):
-            tt = tlo if m == 0 else thi
-            if abs(t1 - t0) > 1e-300:
-                lam = (tt - t0) / (t1 - t0)
-            else:
-                lam = 0.0
-            px = ix0 + lam * (ix1 - ix0)
-            py = iy0 + lam * (iy1 - iy0)
-            cx[m] = px
-            cy[m] = py
-            csep[m] = (px - x0) * nrx + (py - y0) * nry
-        nkeep = 0
-        for m in range(2):
-            if csep[m] <= tol:
-                keep[nkeep] = m
-                nkeep += 1
-        if nkeep == 2 and thi - tlo <= 1e-12 * lref:
-            nkeep = 1  # both points coincide: one corner contact
-            if csep[1] < csep[0]:
-                keep[0] = 1
-        if nkeep == 0:
-            _open_pair(S, p)
-            continue
-        # a face: each end carries half of it; a corner: half the facing part, at least d
-        length = 0.5 * (thi - tlo) if nkeep == 2 else max(0.5 * (thi - tlo), rounding)
-        # contact normal from a to b, tangent
-        nx = nrx if ref == 0 else -nrx
-        ny = nry if ref == 0 else -nry
+        # the incident edge clipped to the reference edge: its two ends within the gap
+        nsharp = 0
+        if thi >= tlo:
+            for m in range(2):
+                tt = tlo if m == 0 else thi
+                lam = (tt - t0) / (t1 - t0) if abs(t1 - t0) > 1e-300 else 0.0
+                px = ix0 + lam * (ix1 - ix0)
+                py = iy0 + lam * (iy1 - iy0)
+                csep[m] = (px - x0) * nrx + (py - y0) * nry
+                if csep[m] <= tol:
+                    cx[nsharp] = px
+                    cy[nsharp] = py
+                    csep[nsharp] = csep[m]
+                    nsharp += 1
+        # a face while both ends touch and the flat parts of the two edges (between the
+        # tangent points of the rounded corners) overlap; otherwise a rounded corner contact
+        face = nsharp == 2 and thi - tlo > 1e-12 * lref
+        if face:
+            cu = iux * ux + iuy * uy
+            f0 = t0 + wv[inc, W_TAN] * cu
+            f1 = t1 - wv[ij, W_TAN] * cu
+            face = (min(lref - wv[jref, W_TAN], max(f0, f1))
+                    > max(wv[e, W_TAN], min(f0, f1)))
+        if face:
+            nkeep = 2
+            length = 0.5 * (thi - tlo)  # each end carries half of the face
+            nx = nrx if ref == 0 else -nrx
+            ny = nry if ref == 0 else -nry
+            for q in range(2):
+                ptx[q] = cx[q] - 0.5 * csep[q] * nrx
+                pty[q] = cy[q] - 0.5 * csep[q] * nry
+                pdel[q] = -csep[q]
+        else:
+            dist, rx, ry, qx, qy = _rounded_corner(wv, off, rb, e, ib, inc)
+            r_ref = wv[off[rb], W_RAD]
+            rsum = r_ref + wv[off[ib], W_RAD]
+            if dist > 1e-9 * (rsum + lref):
+                gx = (qx - rx) / dist
+                gy = (qy - ry) / dist
+                sep = dist - rsum
+            else:  # inner polygons meet (overlap > the radii): sharp measure along the ref normal
+                gx = nrx
+                gy = nry
+                sep = min(max(sep_a, sep_b), -rsum)
+            if sep > tol:
+                _open_pair(S, p)
+                continue
+            nkeep = 1
+            # the face parts it stands for (lift-off: one end, sliding off a corner: both)
+            length = max(0.5 * max(thi - tlo, 0.0) * nsharp, rounding)
+            nx = gx if ref == 0 else -gx
+            ny = gy if ref == 0 else -gy
+            ptx[0] = rx + (r_ref + 0.5 * sep) * gx
+            pty[0] = ry + (r_ref + 0.5 * sep) * gy
+            pdel[0] = -sep
         tx = -ny
         ty = nx
         # slot assignment by the tangential coordinate about block a's centroid
         for q in range(nkeep):
-            m = keep[q]
-            ptx[q] = cx[m] - 0.5 * csep[m] * nrx
-            pty[q] = cy[m] - 0.5 * csep[m] * nry
             pco[q] = (ptx[q] - pos[a, 0]) * tx + (pty[q] - pos[a, 1]) * ty
-            pdel[q] = -csep[m]
         if nkeep == 2:
             if pco[0] <= pco[1]:
                 slot_of[0] = 0
@@ -494,7 +593,9 @@ def contact_forces(wv, off, pos, vel, omg, radius, still, pa, pb, pprop, pref, p
         for q in range(nkeep):
             k = slot_of[q]
             if S[p, k, ACT] == 0.0:
-                _activate_slot(S, p, k, prop, broken)
+                # a corner that comes into contact across a gap is a new touch, not a bond
+                bonded = face or pdel[q] >= -1e-6 * rounding
+                _activate_slot(S, p, k, prop, broken if bonded else 1.0)
             px = ptx[q]
             py = pty[q]
             rax = px - pos[a, 0]

@@ -15,7 +15,7 @@ from . import _kernels as K
 from .selectors import domain_edges, select_blocks
 from .settings import ContinuouslyYielding, Coulomb, Settings
 
-__all__ = ["Engine", "joint_table", "strip_collinear"]
+__all__ = ["Engine", "joint_table", "rounded_corners", "strip_collinear"]
 
 _DOF = {"x": 0, "y": 1, "r": 2}
 FREE, FIXED, PRESCRIBED = 0, 1, 2
@@ -73,6 +73,60 @@ def strip_collinear(xy: np.ndarray, offsets: np.ndarray, rel_tol: float = 1e-9):
     return np.ascontiguousarray(xy[keep]), np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
 
 
+def rounded_corners(loc: np.ndarray, off: np.ndarray, normal: np.ndarray, rounding: float):
+    """Rounded corners of convex blocks: arc centres, tangent lengths and each block's radius.
+
+    Every corner of block b is replaced by a circular arc of radius r_b tangent to its two edges
+    (outward unit normals n₁ of the edge ending at the vertex v, n₂ of the edge starting there).
+    The arc centre lies r_b inside both edges, C = v − r_b (n₁ + n₂)/(1 + n₁·n₂), and touches them
+    at the tangent length r_b tan(θ/2) = r_b |n₁ × n₂|/(1 + n₁·n₂) from v (θ the turn at v). The
+    rounded block is its inner polygon of centres (the block inset by r_b) grown by a disk of
+    radius r_b, so contacts between rounded blocks are distances between inner polygons minus the
+    two radii (UDEC's rounding, REFERENCE.md §5; Cundall 1988).
+
+    r_b is the rounding d, reduced on a block whose corners would eat more than half of an edge
+    (sharp sliver corners): r_b = min(d, min over edges ½ L / (tan(θ₀/2) + tan(θ₁/2))), so every
+    edge keeps at least half of its length flat.
+
+    Parameters
+    ----------
+    loc : (V, 2) ndarray
+        Vertices about each block's centroid, counter-clockwise, ``off`` the block offsets.
+    normal : (V, 2) ndarray
+        Outward unit normal of the edge that starts at each vertex.
+    rounding : float
+        The rounding d (m), > 0.
+
+    Returns
+    -------
+    centre : (V, 2) ndarray
+        Arc centres about the centroid.
+    tangent : (V,) ndarray
+        Tangent lengths r_b tan(θ/2) (m).
+    radius : (B,) ndarray
+        r_b of each block (m).
+    """
+    nb = len(off) - 1
+    block = np.repeat(np.arange(nb), np.diff(off))
+    idx = np.arange(len(loc))
+    nxt = idx + 1
+    nxt[off[1:] - 1] = off[:-1]
+    prv = idx - 1
+    prv[off[:-1]] = off[1:] - 1
+    n1, n2 = normal[prv], normal[idx]
+    cos_turn = np.einsum("ij,ij->i", n1, n2)
+    sin_turn = n1[:, 0] * n2[:, 1] - n1[:, 1] * n2[:, 0]  # > 0 at the convex corners
+    unit_tan = np.where(sin_turn > 0, sin_turn / np.maximum(1.0 + cos_turn, 1e-12), 0.0)
+    length = np.hypot(*(loc[nxt] - loc).T)
+    fit = 0.5 * length / np.maximum(unit_tan + unit_tan[nxt], 1e-300)
+    radius = np.full(nb, float(rounding))
+    np.minimum.at(radius, block, fit)
+    r = radius[block]
+    inward = (n1 + n2) / np.maximum(1.0 + cos_turn, 1e-12)[:, None]
+    centre = loc - np.where(sin_turn > 0, r, 0.0)[:, None] * inward
+    return np.ascontiguousarray(centre), r * unit_tan, radius
+
+
 class Engine:
     """Mutable DEM state of one model under one :class:`~rockmass.solver.Settings`."""
 
@@ -100,9 +154,7 @@ class Engine:
         nxt = np.arange(len(self.loc)) + 1
         nxt[self.off[1:] - 1] = self.off[:-1]
         edge = self.loc[nxt] - self.loc
-        self.lnrm = np.ascontiguousarray(np.column_stack([edge[:, 1], -edge[:, 0]])
-                                         / np.hypot(edge[:, 0], edge[:, 1])[:, None])
-        self.wv = np.empty((len(self.loc), 4))
+        normal = np.column_stack([edge[:, 1], -edge[:, 0]]) / np.hypot(edge[:, 0], edge[:, 1])[:, None]
 
         edge = np.roll(model.xy_m, -1, axis=0) - model.xy_m
         last = self.off[1:] - 1
@@ -110,6 +162,11 @@ class Engine:
         edge_len = np.hypot(edge[:, 0], edge[:, 1])
         self.median_edge_m = float(np.median(edge_len))
         self.rounding_m = settings.rounding_m or 0.01 * self.median_edge_m
+        centre, tangent, radius = rounded_corners(self.loc, self.off, normal, self.rounding_m)
+        self.corner_radius_m = radius
+        self.lnrm = np.ascontiguousarray(np.column_stack([normal, centre, tangent,
+                                                          radius[block_of_vertex]]))
+        self.wv = np.empty((len(self.loc), K.N_WV_COLUMNS))
         self.ctol_m = settings.contact_tolerance_m or self.rounding_m
         self.overlap_limit_m = 0.5 * self.rounding_m
         self.hysteresis_m = 0.01 * self.rounding_m

@@ -79,7 +79,10 @@ def apply_insitu(engine, insitu: InSituStress):
         cy = pr[:, K.P_MODEL] == K.MODEL_CY
         en = pr[:, K.P_EN]
         un = np.where(cy, np.maximum(s, 0.0) ** (1 - en) / ((1 - en) * pr[:, K.P_KN]), s / pr[:, K.P_KN])
-        S[rows, k, K.U0] = un - S[rows, k, K.OVL]
+        # faces start at their in-situ closure; other touches start unloaded: an overlap is
+        # zeroed, a gap (rounded corners apart) stays open
+        ovl = S[rows, k, K.OVL]
+        S[rows, k, K.U0] = np.where(face_pair[rows], un - ovl, -np.maximum(ovl, 0.0))
         S[rows, k, K.TAU] = tau[rows, k]
         S[rows, k, K.FN] = s * S[rows, k, K.LEN]
         S[rows, k, K.FS] = tau[rows, k] * S[rows, k, K.LEN]

@@ -376,8 +376,11 @@ class Settings:
     ``joints`` maps a contact label to its joint model. A contact's label is looked up as its joint
     set name (``contact_kind == "joint"``), then its kind (``"joint"``, ``"trace"``, ``"glued"``,
     ``"excavation"``), then ``"default"`` (also used for contacts formed during the run between
-    blocks that were not neighbours). ``rounding_m`` is the corner rounding d (UDEC): None gives 1 %
-    of the median edge length; the overlap limit is d/2 (REFERENCE.md §5). ``sleep``: in static
+    blocks that were not neighbours). ``rounding_m`` is the corner rounding d (UDEC): every corner
+    is an arc of radius d tangent to its two edges (smaller on a block whose sharp corners would
+    leave less than half of an edge flat; :func:`rockmass.solver.engine.rounded_corners`), so
+    contacts turn smoothly over corners; None gives 1 % of the median edge length; the overlap
+    limit is d/2 (REFERENCE.md §5). ``sleep``: in static
     stages, blocks whose own unbalanced-force ratio stays below the stage tolerance stop being
     integrated until a neighbour disturbs them (REFERENCE.md §6; speed-up and the displacement error
     it adds are measured in ``benchmarks/bench_solver.py``).
