@@ -53,22 +53,16 @@ class _Run:
     """The run folder: ``run.json`` (or ``None`` and a note) and the stage folders present."""
 
     def __init__(self, out: Path):
-        self.out = out
-        self.doc, self.note = None, None
+        self.out, self.doc, self.note = out, None, None
         try:
-            self.doc = _json(out / "run.json", out)
-            if not isinstance(self.doc.get("stages", []), list):
-                raise _Note("run.json: 'stages' is not a list")
-        except (_Note, AttributeError) as exc:
-            self.doc, self.note = None, str(exc) if isinstance(exc, _Note) else "run.json: not an object"
-        self.dirs: dict[str, Path] = {}
-        for name in STAGES:
-            folder = out / name
-            for entry in self.stage_entries():
-                if entry.get("name") == name and entry.get("dir"):
-                    folder = out / str(entry["dir"])  # an absolute dir replaces out
-            if folder.is_dir():
-                self.dirs[name] = folder
+            doc = _json(out / "run.json", out)
+            if not isinstance(doc, dict) or not isinstance(doc.get("stages", []), list):
+                raise _Note("run.json is not a run record (an object with a list of stages)")
+            self.doc = doc
+        except _Note as exc:
+            self.note = str(exc)
+        named = {e.get("name"): out / str(e["dir"]) for e in self.stage_entries() if e.get("dir")}
+        self.dirs: dict[str, Path] = {n: d for n in STAGES if (d := named.get(n, out / n)).is_dir()}
 
     def stage_entries(self) -> list[dict]:
         return [e for e in (self.doc or {}).get("stages", []) if isinstance(e, dict)]
@@ -90,6 +84,15 @@ def _rel(path: Path, out: Path) -> str:
         return path.name
 
 
+def _shown_path(path: str, out: Path) -> str:
+    """An input's path as recorded, or relative to the run folder when it lies inside it (an
+    earlier stage's output)."""
+    try:
+        return Path(path).resolve().relative_to(out.resolve()).as_posix()
+    except (ValueError, OSError):
+        return str(path)
+
+
 def _json(path: Path, out: Path):
     try:
         return json.loads(path.read_text(encoding="utf-8"))
@@ -99,11 +102,12 @@ def _json(path: Path, out: Path):
         raise _Note(f"{_rel(path, out)} is not readable JSON ({exc})") from None
 
 
-def _image(run: _Run, stage: str, name: str, caption: str) -> str:
-    """An image of a stage folder as a figure, or a note when it is missing or broken."""
+def _image(run: _Run, stage: str, name: str, caption: str, cls: str | None = None) -> str:
+    """An image of a stage folder as a figure (``cls="small"``: half width, side by side), or a
+    note when it is missing or broken."""
     path = run.dirs[stage] / name
     try:
-        return figure(caption, file_data_uri(path))
+        return figure(caption, file_data_uri(path), cls)
     except FileNotFoundError:
         return note(f"{_rel(path, run.out)} is missing.")
     except (OSError, ValueError) as exc:
@@ -163,29 +167,30 @@ def _section_inputs(run: _Run) -> str:
             continue
         for item in manifest.get("inputs") or []:
             if isinstance(item, dict):
-                rows.append([stage, str(item.get("path", "")), str(item.get("sha256", ""))[:16],
-                             fmt(item.get("bytes"))])
+                rows.append([stage, _shown_path(item.get("path", ""), run.out),
+                             str(item.get("sha256", ""))[:16], fmt(item.get("bytes"))])
     return (table(["stage", "file", "SHA-256 (first 16)", "bytes"], rows, "t-inputs") if rows
             else note("No input file recorded.")) + "".join(notes)
 
 
 def _section_traces(run: _Run) -> str:
-    """Trace overlay on the photo, trace map by set, rose diagrams."""
-    parts = []
+    """Trace overlay on the photo and trace map by set, then the rose diagrams side by side."""
+    large, small = [], []
     if run.has("extract"):
-        parts.append(_image(run, "extract", "overlay.png", "Extracted traces over the photograph, by set"))
-        parts.append(_image(run, "extract", "rose.png", "Rose diagram of the extracted traces "
-                                                        "(length-weighted)"))
+        large.append(_image(run, "extract", "overlay.png", "Extracted traces over the photograph, by set"))
+        small.append(_image(run, "extract", "rose.png", "Rose diagram of the extracted traces "
+                                                        "(length-weighted)", "small"))
     if run.has("traces"):
-        parts.append(_image(run, "traces", "traces.png", "Digitised trace map, by set"))
-        parts.append(_image(run, "traces", "rose.png", "Rose diagram of the trace map (length-weighted)"))
-    return "".join(parts)
+        large.append(_image(run, "traces", "traces.png", "Digitised trace map, by set"))
+        small.append(_image(run, "traces", "rose.png", "Rose diagram of the trace map (length-weighted)",
+                            "small"))
+    return "".join(large + small)
 
 
 def _section_stereonet(run: _Run) -> str:
     """Poles of the scanline survey with the fitted sets."""
     return _image(run, "scanline", "stereonet.png",
-                  "Poles to joints of the scanline (lower hemisphere, equal area), by set")
+                  "Poles to joints of the scanline (lower hemisphere, equal area), by set", "small")
 
 
 def _section_boxcount(run: _Run) -> str:
@@ -251,7 +256,7 @@ def _intensity_rows_boxcount(run: _Run) -> list[list[str]]:
 
 def _intensity_rows_dfn(run: _Run) -> list[list[str]]:
     rows = []
-    for i, summary in _realizations(run):
+    for i, summary in _realizations(run)[0]:  # the DFN section notes unreadable ones
         total = summary.get("total") or {}
         rows.append(["P32 target", fmt(total.get("target_p32")), "m²/m³", f"dfn, realization {i}"])
         rows.append(["P32 achieved", fmt(total.get("achieved_p32")), "m²/m³", f"dfn, realization {i}"])
@@ -265,7 +270,8 @@ def _intensity_rows_dfn(run: _Run) -> list[list[str]]:
 def _section_intensities(run: _Run) -> str:
     """P10 / P20 / P21 / P32 from whatever stages provide them."""
     rows, notes = [], []
-    readers = [("scanline", _intensity_rows_scanline), ("extract", lambda r: _intensity_rows_traces(r, "extract")),
+    readers = [("scanline", _intensity_rows_scanline),
+               ("extract", lambda r: _intensity_rows_traces(r, "extract")),
                ("traces", lambda r: _intensity_rows_traces(r, "traces")),
                ("boxcount", _intensity_rows_boxcount), ("dfn", _intensity_rows_dfn)]
     for stage, reader in readers:
@@ -278,15 +284,20 @@ def _section_intensities(run: _Run) -> str:
             else note("No intensity available.")) + "".join(notes)
 
 
-def _realizations(run: _Run) -> list[tuple[int, dict]]:
-    """(index, summary.json) of every ``dfn/realization_NNNN`` folder, in order."""
-    out = []
-    for folder in sorted(run.dirs["dfn"].glob("realization_*")):
-        if folder.is_dir() and folder.name[12:].isdigit():
-            out.append((int(folder.name[12:]), _json(folder / "summary.json", run.out)))
-    if not out:
+def _realizations(run: _Run) -> tuple[list[tuple[int, dict]], list[str]]:
+    """(index, summary.json) of every ``dfn/realization_NNNN`` folder, in order, and the notes of
+    those whose summary cannot be read."""
+    out, notes = [], []
+    folders = [f for f in sorted(run.dirs["dfn"].glob("realization_*"))
+               if f.is_dir() and f.name[12:].isdigit()]
+    if not folders:
         raise _Note(f"{_rel(run.dirs['dfn'], run.out)} holds no realization_NNNN folder")
-    return out
+    for folder in folders:
+        try:
+            out.append((int(folder.name[12:]), _json(folder / "summary.json", run.out)))
+        except _Note as exc:
+            notes.append(f"{exc}.")
+    return out, notes
 
 
 def _set_laws(run: _Run) -> dict[str, tuple[str, str, str]]:
@@ -319,7 +330,7 @@ def _size_text(family: str, params: dict) -> str:
 
 def _section_dfn(run: _Run) -> str:
     """Per set: orientation and size law (fitted or given), P32 target and achieved per realization."""
-    realizations = _realizations(run)
+    realizations, notes = _realizations(run)
     try:
         laws = _set_laws(run)
         law_note = ""
@@ -333,7 +344,7 @@ def _section_dfn(run: _Run) -> str:
                          fmt(s.get("target_p32")), fmt(s.get("achieved_p32")), fmt(s.get("count"))])
     head = ["realization", "set", "from", "orientation (dip/dip dir.)", "size law (radius)",
             "P32 target (m²/m³)", "P32 achieved (m²/m³)", "disks"]
-    return table(head, rows, "t-dfn") + law_note
+    return table(head, rows, "t-dfn") + law_note + "".join(note(n) for n in notes)
 
 
 def _section_blocks(run: _Run) -> str:
@@ -367,7 +378,8 @@ def _section_solver(run: _Run) -> str:
 
 def _section_energy(run: _Run) -> str:
     """Energy ledger of every DEM stage (J): one row per term, one column per stage."""
-    stages = [s for s in run.json("solve", "result.json").get("stages") or [] if isinstance(s.get("energy"), dict)]
+    stages = [s for s in run.json("solve", "result.json").get("stages") or []
+              if isinstance(s.get("energy"), dict)]
     if not stages:
         return note("result.json has no energy ledger.")
     terms = []
@@ -378,62 +390,94 @@ def _section_energy(run: _Run) -> str:
     return table(["term (J)"] + [str(s.get("name", "")) for s in stages], rows, "t-energy")
 
 
-def _last_frame(run: _Run) -> Path:
+def _frames(run: _Run) -> tuple[Path, Path | None, str | None]:
+    """(last frame, first frame of the last DEM stage or None, that stage's name) as .vtu paths;
+    from result.json's frame list, else the highest blocks_NNNN.vtu."""
     folder = run.dirs["solve"]
     try:
-        frames = run.json("solve", "result.json").get("frames") or []
-        name = frames[-1]["file"] if frames else None
-    except (_Note, KeyError, TypeError):
-        name = None
-    if name is None:
+        frames = [f for f in run.json("solve", "result.json").get("frames") or [] if f.get("file")]
+    except (_Note, AttributeError):
+        frames = []
+    if not frames:
         found = sorted(folder.glob("blocks_[0-9][0-9][0-9][0-9].vtu"))
         if not found:
             raise _Note(f"{_rel(folder, run.out)} holds no blocks_NNNN.vtu frame")
-        return found[-1]
-    return folder / name
+        return found[-1], None, None
+    stage = frames[-1].get("stage")
+    first = next(f for f in frames if f.get("stage") == stage)
+    if first is frames[0] or first is frames[-1]:
+        return folder / frames[-1]["file"], None, None
+    return folder / frames[-1]["file"], folder / first["file"], stage
 
 
-def _section_displacement(run: _Run) -> str:
-    """Blocks at the final frame, coloured by displacement magnitude (drawn from the last .vtu)."""
+def _read_frame(path: Path, out: Path) -> dict[int, tuple]:
+    """Block id -> (polygon (k, 2), displacement (2,), active) of one .vtu frame."""
     import meshio.vtu  # its reader raises; meshio.read would print and exit on a bad file
     import numpy as np
-    from matplotlib.collections import PolyCollection
 
-    path = _last_frame(run)
     try:
         mesh = meshio.vtu.read(str(path))
     except FileNotFoundError:
-        raise _Note(f"{_rel(path, run.out)} is missing") from None
+        raise _Note(f"{_rel(path, out)} is missing") from None
     except Exception as exc:  # noqa: BLE001 - XML, zlib, base64 and meshio errors on a bad file
-        raise _Note(f"{_rel(path, run.out)} is not a readable VTU file "
+        raise _Note(f"{_rel(path, out)} is not a readable VTU file "
                     f"({type(exc).__name__}{': ' if str(exc) else ''}{exc})") from None
-    polys, mags, active = [], [], []
-    for k, block in enumerate(mesh.cells):
-        disp = np.asarray(mesh.cell_data["displacement"][k])
-        act = np.asarray(mesh.cell_data.get("active", [np.ones(len(block.data))])[k]).astype(bool)
-        polys += [mesh.points[c, :2] for c in block.data]
-        mags += list(np.hypot(disp[:, 0], disp[:, 1]))
-        active += list(act)
-    mags, active = np.asarray(mags) * 1e3, np.asarray(active)
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(7.5, 5.5))
-    on = [p for p, a in zip(polys, active) if a]
-    coll = PolyCollection(on, array=mags[active], cmap="viridis", edgecolors="k", linewidths=0.2)
+    blocks, n = {}, 0
+    for k, cells in enumerate(mesh.cells):
+        data = {key: np.asarray(v[k]) for key, v in mesh.cell_data.items()}
+        ids = data.get("block_id", np.arange(n, n + len(cells.data)))
+        active = data.get("active", np.ones(len(cells.data)))
+        for c, conn in enumerate(cells.data):
+            blocks[int(ids[c])] = (mesh.points[conn, :2], data["displacement"][c, :2], bool(active[c]))
+        n += len(cells.data)
+    return blocks
+
+
+def _displacement_panel(fig, ax, blocks: dict, values: dict, title: str) -> float:
+    """Active blocks coloured by ``values`` (mm), removed blocks dotted; returns the largest value."""
+    from matplotlib.collections import PolyCollection
+
+    on = [b for b, (_, _, active) in blocks.items() if active]
+    coll = PolyCollection([blocks[b][0] for b in on], array=[values[b] for b in on], cmap="viridis",
+                          edgecolors="k", linewidths=0.2)
     ax.add_collection(coll)
-    off = [p for p, a in zip(polys, active) if not a]
+    off = [blocks[b][0] for b, (_, _, active) in blocks.items() if not active]
     if off:
-        ax.add_collection(PolyCollection(off, facecolors="none", edgecolors="0.7", linewidths=0.3,
+        ax.add_collection(PolyCollection(off, facecolors="none", edgecolors="0.6", linewidths=0.4,
                                          linestyles="dotted"))
     ax.autoscale_view()
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
+    ax.set_title(title, fontsize=10)
     fig.colorbar(coll, ax=ax, shrink=0.8, label="displacement (mm)")
+    return max((values[b] for b in on), default=0.0)
+
+
+def _section_displacement(run: _Run) -> str:
+    """Blocks at the final frame coloured by displacement magnitude since the model's original
+    position and, with several DEM stages, by the displacement during the last stage alone."""
+    import math as m
+
+    last, first, stage = _frames(run)
+    blocks = _read_frame(last, run.out)
+    total = {b: 1e3 * m.hypot(*d) for b, (_, d, _) in blocks.items()}
+    start = _read_frame(first, run.out) if first is not None else None
+    plt = pyplot()
+    fig, axes = plt.subplots(1, 2 if start else 1, figsize=(13 if start else 7.5, 5.5), squeeze=False)
+    peak = _displacement_panel(fig, axes[0, 0], blocks, total, f"final frame ({last.name}): total")
+    caption = (f"Displacement magnitude at the final frame ({last.name}) from the model's original "
+               f"position; largest {fmt(peak)} mm")
+    if start:
+        during = {b: 1e3 * m.hypot(*(d - start[b][1])) if b in start else 0.0
+                  for b, (_, d, _) in blocks.items()}
+        peak_stage = _displacement_panel(fig, axes[0, 1], blocks, during, f"during stage {stage}")
+        caption += (f". Right: during the last stage, {stage} ({first.name} to {last.name}); "
+                    f"largest {fmt(peak_stage)} mm")
+    if any(not active for _, _, active in blocks.values()):
+        caption += ". Dotted outlines: removed (excavated) blocks"
     src = png_base64(fig)
     plt.close(fig)
-    peak = float(mags[active].max()) if active.any() else 0.0
-    caption = (f"Displacement magnitude at the final frame ({path.name}); largest {fmt(peak)} mm"
-               + ("; dotted outlines: removed (excavated) blocks" if off else ""))
     return figure(caption, src)
 
 
@@ -554,6 +598,7 @@ def write_run_report(out_dir: str | Path) -> Path:
 <style>
 {BASE_CSS}td:first-child {{ text-align: left; }}
 figure img {{ max-width: min(100%, 880px); }}
+figure.small {{ display: inline-block; vertical-align: top; width: 440px; margin-right: 1em; }}
 .note {{ color: #7a4a00; background: #fff6e0; padding: 4px 8px; font-size: 13px; }}
 nav {{ font-size: 13px; margin-bottom: 1em; }}
 {PRINT_CSS}</style></head><body>

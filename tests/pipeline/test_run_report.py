@@ -276,7 +276,8 @@ def test_dfn_table_gives_every_set_of_every_realization(run_dir):
             assert int(row[header.index("disks")]) == s["count"]
             spec = next(c for c in config if c["name"] == s["name"])
             orientation = row[header.index("orientation (dip/dip dir.)")]
-            assert f"{spec['orientation']['dip_deg']:g}/{spec['orientation']['dip_direction_deg']:g}" in orientation
+            o = spec["orientation"]
+            assert f"{o['dip_deg']:g}/{o['dip_direction_deg']:g}" in orientation
             assert f"r_min_m {spec['size']['r_min_m']:g}" in row[header.index("size law (radius)")]
 
 
@@ -297,25 +298,56 @@ def test_solver_and_energy_tables_equal_result_json(run_dir):
     assert _same(page.cell("t-monitors", "top", "final |u| (m)"), top["final_displacement_m"])
 
 
-def test_displacement_map_is_the_last_frame_coloured_by_magnitude(run_dir):
+def _frame_displacements(path: Path) -> dict:
     import meshio
     import numpy as np
 
-    out, _, _, page = run_dir
-    last = _stage_json(out, "solve", "result.json")["frames"][-1]["file"]
-    mesh = meshio.read(out / "solve" / last)
+    mesh = meshio.read(path)
+    ids = np.concatenate([np.asarray(d) for d in mesh.cell_data["block_id"]])
     disp = np.concatenate([np.asarray(d) for d in mesh.cell_data["displacement"]])
-    peak_mm = 1e3 * float(np.hypot(disp[:, 0], disp[:, 1]).max())
+    return {int(b): d[:2] for b, d in zip(ids, disp)}
+
+
+def test_displacement_map_is_the_last_frame_and_the_last_stage_alone(run_dir):
+    import numpy as np
+
+    out, _, _, page = run_dir
+    frames = _stage_json(out, "solve", "result.json")["frames"]
+    last = frames[-1]
+    first = next(f for f in frames if f["stage"] == last["stage"])
+    end = _frame_displacements(out / "solve" / last["file"])
+    start = _frame_displacements(out / "solve" / first["file"])
+    total_mm = 1e3 * max(float(np.hypot(*d)) for d in end.values())
+    stage_mm = 1e3 * max(float(np.hypot(*(d - start[b]))) for b, d in end.items())
     text = page.sections["displacement"]
-    assert last in text
-    shown = float(text.split("largest ")[1].split(" mm")[0])
-    assert math.isclose(shown, peak_mm, rel_tol=5e-4)
+    assert last["file"] in text and f"during the last stage, {last['stage']}" in text
+    shown = [float(part.split(" mm")[0]) for part in text.split("largest ")[1:]]
+    assert shown == [pytest.approx(total_mm, rel=5e-4), pytest.approx(stage_mm, rel=5e-4)]
 
 
 def test_blocks_table_equals_blocks_json(run_dir):
     out, _, _, page = run_dir
     q = _stage_json(out, "blocks", "blocks.json")["quality"]["n_blocks_by_region"]
     assert {r[0]: int(r[1]) for r in page.tables["t-blocks"][1:]} == q
+
+
+def test_fitted_dfn_sets_show_the_fitted_orientation_and_size_law(run_dir, tmp_path):
+    out = _copy(run_dir, tmp_path)
+    shutil.rmtree(out / "dfn")
+    assert main(["dfn", str(SAMPLES / "dfn_fit_seed001.toml"), "--realizations", "1",
+                 "--out", str(out / "dfn")]) == 0
+    page = _Page.parse(write_run_report(out))
+    header, rows = page.tables["t-dfn"][0], {r[1]: r for r in page.tables["t-dfn"][1:]}
+    fitted = _stage_json(out, "dfn", "fitted.json")["sets"]
+    assert set(rows) == {s["name"] for s in fitted}
+    for s in fitted:
+        row, o = rows[s["name"]], s["orientation"]
+        assert row[header.index("from")] == "fitted"
+        orientation = row[header.index("orientation (dip/dip dir.)")]
+        assert f"{o['dip_deg']:.3g}/{o['dip_direction_deg']:.3g}, κ {o['kappa']:.3g}" in orientation
+        law = row[header.index("size law (radius)")]
+        assert law.startswith(s["size"]["family"])
+        assert f"alpha {s['size']['params']['alpha']:.4g}" in law
 
 
 # ---------------------------------------------------------------------------- bad or missing --
@@ -347,6 +379,7 @@ def test_corrupt_and_missing_stage_files_give_notes_not_a_crash(run_dir, tmp_pat
     assert {s for s, _ in page.images} == {"traces", "boxcount", "blocks"}
     assert len([s for s, _ in page.images if s == "traces"]) == 3
     assert "t-intensity" in page.tables and "t-blocks" in page.tables
+    assert {r[0] for r in page.tables["t-dfn"][1:]} == {"0"}  # the readable realization
 
 
 def test_missing_or_corrupt_run_json_gives_a_note_and_the_stage_sections(run_dir, tmp_path):
@@ -357,7 +390,7 @@ def test_missing_or_corrupt_run_json_gives_a_note_and_the_stage_sections(run_dir
     assert "run.json is missing" in page.notes["run"][0]
     (out / "run.json").write_text("[1, 2]", encoding="utf-8")
     page = _Page.parse(write_run_report(out))
-    assert "run.json: not an object" in page.notes["run"][0]
+    assert "run.json is not a run record" in page.notes["run"][0]
     assert set(page.sections) == ALL_SECTIONS
 
 
