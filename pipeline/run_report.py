@@ -309,7 +309,8 @@ def _set_laws(run: _Run) -> dict[str, tuple[str, str, str]]:
         config = {}
     for s in config.get("sets") or []:
         o, size = s.get("orientation") or {}, dict(s.get("size") or {})
-        laws[s.get("name")] = ("config", _orientation_text(o), _size_text(size.pop("distribution", ""), size))
+        law = _size_text(size.pop("distribution", ""), size)
+        laws[s.get("name")] = ("config", _orientation_text(o), law)
     if (run.dirs["dfn"] / "fitted.json").exists():
         for s in run.json("dfn", "fitted.json").get("sets") or []:
             size = s.get("size") or {}
@@ -344,7 +345,28 @@ def _section_dfn(run: _Run) -> str:
                          fmt(s.get("target_p32")), fmt(s.get("achieved_p32")), fmt(s.get("count"))])
     head = ["realization", "set", "from", "orientation (dip/dip dir.)", "size law (radius)",
             "P32 target (m²/m³)", "P32 achieved (m²/m³)", "disks"]
-    return table(head, rows, "t-dfn") + law_note + "".join(note(n) for n in notes)
+    return (table(head, rows, "t-dfn") + _dfn_validation(run, [i for i, _ in realizations]) + law_note
+            + "".join(note(n) for n in notes))
+
+
+def _dfn_validation(run: _Run, indices: list[int]) -> str:
+    """One line per realization re-sampled with the field geometry (validation.json, with
+    ``[dfn.fit] validate = true``): how many measured quantities it reproduces within tolerance."""
+    lines = []
+    for i in indices:
+        path = run.dirs["dfn"] / f"realization_{i:04d}" / "validation.json"
+        if not path.exists():
+            continue
+        try:
+            rows = _json(path, run.out).get("rows") or []
+            ok = sum(1 for r in rows if r.get("ok"))
+            lines.append(f"realization {i}: {ok} of {len(rows)} field measures within tolerance")
+        except (_Note, AttributeError) as exc:
+            lines.append(f"realization {i}: {exc}")
+    if not lines:
+        return ""
+    return f'<p id="dfn-validation">Validation against the field data: {html.escape("; ".join(lines))}.</p>'
+
 
 
 def _section_blocks(run: _Run) -> str:

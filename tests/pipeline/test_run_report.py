@@ -348,6 +348,9 @@ def test_fitted_dfn_sets_show_the_fitted_orientation_and_size_law(run_dir, tmp_p
         law = row[header.index("size law (radius)")]
         assert law.startswith(s["size"]["family"])
         assert f"alpha {s['size']['params']['alpha']:.4g}" in law
+    rows = _stage_json(out, "dfn", "realization_0000/validation.json")["rows"]
+    assert (f"realization 0: {sum(r['ok'] for r in rows)} of {len(rows)} field measures within "
+            "tolerance") in page.sections["dfn"]
 
 
 # ---------------------------------------------------------------------------- bad or missing --
