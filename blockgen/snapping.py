@@ -13,7 +13,9 @@ Rule for one edge ``(u, v)`` of length < ``min_edge_m`` (shortest first):
    neither end is pinned), ``u``, ``v``.
 2. **Accepted** when, for every block touching ``u`` or ``v``: the new ring is convex (no reflex
    vertex beyond ``reflex_sin`` and ``reflex_m``) with positive area, or has collapsed to nothing
-   (a triangle on the edge, its area passing to its neighbours); and the area of these blocks,
+   (a triangle on the edge, its area passing to its neighbours) — but not thinner than half the
+   minimum edge in mean width 2·area/perimeter and less than half as wide as it was (a nearly
+   collinear triangle would drive the DEM time step to nothing); and the area of these blocks,
    summed per region, is unchanged (to 1e-12 relative) — so the domain and every excavation stage
    keep their areas exactly, and no block overlaps another. Otherwise the next candidate is tried;
    an edge with no acceptable candidate is left and listed. The midpoint is rounded to the noding
@@ -176,7 +178,7 @@ def _one_pass(noded, kind, src, moved, faces, region, min_edge_m, grid_m, reflex
             targets.append(xy[v])  # u moves onto v
         for p in targets:
             rings = _try(p, u, v, [ring(f) for f in touched], [int(region[f]) for f in touched],
-                         reflex_sin, reflex_m)
+                         reflex_sin, reflex_m, 0.5 * min_edge_m)
             if rings is not None:
                 moves[u] = moves[v] = p
                 busy.update(touched)
@@ -236,9 +238,17 @@ def _collinear_on_outline(target, mover, xy, pinned_dirs, reflex_sin):
     return all(abs(d[0] * e[1] - d[1] * e[0]) <= reflex_sin for e in pinned_dirs[mover])
 
 
-def _try(p, u, v, rings, regions, reflex_sin, reflex_m):
+def _mean_width(xy):
+    """2·area / perimeter of a ring (the sliver measure of :mod:`rockmass.blockgen.builder`)."""
+    perimeter = float(np.sum(np.hypot(*(np.roll(xy, -1, axis=0) - xy).T)))
+    return 2.0 * abs(_signed_area(xy)) / perimeter if perimeter > 0 else 0.0
+
+
+def _try(p, u, v, rings, regions, reflex_sin, reflex_m, min_width=0.0):
     """New rings (None: the block vanishes) of the blocks ``rings`` = [(coords, node ids)] if u and
-    v go to ``p``; None if the rule refuses the move."""
+    v go to ``p``; None if the rule refuses the move (including a block that would end thinner
+    than ``min_width`` in mean width 2·area/perimeter and less than half as wide as before: a
+    nearly collinear triangle left by a collapse would drive the DEM time step to nothing)."""
     before: dict[int, float] = {}
     after: dict[int, float] = {}
     out = []
@@ -256,6 +266,9 @@ def _try(p, u, v, rings, regions, reflex_sin, reflex_m):
         new_xy = new_xy[keep]
         area = _signed_area(new_xy)
         if area <= 0 or len(reflex_vertices(new_xy, reflex_sin, reflex_m)):
+            return None
+        width = _mean_width(new_xy)
+        if width < min_width and width < 0.5 * _mean_width(ring_xy):
             return None
         after[reg] = after.get(reg, 0.0) + area
         out.append(new_xy)

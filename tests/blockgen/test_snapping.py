@@ -122,3 +122,69 @@ def test_unique_rows_matches_numpy_unique():
     assert np.array_equal(uniq, ref[0]) and np.array_equal(inv, ref[1].ravel())
     assert np.array_equal(counts, ref[2])
     assert np.array_equal(uniq[inv], a)
+
+
+
+NEEDLE_CASE = """
+[dfn]
+seed = 5904729961632443646
+realizations = 1
+[dfn.domain]
+min_m = [0.0, 0.0, 0.0]
+max_m = [60.0, 60.0, 40.0]
+[[dfn.sets]]
+name = "J1"
+orientation = {distribution = "fisher", dip_deg = 50.0, dip_direction_deg = 270.0, kappa = 20.0}
+size = {distribution = "power_law", r_min_m = 3.53, r_max_m = 40.0, alpha = 2.5}
+intensity = {measure = "P32", value = 0.6666666666666666}
+[[dfn.sets]]
+name = "J2"
+orientation = {distribution = "fisher", dip_deg = 80.0, dip_direction_deg = 10.0, kappa = 20.0}
+size = {distribution = "power_law", r_min_m = 2.51, r_max_m = 40.0, alpha = 2.5}
+intensity = {measure = "P32", value = 0.6666666666666666}
+[[dfn.sets]]
+name = "J3"
+orientation = {distribution = "fisher", dip_deg = 70.0, dip_direction_deg = 150.0, kappa = 20.0}
+size = {distribution = "power_law", r_min_m = 2.84, r_max_m = 40.0, alpha = 2.5}
+intensity = {measure = "P32", value = 0.6666666666666666}
+[[dfn.sections]]
+name = "drift face"
+point_m = [30.0, 30.0, 0.0]
+dip_deg = 90.0
+dip_direction_deg = 0.0
+window_uv_m = [[-20.0, 5.0], [20.0, 5.0], [20.0, 35.0], [-20.0, 35.0]]
+[blocks]
+seed = 5904729961632443646
+rounding_m = 0.05
+min_edge_m = 0.1
+dangling = "glued"
+[blocks.dfn_section]
+section = "drift face"
+realization = 0
+[[blocks.excavations]]
+shape = "horseshoe"
+name = "drift"
+center_xy_m = [0.0, 15.0]
+span_m = 6.0
+wall_height_m = 3.0
+"""
+
+
+def test_snapping_leaves_no_needle_block_on_a_dfn_section(tmp_path):
+    """Seed-001 sets at P32 = 2 on a drift section (a case of samples/study_dfn_seed001.toml with
+    min_edge_m = 0.1): a collapse used to turn a thin triangle (mean width 2A/P = 0.017 m) into a
+    needle of width 7.6e-13 m, which drove the DEM time step to 1e-10 s. The rule now refuses it:
+    every block keeps a mean width above 1 mm (measured: 0.021 m, the same thinnest block as
+    without snapping)."""
+    from rockmass.blockgen import read_json
+    from rockmass.cli import main
+
+    config = tmp_path / "case.toml"
+    config.write_text(NEEDLE_CASE)
+    assert main(["blocks", str(config), "--out", str(tmp_path / "out")]) == 0
+    model = read_json(tmp_path / "out" / "blocks.json")
+    perimeter = np.array([shapely.Polygon(model.xy_m[a:b]).length
+                          for a, b in zip(model.offsets[:-1], model.offsets[1:])])
+    width = 2 * model.area_m2 / perimeter
+    assert width.min() > 1e-3, width.min()
+
