@@ -113,7 +113,11 @@ def _case_header(case, config_path) -> str:
 
 
 def _params_text(params: dict) -> str:
-    return ", ".join(f"{k.rsplit('.', 1)[-1]}={v}" for k, v in params.items())
+    """``theta_deg=60.0, ...``: the last part of each field path, or the whole path when two
+    fields share it (``dfn.sets[0].intensity.value=...``)."""
+    last = [k.rsplit(".", 1)[-1] for k in params]
+    return ", ".join(f"{k if last.count(n) > 1 else n}={v}" for k, n, v in
+                     zip(params, last, params.values()))
 
 
 def run(args) -> int:
