@@ -321,7 +321,8 @@ def run_case(task: dict) -> dict:
     -------
     dict
         The task's keys (without ``config``) plus the measured values, ``status`` ("ok" or
-        "failed"), ``error`` (the reason, or None) and ``timings_s``. Never raises for a failure of
+        "failed": an exception, or a solver run stopped by an overlap or an instability),
+        ``error`` (the reason, or None) and ``timings_s``. Never raises for a failure of
         the case itself: a study goes on with the other cases.
     """
     from .config import RockmassConfig
@@ -348,6 +349,11 @@ def run_case(task: dict) -> dict:
         t = time.perf_counter()
         out.update(_solve(document, path, model))
         timings["solve_s"] = time.perf_counter() - t
+        if out.get("solve_status", "ok") != "ok":
+            # a run stopped by an overlap or an instability has no valid displacement: the case
+            # is a failure with the solver's diagnostic (its row stays in results.csv)
+            out["status"] = "failed"
+            out["error"] = f"solver stopped ({out['solve_status']}): {out.get('diagnostic')}"
     except Exception as exc:  # noqa: BLE001 - a failed case is a result, not the study's end
         out["status"] = "failed"
         out["error"] = f"{type(exc).__name__}: {exc}"

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import base64
 import csv
+import io
 import json
 import re
 from pathlib import Path
@@ -206,6 +207,27 @@ def test_report_is_self_contained_with_embedded_pngs(serial_run):
     assert "<script" not in page
     assert "θ = 60°" not in page  # the legend is inside the image, the table in the page
     assert page.count("<tr>") >= 1 + 4 + 1 + 2  # header + 4 cases, header + 2 combinations
+
+
+def test_a_case_whose_solver_stops_on_an_overlap_is_a_failed_case(tmp_path, capsys):
+    """With a rounding of 10 µm the overlap limit (5 µm) is far below the closures of the
+    excavation, so the DEM stops with "overlap": the case must not pass as "ok" with the
+    displacement of a stopped run — it is failed, with the solver's diagnostic, kept in
+    results.csv, and the study exits 1."""
+    cfg = _write(tmp_path, BASE + """
+[study]
+[[study.cases]]
+"solve.rounding_m" = 1e-5
+""")
+    out = tmp_path / "o"
+    assert main(["study", str(cfg), "--out", str(out), "--workers", "1"]) == 1
+    assert "FAILED: solver stopped (overlap)" in capsys.readouterr().err
+    (case_dir,) = (out / "cases").iterdir()
+    record = json.loads((case_dir / "case.json").read_text())
+    assert record["status"] == "failed" and record["solve_status"] == "overlap"
+    assert "overlap" in record["error"]
+    rows = list(csv.DictReader(io.StringIO((out / "results.csv").read_text())))
+    assert [r["status"] for r in rows] == ["failed"]
 
 
 def test_list_form_and_grid_combine(tmp_path, capsys):
