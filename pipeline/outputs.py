@@ -15,7 +15,7 @@ from pathlib import Path
 
 from .errors import RunError
 
-__all__ = ["output_folder", "print_json"]
+__all__ = ["output_folder", "print_json", "print_summary"]
 
 
 @contextlib.contextmanager
@@ -41,3 +41,11 @@ def print_json(document) -> None:
 
     json.dump(document, sys.stdout, indent=2, allow_nan=False)
     sys.stdout.write("\n")
+
+
+def print_summary(document, as_json: bool, text) -> None:
+    """Print a subcommand's result: the JSON document with ``--json``, else ``text(document)``."""
+    if as_json:
+        print_json(document)
+    else:
+        print(text(document))

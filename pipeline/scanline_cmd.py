@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 
 from .errors import InputError
-from .outputs import output_folder, print_json
+from .outputs import output_folder, print_summary
 
 __all__ = ["add_parser", "run", "compute", "produce"]
 
@@ -148,9 +148,5 @@ def produce(args, out_dir=None):
 
 def run(args) -> int:
     """Handler of ``rockmass scanline``."""
-    summary = produce(args, args.out)
-    if args.json:
-        print_json(summary)
-    else:
-        print(summary_text(summary))
+    print_summary(produce(args, args.out), args.json, summary_text)
     return 0

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from .errors import InputError
 from .inputs import read_polygon_file, read_trace_file
-from .outputs import output_folder, print_json
+from .outputs import output_folder, print_summary
 
 __all__ = ["add_parser", "run", "compute", "produce"]
 
@@ -128,9 +128,5 @@ def produce(args, out_dir=None):
 
 def run(args) -> int:
     """Handler of ``rockmass traces``."""
-    summary = produce(args, args.out)
-    if args.json:
-        print_json(summary)
-    else:
-        print(summary_text(summary))
+    print_summary(produce(args, args.out), args.json, summary_text)
     return 0

@@ -54,10 +54,10 @@ _FACING_COS = -0.99  # edges whose normals are this close to anti-parallel face 
 
 
 @njit(cache=True)
-def world_vertices(loc, lnrm, off, pos, rot, active, wv):
+def world_vertices(loc, lgeo, off, pos, rot, active, wv):
     """World vertex table of the active blocks (columns ``W_*``): the vertex pos[b] + R(rot[b])
-    loc[k], the outward unit normal R lnrm[k, :2] of the edge starting at it, its rounded corner's
-    arc centre pos[b] + R lnrm[k, 2:4], tangent length lnrm[k, 4] and radius lnrm[k, 5]
+    loc[k], the outward unit normal R lgeo[k, :2] of the edge starting at it, its rounded corner's
+    arc centre pos[b] + R lgeo[k, 2:4], tangent length lgeo[k, 4] and radius lgeo[k, 5]
     (:func:`rockmass.solver.engine.rounded_corners`)."""
     for b in range(len(off) - 1):
         if not active[b]:
@@ -67,12 +67,12 @@ def world_vertices(loc, lnrm, off, pos, rot, active, wv):
         for k in range(off[b], off[b + 1]):
             wv[k, W_X] = pos[b, 0] + c * loc[k, 0] - s * loc[k, 1]
             wv[k, W_Y] = pos[b, 1] + s * loc[k, 0] + c * loc[k, 1]
-            wv[k, W_NX] = c * lnrm[k, 0] - s * lnrm[k, 1]
-            wv[k, W_NY] = s * lnrm[k, 0] + c * lnrm[k, 1]
-            wv[k, W_CX] = pos[b, 0] + c * lnrm[k, 2] - s * lnrm[k, 3]
-            wv[k, W_CY] = pos[b, 1] + s * lnrm[k, 2] + c * lnrm[k, 3]
-            wv[k, W_TAN] = lnrm[k, 4]
-            wv[k, W_RAD] = lnrm[k, 5]
+            wv[k, W_NX] = c * lgeo[k, 0] - s * lgeo[k, 1]
+            wv[k, W_NY] = s * lgeo[k, 0] + c * lgeo[k, 1]
+            wv[k, W_CX] = pos[b, 0] + c * lgeo[k, 2] - s * lgeo[k, 3]
+            wv[k, W_CY] = pos[b, 1] + s * lgeo[k, 2] + c * lgeo[k, 3]
+            wv[k, W_TAN] = lgeo[k, 4]
+            wv[k, W_RAD] = lgeo[k, 5]
 
 
 @njit(cache=True)
@@ -703,7 +703,7 @@ def quiet_forces(edges, pos, vel, omg, rot, qf):
 
 
 @njit(cache=True)
-def advance(n_steps, loc, lnrm, off, pos, rot, vel, omg, inv_mass, mass, mode, dof_input, presc_val,
+def advance(n_steps, loc, lgeo, off, pos, rot, vel, omg, inv_mass, mass, mode, dof_input, presc_val,
             active, movable, gravity, ext_f, ext_a, ext_b, quiet_edges, pa, pb, pprop, pref, pinit,
             init_brk, props, S, ref_pos, ref_rot, radius, dt, ctol, hyst, rounding, ovl_limit,
             margin, alpha_local, alpha_mass, beta, tol_ratio, check_every, wv, fpair, bp_ptr,
@@ -732,7 +732,7 @@ def advance(n_steps, loc, lnrm, off, pos, rot, vel, omg, inv_mass, mass, mode, d
     fe = np.zeros(3)
     ratio = np.inf
     for step in range(n_steps):
-        world_vertices(loc, lnrm, off, pos, rot, active, wv)
+        world_vertices(loc, lgeo, off, pos, rot, active, wv)
         max_ovl, max_pair = contact_forces(wv, off, pos, vel, omg, radius, asleep, pa, pb, pprop,
                                            pref, pinit, init_brk, props, S, dt, ctol, hyst,
                                            rounding, beta, fpair, E)

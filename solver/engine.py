@@ -46,6 +46,17 @@ def joint_table(models: list) -> np.ndarray:
     return table
 
 
+def ring_neighbours(offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of the next and the previous vertex of every vertex, each block a closed ring
+    ``offsets[b]:offsets[b+1]``."""
+    idx = np.arange(offsets[-1])
+    nxt = idx + 1
+    nxt[offsets[1:] - 1] = offsets[:-1]
+    prv = idx - 1
+    prv[offsets[:-1]] = offsets[1:] - 1
+    return nxt, prv
+
+
 def strip_collinear(xy: np.ndarray, offsets: np.ndarray, rel_tol: float = 1e-9):
     """Drop vertices where a block's boundary runs straight on (|sin of the turn| < ``rel_tol``).
 
@@ -56,11 +67,7 @@ def strip_collinear(xy: np.ndarray, offsets: np.ndarray, rel_tol: float = 1e-9):
     """
     n = len(offsets) - 1
     block = np.repeat(np.arange(n), np.diff(offsets))
-    idx = np.arange(len(xy))
-    nxt = idx + 1
-    nxt[offsets[1:] - 1] = offsets[:-1]
-    prv = idx - 1
-    prv[offsets[:-1]] = offsets[1:] - 1
+    nxt, prv = ring_neighbours(offsets)
     e0 = xy - xy[prv]
     e1 = xy[nxt] - xy
     cross = e0[:, 0] * e1[:, 1] - e0[:, 1] * e1[:, 0]
@@ -108,12 +115,8 @@ def rounded_corners(loc: np.ndarray, off: np.ndarray, normal: np.ndarray, roundi
     """
     nb = len(off) - 1
     block = np.repeat(np.arange(nb), np.diff(off))
-    idx = np.arange(len(loc))
-    nxt = idx + 1
-    nxt[off[1:] - 1] = off[:-1]
-    prv = idx - 1
-    prv[off[:-1]] = off[1:] - 1
-    n1, n2 = normal[prv], normal[idx]
+    nxt, prv = ring_neighbours(off)
+    n1, n2 = normal[prv], normal
     cos_turn = np.einsum("ij,ij->i", n1, n2)
     sin_turn = n1[:, 0] * n2[:, 1] - n1[:, 1] * n2[:, 0]  # > 0 at the convex corners
     unit_tan = np.where(sin_turn > 0, sin_turn / np.maximum(1.0 + cos_turn, 1e-12), 0.0)
@@ -151,20 +154,15 @@ class Engine:
         self.mass = np.ascontiguousarray(np.column_stack([rho * area, rho * area, rho * polar]))
         self.active = np.ones(nb, np.bool_)
         self.radius = np.sqrt(np.maximum.reduceat((self.loc ** 2).sum(1), self.off[:-1]))
-        nxt = np.arange(len(self.loc)) + 1
-        nxt[self.off[1:] - 1] = self.off[:-1]
-        edge = self.loc[nxt] - self.loc
+        edge = self.loc[ring_neighbours(self.off)[0]] - self.loc
         normal = np.column_stack([edge[:, 1], -edge[:, 0]]) / np.hypot(edge[:, 0], edge[:, 1])[:, None]
 
-        edge = np.roll(model.xy_m, -1, axis=0) - model.xy_m
-        last = self.off[1:] - 1
-        edge[last] = model.xy_m[self.off[:-1]] - model.xy_m[last]
-        edge_len = np.hypot(edge[:, 0], edge[:, 1])
-        self.median_edge_m = float(np.median(edge_len))
+        # the block model's own edges (before strip_collinear), with its own offsets
+        edge = model.xy_m[ring_neighbours(np.asarray(model.offsets))[0]] - model.xy_m
+        self.median_edge_m = float(np.median(np.hypot(edge[:, 0], edge[:, 1])))
         self.rounding_m = settings.rounding_m or 0.01 * self.median_edge_m
         centre, tangent, radius = rounded_corners(self.loc, self.off, normal, self.rounding_m)
-        self.corner_radius_m = radius
-        self.lnrm = np.ascontiguousarray(np.column_stack([normal, centre, tangent,
+        self.lgeo = np.ascontiguousarray(np.column_stack([normal, centre, tangent,
                                                           radius[block_of_vertex]]))
         self.wv = np.empty((len(self.loc), K.N_WV_COLUMNS))
         self.ctol_m = settings.contact_tolerance_m or self.rounding_m
@@ -259,7 +257,7 @@ class Engine:
 
     def rebuild(self):
         """Broad phase and pair remap (state of surviving pairs kept)."""
-        K.world_vertices(self.loc, self.lnrm, self.off, self.pos, self.rot, self.active, self.wv)
+        K.world_vertices(self.loc, self.lgeo, self.off, self.pos, self.rot, self.active, self.wv)
         margin = self.margin_m
         pa, pb = K.broad_phase(self.wv, self.off, self.active, self.movable, margin)
         n = len(pa)
@@ -279,7 +277,7 @@ class Engine:
 
     def detect(self):
         """Run the narrow phase once without motion: establishes the contact slots."""
-        K.world_vertices(self.loc, self.lnrm, self.off, self.pos, self.rot, self.active, self.wv)
+        K.world_vertices(self.loc, self.lgeo, self.off, self.pos, self.rot, self.active, self.wv)
         K.contact_forces(self.wv, self.off, self.pos, self.vel, self.omg, self.radius,
                          np.zeros(self.nb, np.int8), self.pa, self.pb, self.pprop, self.pref,
                          self.pinit, self.init_brk, self.props, self.S, 0.0, self.ctol_m, self.hysteresis_m, self.rounding_m, 0.0, self.fpair,

@@ -218,7 +218,7 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
         for i, inp in enumerate(inputs):
             presc[:, i] = inp.history(t_half)
         snap = eng.snapshot()
-        rc = K.advance(todo, eng.loc, eng.lnrm, eng.off, eng.pos, eng.rot, eng.vel, eng.omg, eng.inv_mass,
+        rc = K.advance(todo, eng.loc, eng.lgeo, eng.off, eng.pos, eng.rot, eng.vel, eng.omg, eng.inv_mass,
                        eng.mass, eng.mode, eng.dof_input, presc, eng.active, eng.movable,
                        eng.gravity, eng.ext_f, eng.ext_a, eng.ext_b, eng.quiet_edges, eng.pa,
                        eng.pb, eng.pprop, eng.pref, eng.pinit, eng.init_brk, eng.props, eng.S,

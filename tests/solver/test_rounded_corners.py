@@ -190,3 +190,16 @@ def test_block_sliding_off_an_incline_over_its_corner_keeps_the_energy_ledger():
     corner_y = -math.sin(math.radians(30.0))  # the base's lower top corner, (−cos 30°, −sin 30°)
     final = result.frames[-1]
     assert final.position_m[1, 1] < corner_y
+
+
+def test_default_rounding_is_one_percent_of_the_median_edge_of_the_block_model():
+    """A base with a T-junction vertex on its top face (edges 4, 1, 2, 2, 1 m) under a 0.5 m
+    square (4 × 0.5 m): the median of the nine block-model edges is 1 m, so d = 1 cm. (The solver
+    drops the collinear vertex for its own polygons; the median is of the model's edges.)"""
+    base = np.array([[-2.0, -1.0], [2.0, -1.0], [2.0, 0.0], [0.0, 0.0], [-2.0, 0.0]])
+    model = hand_model([base, rect(0.0, 0.0, 0.5, 0.5)], [(0, 1)])
+    settings = Settings(joints={"default": Coulomb(KN, KN, 30.0)}, material=Material(2500),
+                        stages=(Stage("s", "static"),))
+    eng = Engine(model, settings)
+    assert eng.median_edge_m == pytest.approx(1.0, rel=1e-12)
+    assert eng.rounding_m == pytest.approx(0.01, rel=1e-12)
