@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from types import MappingProxyType
@@ -326,15 +326,25 @@ def _check_orientation(dip, dip_direction):
     return (dip, dip_direction % 360.0)
 
 
+# the steps of :func:`extract`, in order: its timings and its ``progress`` callback use these names
+STEPS = ("read", "grey", "downsample", "roi", "flatten", "ridges", "segment", "skeleton", "graph",
+         "prune", "crossings", "bridge", "chain", "link", "vectorize")
+
+
 class _Clock:
-    def __init__(self):
+    """Time per step; calls ``progress(step)`` as each step ends."""
+
+    def __init__(self, progress: Callable[[str], None] | None = None):
         self.timings: dict[str, float] = {}
+        self.progress = progress
         self._t = time.perf_counter()
 
     def lap(self, name: str) -> None:
         now = time.perf_counter()
         self.timings[name] = self.timings.get(name, 0.0) + now - self._t
         self._t = now
+        if self.progress is not None:
+            self.progress(name)
 
 
 def _render(graph, shape) -> np.ndarray:
@@ -349,7 +359,7 @@ def _render(graph, shape) -> np.ndarray:
 def extract(image_or_path, *, m_per_px: float | None = None, control_points=None,
             joint_width_px: float = 3.0, roi=None, face_dip_deg: float | None = None,
             face_dip_direction_deg: float | None = None, params: ExtractParams | None = None,
-            debug: bool = False) -> Extraction:
+            debug: bool = False, progress: Callable[[str], None] | None = None) -> Extraction:
     """Joint traces from a face photograph.
 
     Parameters
@@ -374,6 +384,9 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         Chain settings; default ``ExtractParams()``.
     debug : bool, default False
         Keep the intermediate images in ``Extraction.debug``.
+    progress : callable, optional
+        ``progress(step)`` after each step of the chain, with the names of :data:`STEPS` in order
+        (the ``rockmass extract`` progress bar).
 
     Returns
     -------
@@ -420,7 +433,7 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         notes.append("no scale given (m_per_px or control_points): coordinates and lengths are in "
                      "pixels, labelled 'px'; set m_per_px or give two control points for metres")
 
-    clock = _Clock()
+    clock = _Clock(progress)
     if isinstance(image_or_path, (str, Path)):
         raw = enhance.read_photo(image_or_path)
         name = str(image_or_path)

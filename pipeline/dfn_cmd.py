@@ -130,8 +130,8 @@ def compute(args, document=None):
     Returns (config, specs, seed, [(index, network, summary, validation rows or None)], timings, fit).
     """
     from .config import load_config
-    from .dfn.generation import generate
     from .dfn_config import DFNDocument
+    from .progress import count_bar
 
     _check_flag(args.seed, "--seed", 0)
     _check_flag(args.realizations, "--realizations", 1)
@@ -151,30 +151,44 @@ def compute(args, document=None):
     seed = cfg.seed if args.seed is None else args.seed
     count = cfg.realizations if args.realizations is None else args.realizations
     indices = list(range(args.first, args.first + count))
-    results = []
     t1 = time.perf_counter()
-    for i in indices:
-        try:
-            network = generate(specs, cfg.domain_m(), seed=seed, realization=i,
-                               max_fractures=cfg.max_fractures)
-        except ValueError as exc:
-            raise InputError(f"{args.config}: dfn.max_fractures: {exc}") from exc
-        rows = None
-        if fit is not None and cfg.fit.validate_:
-            from .dfn.validation import compare_with_field
-
-            rows = compare_with_field(network, fit, *field)
-        summary = realization_summary(network, specs, seed, i)
-        if cfg.sections:
-            summary["sections"] = []
-            for k, sec in enumerate(cfg.sections):
-                try:
-                    summary["sections"].append(_section(network, specs, sec, k))
-                except ValueError as exc:
-                    raise InputError(f"{args.config}: dfn.sections[{k}]: {exc}") from exc
-        results.append((i, network, summary, rows))
+    bar = count_bar("dfn", len(indices), "realization")
+    results = []
+    try:
+        for done, i in enumerate(indices, 1):
+            results.append(_realization(args, cfg, specs, fit, field, seed, i))
+            if bar is not None:
+                bar(done)
+    finally:
+        if bar is not None:
+            bar.close()
     t2 = time.perf_counter()
     return document, specs, seed, results, {"load_s": t1 - t0, "generate_s": t2 - t1}, fit
+
+
+def _realization(args, cfg, specs, fit, field, seed: int, i: int) -> tuple:
+    """Realization ``i``: (index, network, summary, validation rows or None)."""
+    from .dfn.generation import generate
+
+    try:
+        network = generate(specs, cfg.domain_m(), seed=seed, realization=i,
+                           max_fractures=cfg.max_fractures)
+    except ValueError as exc:
+        raise InputError(f"{args.config}: dfn.max_fractures: {exc}") from exc
+    rows = None
+    if fit is not None and cfg.fit.validate_:
+        from .dfn.validation import compare_with_field
+
+        rows = compare_with_field(network, fit, *field)
+    summary = realization_summary(network, specs, seed, i)
+    if cfg.sections:
+        summary["sections"] = []
+        for k, sec in enumerate(cfg.sections):
+            try:
+                summary["sections"].append(_section(network, specs, sec, k))
+            except ValueError as exc:
+                raise InputError(f"{args.config}: dfn.sections[{k}]: {exc}") from exc
+    return i, network, summary, rows
 
 
 def validation_document(rows: list[dict], index: int) -> dict:

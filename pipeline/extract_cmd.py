@@ -88,7 +88,8 @@ def compute(args):
     from .fractal import box_count
     from .imaging import extract
     from .imaging.enhance import read_photo
-    from .imaging.extract import ExtractParams
+    from .imaging.extract import STEPS, ExtractParams
+    from .progress import step_bar
 
     settings = _settings(args)
     path = Path(args.photo)
@@ -109,6 +110,7 @@ def compute(args):
         r1, c1, r2, c2, distance = args.control_points
         control = {"rc_px": [(r1, c1), (r2, c2)], "distance_m": distance}
     t1 = time.perf_counter()
+    bar = step_bar("extract", STEPS)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # recorded in the result's warnings instead
         try:
@@ -116,9 +118,13 @@ def compute(args):
                              joint_width_px=settings["joint_width_px"], roi=roi,
                              face_dip_deg=settings["face_dip_deg"],
                              face_dip_direction_deg=settings["face_dip_direction_deg"],
-                             params=ExtractParams(**settings["params"]), debug=args.debug)
+                             params=ExtractParams(**settings["params"]), debug=args.debug,
+                             progress=bar)
         except ValueError as exc:
             raise InputError(f"{path}: {exc}") from None
+        finally:
+            if bar is not None:
+                bar.close()
     t2 = time.perf_counter()
     traces = result.traces
     unit = result.scale.units

@@ -368,33 +368,6 @@ def _relative_paths(obj: Any, base: Path, out_dir: Path) -> Any:
 # ---------------------------------------------------------------------------------- executing --
 
 
-def _progress_enabled() -> bool:
-    return sys.stderr.isatty() and not os.environ.get("ROCKMASS_QUIET")
-
-
-class _SolveBar:
-    """A tqdm bar per solver stage on stderr, fed by ``progress(done, total)``."""
-
-    def __init__(self) -> None:
-        self.bar = None
-        self.last = -1
-
-    def __call__(self, done: int, total: int) -> None:
-        from tqdm import tqdm
-
-        if self.bar is None or done < self.last or total != self.bar.total:
-            self.close()
-            self.bar = tqdm(total=total, desc="solve", unit="step", file=sys.stderr, leave=False)
-            self.last = 0
-        self.bar.update(done - self.last)
-        self.last = done
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-            self.bar = None
-
-
 def _ns(plan: RunPlan, argv, **kwargs) -> types.SimpleNamespace:
     return types.SimpleNamespace(argv=list(argv), config=str(plan.config_path), json=False, **kwargs)
 
@@ -446,13 +419,7 @@ def _run_stage(plan: RunPlan, stage: StagePlan, folder: Path, argv) -> dict:
         model = None
         if doc.solve.blocks_file is None:
             model = _read_blocks(plan.out_dir / "blocks" / "blocks.json")
-        bar = _SolveBar() if _progress_enabled() else None
-        try:
-            result, _ = produce(_ns(plan, argv, out=str(folder)), folder, document=doc, model=model,
-                                progress=bar)
-        finally:
-            if bar is not None:
-                bar.close()
+        result, _ = produce(_ns(plan, argv, out=str(folder)), folder, document=doc, model=model)
         if result.status in FAILED_STATUSES:
             notes["failed"] = f"the solver stopped ({result.status}): {result.diagnostic}"
     return notes
@@ -558,11 +525,23 @@ def execute(plan: RunPlan, *, force: bool = False, argv=("rockmass", "run"),
                 "rockmass_version": __version__, "stages": records,
                 "total_wall_s": time.perf_counter() - t_start}
     atomic_write_json(out / RUN_FILE, document)
+    others = other_stage_folders(plan)
+    if others:
+        log(f"kept {', '.join(others)} from an earlier run in {out} (not asked for by this run: "
+            "not in its manifest or report; reused if asked for again unchanged)")
     _write_report(out, log)
     _write_manifest(plan, document, argv, failures)
     if failures:
         raise RunError("; ".join(failures) + f" (every output is in {out})")
     return document
+
+
+def other_stage_folders(plan: RunPlan) -> list[str]:
+    """Stage folders in DIR that this run does not produce (left by earlier runs that asked for
+    other stages). They are kept — a later run asking for them again reuses them by hash — but are
+    not part of this run: not in manifest.json, run.json or report.html."""
+    planned = {s.name for s in plan.stages}
+    return [n for n in STAGES if n not in planned and (plan.out_dir / n / STAGE_FILE).is_file()]
 
 
 def _replace_folder(partial: Path, folder: Path) -> None:
@@ -589,10 +568,12 @@ def _write_manifest(plan: RunPlan, document: dict, argv, failures: list[str]) ->
     from .manifest import MANIFEST_NAME, build_manifest, file_sha256
 
     out = plan.out_dir
+    others = set(other_stage_folders(plan))
     files = []
     for p in sorted(out.rglob("*")):
         rel = p.relative_to(out).as_posix()
-        if not p.is_file() or rel == MANIFEST_NAME or rel.split("/")[0].endswith((_PARTIAL, _OLD)):
+        top = rel.split("/")[0]
+        if not p.is_file() or rel == MANIFEST_NAME or top.endswith((_PARTIAL, _OLD)) or top in others:
             continue
         sha, size = file_sha256(p)
         files.append({"path": rel, "sha256": sha, "bytes": size})

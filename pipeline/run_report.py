@@ -50,7 +50,9 @@ class _Note(Exception):
 
 
 class _Run:
-    """The run folder: ``run.json`` (or ``None`` and a note) and the stage folders present."""
+    """The run folder: ``run.json`` (or ``None`` and a note) and the stage folders it lists — stage
+    folders that earlier runs left in DIR are not part of this run and are not shown; without a
+    readable run.json, every stage folder present."""
 
     def __init__(self, out: Path):
         self.out, self.doc, self.note = out, None, None
@@ -61,8 +63,11 @@ class _Run:
             self.doc = doc
         except _Note as exc:
             self.note = str(exc)
-        named = {e.get("name"): out / str(e["dir"]) for e in self.stage_entries() if e.get("dir")}
-        self.dirs: dict[str, Path] = {n: d for n in STAGES if (d := named.get(n, out / n)).is_dir()}
+        if self.doc is None:
+            named = {n: out / n for n in STAGES}
+        else:
+            named = {e.get("name"): out / str(e["dir"]) for e in self.stage_entries() if e.get("dir")}
+        self.dirs: dict[str, Path] = {n: d for n in STAGES if (d := named.get(n)) and d.is_dir()}
 
     def stage_entries(self) -> list[dict]:
         return [e for e in (self.doc or {}).get("stages", []) if isinstance(e, dict)]

@@ -122,7 +122,7 @@ def prepare(config_path, document=None, model=None):
 def solve(model, settings, config_path, progress=None):
     """:func:`rockmass.solver.run`; a ``ValueError`` (settings that do not fit the model: a selector
     choosing no block, a time step above the stable limit) becomes an ``InputError`` naming the file.
-    ``progress(done, total)`` is called while stepping (:func:`rockmass.solver.runner.run`)."""
+    ``progress(done, total, stage_name)`` is called while stepping (:func:`rockmass.solver.runner.run`)."""
     from .solver import run as solver_run
 
     try:
@@ -300,17 +300,24 @@ def produce(args, out_dir, document=None, model=None, progress=None):
     """Prepare (:func:`prepare`), solve and write every output into the folder ``out_dir``, also when
     the run stopped (its status is in result.json); return ``(result, result.json document)``.
 
-    The work of ``rockmass solve`` (and of the ``solve`` stage of ``rockmass run``).
+    The work of ``rockmass solve`` (and of the ``solve`` stage of ``rockmass run``). Without a
+    ``progress`` callback, a bar per DEM stage on a terminal (:func:`rockmass.progress.solver_bar`).
     """
     from contextlib import ExitStack
 
     from .atomic import atomic_path, atomic_write_json, atomic_write_text
     from .blockgen import write_json
     from .manifest import build_manifest
+    from .progress import solver_bar
 
     document, model, settings, inputs, timings = prepare(args.config, document, model)
     t0 = time.perf_counter()
-    result = solve(model, settings, args.config, progress)
+    bar = solver_bar() if progress is None else None
+    try:
+        result = solve(model, settings, args.config, progress or bar)
+    finally:
+        if bar is not None:
+            bar.close()
     timings["solve_s"] = time.perf_counter() - t0
     t1 = time.perf_counter()
     files = build_outputs(model, settings, result, timings)

@@ -238,7 +238,7 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
         done += steps
         eng.time_s += steps * dt
         if progress is not None:
-            progress(done, n_steps)
+            progress(done, n_steps, stage.name)
         ratio = out[1]
         if dynamic:
             rec.track_peaks()
@@ -297,11 +297,13 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
         contact_rebuilds=int(eng.n_rebuilds - rebuilds0), diagnostic=diagnostic)
 
 
-def run(model, settings: Settings, *, progress: Callable[[int, int], None] | None = None) -> Result:
+def run(model, settings: Settings, *,
+        progress: Callable[[int, int, str], None] | None = None) -> Result:
     """Solve a :class:`~rockmass.blockgen.BlockModel` stage by stage (see the module docstring).
 
-    ``progress(done, total)``, if given, is called after every chunk of steps (a few hundred) with
-    the steps done in the current stage and its step budget (a static stage may converge before it).
+    ``progress(done, total, stage_name)``, if given, is called after every chunk of steps (a few
+    hundred) with the steps done in the current stage, its step budget (a static stage may converge
+    before it) and the stage's name.
 
     Raises ``ValueError`` for settings that do not fit the model (a selector choosing no block, a
     time step above the stable limit, quiet boundaries without moduli); a run that fails while

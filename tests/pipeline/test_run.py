@@ -183,6 +183,28 @@ def test_requested_stages_run_only_what_they_need(tmp_path):
     assert _statuses(out) == {"extract": "ran", "boxcount": "ran"}
 
 
+def test_stage_folders_of_an_earlier_run_are_kept_but_not_part_of_this_run(copy_of_run, tmp_path,
+                                                                           capfd):
+    config, out = copy_of_run
+    text = _config_text().replace('[run]\n', '[run]\nstages = ["boxcount"]\n', 1)
+    capfd.readouterr()
+    assert main(["run", str(_write(tmp_path, text, "boxcount_only.toml")), "--out", str(out)]) == 0
+    assert _statuses(out) == {"extract": "reused", "boxcount": "reused"}
+    others = ["traces", "scanline", "dfn", "blocks", "solve"]
+    assert f"kept {', '.join(others)} from an earlier run" in capfd.readouterr().err
+    listed = {f["path"].split("/")[0] for f in json.loads((out / "manifest.json").read_text())
+              ["extra"]["files"]}
+    assert listed == {"extract", "boxcount", "run.json", "report.html"}
+    if _has_report():
+        report = (out / "report.html").read_text()
+        assert "stages in this folder:\nextract, boxcount." in report
+        assert 'id="sec-solver"' not in report and 'id="sec-boxcount"' in report
+    # still there, and reused when asked for again
+    assert all((out / s / "stage.json").is_file() for s in others)
+    assert main(["run", str(config), "--out", str(out)]) == 0
+    assert _statuses(out) == {s: "reused" for s in STAGES}
+
+
 @pytest.mark.parametrize("edit, message", [
     (lambda t: t.replace("quickstart_face.png", "no_such_photo.png"), "run.photo"),
     (lambda t: t.replace("[run]\n", "[run]\nphotograph = \"x.png\"\n", 1), "run.photograph"),
@@ -244,16 +266,17 @@ def test_solver_progress_reports_every_stage_up_to_its_steps(first_run, tmp_path
     model = read_json(out / "blocks" / "blocks.json")
     args = types.SimpleNamespace(config=str(config), argv=["test"])
     _, doc = produce(args, tmp_path / "solve", document=document, model=model,
-                     progress=lambda done, total: calls.append((done, total)))
+                     progress=lambda done, total, stage: calls.append((done, total, stage)))
     # one run of increasing counts per solver stage, ending at the stage's step count
     runs, last = [], None
-    for done, total in calls:
+    for done, total, stage in calls:
         if last is None or done <= last[0]:
             runs.append([])
-        runs[-1].append((done, total))
+        runs[-1].append((done, total, stage))
         last = (done, total)
     assert [r[-1][0] for r in runs] == [s["steps"] for s in doc["stages"]]
-    assert all(done <= total for done, total in calls)
+    assert [{c[2] for c in r} for r in runs] == [{s["name"]} for s in doc["stages"]]
+    assert all(done <= total for done, total, _ in calls)
 
 
 def test_a_stage_killed_while_writing_never_looks_finished(copy_of_run, tmp_path, monkeypatch):

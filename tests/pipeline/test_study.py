@@ -14,6 +14,8 @@ import pytest
 
 from rockmass.cli import main
 
+from . import _chromium
+
 SAMPLES = Path(__file__).resolve().parents[2] / "samples"
 
 # a 12 m square with two joint sets and a circular tunnel: about 30 blocks, a few hundred steps
@@ -421,44 +423,15 @@ def test_case_config_toml_reruns_the_case_alone_with_the_same_numbers(serial_run
     assert int(row["steps"]) == sum(s["steps"] for s in result["stages"])
 
 
-def _chromium():
-    import shutil
-
-    return next((shutil.which(n) for n in ("chromium", "chromium-browser", "google-chrome")
-                 if shutil.which(n)), None)
-
-
-@pytest.mark.skipif(_chromium() is None, reason="headless Chromium is not installed")
+@pytest.mark.skipif(_chromium.chromium() is None, reason=_chromium.SKIP_REASON)
 def test_report_renders_in_headless_chromium_with_every_image_loaded(serial_run, tmp_path):
     """Open report.html in headless Chromium (no network): every <img> decodes; a screenshot is
     kept as an artifact (in $ROCKMASS_TEST_ARTIFACTS when set)."""
-    import os
-    import shutil
-    import subprocess
-
     _, out = serial_run
-    probe = tmp_path / "probe.html"
-    probe.write_text(
-        '<!DOCTYPE html><html><body><iframe id="f" src="' + (out / "report.html").as_uri()
-        + '" width="1200" height="800"></iframe><script>document.getElementById("f").onload = '
-        "function () { var im = this.contentDocument.images, ok = 0; for (var i = 0; i < "
-        "im.length; i++) if (im[i].complete && im[i].naturalWidth > 0) ok++; "
-        'document.body.setAttribute("data-result", ok + "/" + im.length); };</script></body>'
-        "</html>", encoding="utf-8")
-    flags = [_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
-             "--allow-file-access-from-files", "--virtual-time-budget=15000"]
-    dom = subprocess.run([*flags, "--dump-dom", probe.as_uri()], capture_output=True, text=True,
-                         timeout=120).stdout
-    loaded, total = map(int, re.search(r'data-result="(\d+)/(\d+)"', dom).groups())
+    loaded, total = _chromium.count_loaded_images(out / "report.html", tmp_path)
     assert total >= 3 and loaded == total
-    shot = tmp_path / "study_report.png"
-    subprocess.run([*flags, "--window-size=1250,2400", f"--screenshot={shot}",
-                    (out / "report.html").as_uri()], capture_output=True, timeout=120)
+    shot = _chromium.screenshot(out / "report.html", tmp_path / "study_report.png")
     assert shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    if os.environ.get("ROCKMASS_TEST_ARTIFACTS"):
-        target = Path(os.environ["ROCKMASS_TEST_ARTIFACTS"])
-        target.mkdir(parents=True, exist_ok=True)
-        shutil.copy(shot, target / shot.name)
 
 
 def test_dfn_section_study_varies_p32_and_reseeds_the_dfn(tmp_path):
