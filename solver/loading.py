@@ -45,7 +45,8 @@ def apply_insitu(engine, insitu: InSituStress):
     """Write the in-situ stress into the active contact slots: σ_n = n·σ·n, τ = −t·σ·n
     (compression-positive σ), lumped over each face (a block-model contact with both slots
     active); the normal offset U0 makes the joint law return exactly that σ_n at the present
-    overlap. Corner-only touches start at zero force."""
+    overlap. A face that rounded corners cover is one slot loaded with the face's whole traction
+    (:func:`_covered_face_stress`). Corner-only touches start at zero force."""
     S = engine.S
     act = S[:, :, K.ACT] != 0
     if not act.any():
@@ -61,7 +62,9 @@ def apply_insitu(engine, insitu: InSituStress):
     both = act.all(axis=1)
     # only faces of the block model carry the initial stress; blocks that merely touch at a
     # corner (four blocks meeting at a point) start unloaded
-    face_pair = both & (engine.pinit >= 0)
+    model_face = engine.pinit >= 0
+    covered = model_face & (act.sum(axis=1) == 1)  # faces inside rounded corners: one slot
+    face_pair = model_face & (both | covered)
     length = S[:, :, K.LEN]
     face = length.sum(axis=1)
     sig = sn.copy()
@@ -70,6 +73,9 @@ def apply_insitu(engine, insitu: InSituStress):
     sig[both, 0], sig[both, 1] = f0 / length[both, 0], f1 / length[both, 1]
     f0, f1 = _lumped(tn[both, 0], tn[both, 1], face[both])
     tau[both, 0], tau[both, 1] = f0 / length[both, 0], f1 / length[both, 1]
+    for p in np.flatnonzero(covered):
+        k = 0 if act[p, 0] else 1
+        sig[p, k], tau[p, k] = _covered_face_stress(engine, insitu, p, k)
     props = engine.props[engine.pprop]
     for k in range(2):
         rows = np.flatnonzero(act[:, k])
@@ -87,6 +93,43 @@ def apply_insitu(engine, insitu: InSituStress):
         S[rows, k, K.FN] = s * S[rows, k, K.LEN]
         S[rows, k, K.FS] = tau[rows, k] * S[rows, k, K.LEN]
     engine.rebuild()  # the margin grows with the stored closure
+
+
+def _covered_face_stress(engine, insitu: InSituStress, p: int, k: int) -> tuple[float, float]:
+    """(σ_n, τ) for the one slot ``k`` of pair ``p``, a face of the block model so short that the
+    rounded corners around it cover it (their tangent lengths exceed it), which the narrow phase
+    makes a rounded-corner contact whose normal is not the face's.
+
+    The slot carries the face's whole in-situ load: F = Σ σ(mᵢ)·nᵢ Lᵢ over the straight pieces of
+    the shared boundary (midpoint mᵢ, normal nᵢ oriented like the slot's, length Lᵢ; exact for a
+    stress linear in position), resolved on the slot's normal n and tangent t = (−n_y, n_x):
+    σ_n = n·F / L_slot, τ = −t·F / L_slot (the sign convention of :func:`apply_insitu`). Without it
+    that share of the in-situ load would be missing from both blocks. The slot's point is not the
+    face's centre, so a moment of the order of |F| × the rounding radius stays unbalanced.
+    """
+    import shapely
+
+    S, model = engine.S, engine.model
+    a, b = int(engine.pa[p]), int(engine.pb[p])
+    shared = shapely.Polygon(model.polygon(a)).boundary.intersection(
+        shapely.Polygon(model.polygon(b)).boundary)
+    n_slot = S[p, k, [K.NX, K.NY]]
+    force = np.zeros(2)
+    for part in shapely.get_parts(shared):  # line pieces (points where they only touch: none)
+        if part.geom_type != "LineString":
+            continue
+        xy = np.asarray(part.coords)
+        d = np.diff(xy, axis=0)
+        seg = np.hypot(d[:, 0], d[:, 1])
+        normal = np.column_stack([d[:, 1], -d[:, 0]]) / np.maximum(seg, 1e-300)[:, None]
+        normal *= np.where(normal @ n_slot < 0, -1.0, 1.0)[:, None]
+        mid = 0.5 * (xy[1:] + xy[:-1])
+        sxx, syy, sxy = stress_at(insitu, mid, _unit_weight(engine), _y_ref(engine, insitu))
+        force += np.array([np.sum((sxx * normal[:, 0] + sxy * normal[:, 1]) * seg),
+                           np.sum((sxy * normal[:, 0] + syy * normal[:, 1]) * seg)])
+    t_slot = np.array([-n_slot[1], n_slot[0]])
+    slot_len = S[p, k, K.LEN]
+    return float(n_slot @ force / slot_len), float(-(t_slot @ force) / slot_len)
 
 
 def apply_boundary_stress(engine, loads: tuple[BoundaryStress, ...], insitu: InSituStress | None):
