@@ -49,6 +49,13 @@ def _check_non_negative(value, name: str) -> float:
     return value
 
 
+def _check_angle(value, name: str) -> float:
+    value = float(value)
+    if not (0 <= value <= 90):
+        raise ValueError(f"{name} must be an angle in 0-90 degrees, got {value!r}")
+    return value
+
+
 def link_traces(polylines_rc_px, *, max_gap_px: float, max_turn_deg: float = 15.0,
                 max_offset_px: float = 3.0, max_overlap_px: float = 3.0, skip_px: float = 3.0,
                 reach_px: float = 15.0) -> list[np.ndarray]:
@@ -106,9 +113,7 @@ def link_traces(polylines_rc_px, *, max_gap_px: float, max_turn_deg: float = 15.
     max_overlap_px = _check_non_negative(max_overlap_px, "max_overlap_px")
     skip_px = _check_non_negative(skip_px, "skip_px")
     reach_px = _check_non_negative(reach_px, "reach_px")
-    max_turn_deg = float(max_turn_deg)
-    if not (0 <= max_turn_deg <= 90):
-        raise ValueError(f"max_turn_deg must be an angle in 0-90 degrees, got {max_turn_deg!r}")
+    max_turn_deg = _check_angle(max_turn_deg, "max_turn_deg")
     lines = [np.asarray(p, dtype=np.float64) for p in polylines_rc_px]
     usable = [i for i, p in enumerate(lines) if p.ndim == 2 and p.shape[0] >= 2]
     if len(usable) < 2:
@@ -232,9 +237,7 @@ def extend_to_border(polylines_rc_px, shape_px, *, max_distance_px: float, max_a
     max_distance_px = _check_non_negative(max_distance_px, "max_distance_px")
     skip_px = _check_non_negative(skip_px, "skip_px")
     reach_px = _check_non_negative(reach_px, "reach_px")
-    max_angle_deg = float(max_angle_deg)
-    if not (0 <= max_angle_deg <= 90):
-        raise ValueError(f"max_angle_deg must be an angle in 0-90 degrees, got {max_angle_deg!r}")
+    max_angle_deg = _check_angle(max_angle_deg, "max_angle_deg")
     h, w = (int(v) for v in shape_px)
     low, high = np.array([-0.5, -0.5]), np.array([h - 0.5, w - 0.5])
     cos_limit = np.cos(np.radians(max_angle_deg))

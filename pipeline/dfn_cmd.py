@@ -152,16 +152,12 @@ def compute(args, document=None):
     count = cfg.realizations if args.realizations is None else args.realizations
     indices = list(range(args.first, args.first + count))
     t1 = time.perf_counter()
-    bar = count_bar("dfn", len(indices), "realization")
     results = []
-    try:
+    with count_bar("dfn", len(indices), "realization") as bar:
         for done, i in enumerate(indices, 1):
             results.append(_realization(args, cfg, specs, fit, field, seed, i))
             if bar is not None:
                 bar(done)
-    finally:
-        if bar is not None:
-            bar.close()
     t2 = time.perf_counter()
     return document, specs, seed, results, {"load_s": t1 - t0, "generate_s": t2 - t1}, fit
 

@@ -110,8 +110,7 @@ def compute(args):
         r1, c1, r2, c2, distance = args.control_points
         control = {"rc_px": [(r1, c1), (r2, c2)], "distance_m": distance}
     t1 = time.perf_counter()
-    bar = step_bar("extract", STEPS)
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), step_bar("extract", STEPS) as bar:
         warnings.simplefilter("ignore", UserWarning)  # recorded in the result's warnings instead
         try:
             result = extract(image, m_per_px=settings["m_per_px"], control_points=control,
@@ -122,9 +121,6 @@ def compute(args):
                              progress=bar)
         except ValueError as exc:
             raise InputError(f"{path}: {exc}") from None
-        finally:
-            if bar is not None:
-                bar.close()
     t2 = time.perf_counter()
     traces = result.traces
     unit = result.scale.units

@@ -2,15 +2,19 @@
 
 Bars are drawn only when stderr is a terminal and ``ROCKMASS_QUIET`` is unset, so logs, pipes and
 the test suite see none of them; the computations take plain callbacks (``progress=``) and never
-import tqdm themselves. Each factory returns ``None`` when bars are off, which every callee accepts
-as "no progress reporting".
+import tqdm themselves. Each factory is a context manager that yields the bar, or ``None`` when bars
+are off (which every callee accepts as "no progress reporting"), and closes it on the way out::
+
+    with step_bar("extract", STEPS) as bar:
+        extract(image, progress=bar)
 """
 
 from __future__ import annotations
 
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 
 
 def bars_enabled() -> bool:
@@ -79,16 +83,26 @@ class SolverBar:
             self.bar = None
 
 
-def step_bar(desc: str, steps: Sequence[str]) -> StepBar | None:
-    """A :class:`StepBar`, or ``None`` when bars are off."""
-    return StepBar(desc, steps) if bars_enabled() else None
+@contextmanager
+def _closing(bar) -> Iterator:
+    try:
+        yield bar
+    finally:
+        if bar is not None:
+            bar.close()
 
 
-def count_bar(desc: str, total: int, unit: str) -> CountBar | None:
-    """A :class:`CountBar`, or ``None`` when bars are off (or there is at most one item)."""
-    return CountBar(desc, total, unit) if bars_enabled() and total > 1 else None
+def step_bar(desc: str, steps: Sequence[str]):
+    """Context manager: a :class:`StepBar`, or ``None`` when bars are off."""
+    return _closing(StepBar(desc, steps) if bars_enabled() else None)
 
 
-def solver_bar() -> SolverBar | None:
-    """A :class:`SolverBar`, or ``None`` when bars are off."""
-    return SolverBar() if bars_enabled() else None
+def count_bar(desc: str, total: int, unit: str):
+    """Context manager: a :class:`CountBar`, or ``None`` when bars are off (or there is at most
+    one item)."""
+    return _closing(CountBar(desc, total, unit) if bars_enabled() and total > 1 else None)
+
+
+def solver_bar():
+    """Context manager: a :class:`SolverBar`, or ``None`` when bars are off."""
+    return _closing(SolverBar() if bars_enabled() else None)

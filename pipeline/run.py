@@ -530,7 +530,7 @@ def execute(plan: RunPlan, *, force: bool = False, argv=("rockmass", "run"),
         log(f"kept {', '.join(others)} from an earlier run in {out} (not asked for by this run: "
             "not in its manifest or report; reused if asked for again unchanged)")
     _write_report(out, log)
-    _write_manifest(plan, document, argv, failures)
+    _write_manifest(plan, document, argv, failures, others)
     if failures:
         raise RunError("; ".join(failures) + f" (every output is in {out})")
     return document
@@ -563,12 +563,13 @@ def _write_report(out: Path, log) -> None:
     write_run_report(out)
 
 
-def _write_manifest(plan: RunPlan, document: dict, argv, failures: list[str]) -> None:
+def _write_manifest(plan: RunPlan, document: dict, argv, failures: list[str],
+                    others: list[str]) -> None:
+    """manifest.json: every file of this run (not the stage folders ``others`` of earlier runs)."""
     from .atomic import atomic_write_json
     from .manifest import MANIFEST_NAME, build_manifest, file_sha256
 
     out = plan.out_dir
-    others = set(other_stage_folders(plan))
     files = []
     for p in sorted(out.rglob("*")):
         rel = p.relative_to(out).as_posix()

@@ -126,8 +126,6 @@ def solve(model, settings, config_path, progress=None):
     from .solver import run as solver_run
 
     try:
-        if progress is None:
-            return solver_run(model, settings)
         return solver_run(model, settings, progress=progress)
     except ValueError as exc:
         raise InputError(f"{config_path}: solve: {exc}") from exc
@@ -312,12 +310,8 @@ def produce(args, out_dir, document=None, model=None, progress=None):
 
     document, model, settings, inputs, timings = prepare(args.config, document, model)
     t0 = time.perf_counter()
-    bar = solver_bar() if progress is None else None
-    try:
+    with solver_bar() as bar:
         result = solve(model, settings, args.config, progress or bar)
-    finally:
-        if bar is not None:
-            bar.close()
     timings["solve_s"] = time.perf_counter() - t0
     t1 = time.perf_counter()
     files = build_outputs(model, settings, result, timings)

@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from ..blockgen.tolerances import ROUNDING_FRACTION
 from . import _kernels as K
 from .selectors import domain_edges, select_blocks
 from .settings import ContinuouslyYielding, Coulomb, Settings
@@ -160,7 +161,10 @@ class Engine:
         # the block model's own edges (before strip_collinear), with its own offsets
         edge = model.xy_m[ring_neighbours(np.asarray(model.offsets))[0]] - model.xy_m
         self.median_edge_m = float(np.median(np.hypot(edge[:, 0], edge[:, 1])))
-        self.rounding_m = settings.rounding_m or 0.01 * self.median_edge_m
+        # the d the model was built for (blockgen keeps every edge >= 2d with it), else 1 % of the
+        # median edge (hand-made models)
+        built_for = (model.quality.get("tolerances") or {}).get("rounding_m")
+        self.rounding_m = settings.rounding_m or built_for or ROUNDING_FRACTION * self.median_edge_m
         centre, tangent, radius = rounded_corners(self.loc, self.off, normal, self.rounding_m)
         self.lgeo = np.ascontiguousarray(np.column_stack([normal, centre, tangent,
                                                           radius[block_of_vertex]]))
@@ -209,7 +213,6 @@ class Engine:
             if not len(ids):
                 raise ValueError(f"velocity input {inp.where!r} selects no block")
             self.dof_input[ids, _DOF[inp.component]] = i
-        self.mode = self.base_mode.copy()
         self.ext_f = np.zeros((nb, 2))
         self.ext_a = np.zeros(nb)
         self.ext_b = np.zeros(nb)

@@ -28,7 +28,7 @@ import numpy as np
 from . import _kernels as K
 from .engine import FIXED, Engine
 from .loading import apply_boundary_stress, apply_insitu, quiet_edge_table
-from .result import Frame, Result, StageResult
+from .result import FAILED_STATUSES, Frame, Result, StageResult
 from .selectors import block_at_point
 from .settings import Settings, Stage
 
@@ -321,7 +321,7 @@ def run(model, settings: Settings, *,
     for i, stage in enumerate(settings.stages):
         res = _run_stage(eng, stage, settings, rec, ref, progress)
         stages.append(res)
-        if res.status in ("overlap", "unstable"):
+        if res.status in FAILED_STATUSES:
             status, diagnostic = res.status, res.diagnostic
             break
         if i == 0 and not stage.excavate and stage.kind == "static" and len(settings.stages) > 1:

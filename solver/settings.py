@@ -166,9 +166,6 @@ class InSituStress:
             raise ValueError(f"k0 must be >= 0, got {self.k0}")
 
 
-Selector = Union[str, tuple]
-
-
 @dataclass(frozen=True)
 class Fix:
     """Fix degrees of freedom of the blocks chosen by ``where``.
@@ -379,7 +376,9 @@ class Settings:
     blocks that were not neighbours). ``rounding_m`` is the corner rounding d (UDEC): every corner
     is an arc of radius d tangent to its two edges (smaller on a block whose sharp corners would
     leave less than half of an edge flat; :func:`rockmass.solver.engine.rounded_corners`), so
-    contacts turn smoothly over corners; None gives 1 % of the median edge length; the overlap
+    contacts turn smoothly over corners; None takes the d the block model was built for (its
+    ``quality["tolerances"]["rounding_m"]``, which blockgen's minimum edge 2d was made for), else
+    1 % of the median edge length; the overlap
     limit is d/2 (REFERENCE.md §5). ``sleep``: in static
     stages, blocks whose own unbalanced-force ratio stays below the stage tolerance stop being
     integrated until a neighbour disturbs them (REFERENCE.md §6; speed-up and the displacement error

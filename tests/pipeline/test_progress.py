@@ -38,8 +38,10 @@ def bars(monkeypatch):
 
 def test_no_bars_off_a_terminal_or_when_quiet(monkeypatch):
     monkeypatch.setattr("sys.stderr.isatty", lambda: False, raising=False)
-    assert progress.solver_bar() is None and progress.step_bar("x", ["a"]) is None
-    assert progress.count_bar("x", 5, "item") is None
+    for bars in (progress.solver_bar(), progress.step_bar("x", ["a"]),
+                 progress.count_bar("x", 5, "item")):
+        with bars as bar:
+            assert bar is None
 
 
 def test_quiet_variable_turns_bars_off(monkeypatch):
@@ -63,11 +65,11 @@ def test_extract_reports_every_step_in_order():
 
 
 def test_solver_bar_starts_a_bar_per_stage_labelled_by_its_name(bars):
-    bar = progress.solver_bar()
-    for stage, total in (("equilibrium", 1000), ("excavate tunnel", 600), ("excavate tunnel", 600)):
-        for done in range(200, total + 1, 200):  # the same name again after a restart: a new bar
-            bar(done, total, stage)
-    bar.close()
+    with progress.solver_bar() as bar:
+        for stage, total in (("equilibrium", 1000), ("excavate tunnel", 600),
+                             ("excavate tunnel", 600)):
+            for done in range(200, total + 1, 200):  # the same name after a restart: a new bar
+                bar(done, total, stage)
     assert [(b.desc, b.unit, b.n, b.total, b.closed) for b in bars] == [
         ("solve: equilibrium", "step", 1000, 1000, True),
         ("solve: excavate tunnel", "step", 600, 600, True),

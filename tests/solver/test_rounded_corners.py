@@ -10,6 +10,7 @@ along the line through their arc centres with the gap |C_b − C_a| − r_a − 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -239,3 +240,25 @@ def test_default_rounding_is_one_percent_of_the_median_edge_of_the_block_model()
     eng = Engine(model, settings)
     assert eng.median_edge_m == pytest.approx(1.0, rel=1e-12)
     assert eng.rounding_m == pytest.approx(0.01, rel=1e-12)
+
+
+@pytest.mark.parametrize("how", ["cracks", "rounding_m"])
+def test_default_rounding_is_the_one_the_block_model_was_built_for(how):
+    """blockgen keeps every edge >= 2d for its own d (given, or 1 % of a typical edge: the cut
+    blocks' median, or half the crack size when cracks subdivide them), recorded in
+    quality["tolerances"]; the solver must round with that d, not re-derive another from the
+    finished model's edges (1 % of their median: 0.0073 m against 0.005 m with the cracks here)."""
+    from rockmass.blockgen import Cracks, JointSet, build
+
+    kwargs = {"cracks": Cracks(size_m=1.0)} if how == "cracks" else {"rounding_m": 0.05}
+    model = build([(0, 0), (20, 0), (20, 20), (0, 20)],
+                  [JointSet(angle_deg=30.0, spacing_m=2.3), JointSet(angle_deg=110.0, spacing_m=3.1)],
+                  **kwargs)
+    settings = Settings(joints={"default": Coulomb(KN, KN, 30.0)}, material=Material(2500),
+                        stages=(Stage("s", "static"),))
+    eng = Engine(model, settings)
+    built_for = model.quality["tolerances"]["rounding_m"]
+    assert built_for == (0.05 if how == "rounding_m" else pytest.approx(0.005))
+    assert abs(eng.median_edge_m * 0.01 - built_for) > 0.2 * built_for  # the two rules differ here
+    assert eng.rounding_m == built_for
+    assert Engine(model, replace(settings, rounding_m=0.02)).rounding_m == 0.02
