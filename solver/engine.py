@@ -310,12 +310,44 @@ class Engine:
         Each active slot adds K g gᵀ (K = k_n l or k_s l, g the slot's relative-displacement row
         over the 6 dofs of its two blocks). Row sums of |M^(-1/2) K M^(-1/2)| bound the largest
         eigenvalue, so 2/√(max row sum) ≤ 2/ω_max: a rigorous (conservative) limit for the present
-        contacts. With stiffness-proportional damping β: Δt ≤ (2/ω)(√(1 + ξ²) − ξ), ξ = βω/2
-        (REFERENCE.md §5).
+        contacts. Damping, explicit in the scheme, lowers it: with γ a bound on the eigenvalues of
+        M^(-1/2) C M^(-1/2), Δt ≤ 4 / (√(4ω² + γ²) + γ) — for a damping ratio ξ = γ/(2ω) this is
+        (2/ω)(√(1 + ξ²) − ξ) (REFERENCE.md §5), and it falls as ω or γ grows, so the two bounds give
+        a safe step. C holds the stiffness-proportional Rayleigh term β K (γ ≤ β ω²) and the
+        quiet-boundary dashpots of :attr:`quiet_edges` (Gershgorin row sums like K: a dashpot on a
+        small boundary block, c/m large, is what limits the step there).
         """
+        scale = np.sqrt(self.inv_mass)  # 0 for dofs that do not move
+        gamma = self._dashpot_bound(scale)
+        lam = self._stiffness_bound(scale)
+        if lam <= 0 and gamma <= 0:
+            return math.inf
+        gamma += beta * lam
+        return 4.0 / (math.sqrt(4.0 * lam + gamma * gamma) + gamma)
+
+    def _dashpot_bound(self, scale) -> float:
+        """Gershgorin bound γ of M^(-1/2) C M^(-1/2) for the quiet-boundary dashpots (c = L ρC_p
+        along the edge normal, L ρC_s along it, at the edge midpoint)."""
+        q = self.quiet_edges
+        if not len(q):
+            return 0.0
+        b = q[:, 0].astype(np.int64)
+        c, s = np.cos(self.rot[b]), np.sin(self.rot[b])
+        r = np.column_stack([c * q[:, 1] - s * q[:, 2], s * q[:, 1] + c * q[:, 2]])
+        n = np.column_stack([c * q[:, 3] - s * q[:, 4], s * q[:, 3] + c * q[:, 4]])
+        t = np.column_stack([-n[:, 1], n[:, 0]])
+        rows = np.zeros((self.nb, 3))
+        for coef, d in ((q[:, 5] * q[:, 6], n), (q[:, 5] * q[:, 7], t)):
+            g = np.column_stack([d[:, 0], d[:, 1], r[:, 0] * d[:, 1] - r[:, 1] * d[:, 0]])
+            g = np.abs(g) * scale[b]
+            np.add.at(rows, b, (coef * g.sum(1))[:, None] * g)  # row sums, as for K
+        return float(rows.max())
+
+    def _stiffness_bound(self, scale) -> float:
+        """Gershgorin bound ω² of M^(-1/2) K M^(-1/2) for the active contact slots (0: none)."""
         p, k, slot = self._active_slots()
         if not len(p):
-            return math.inf
+            return 0.0
         length = slot[:, K.LEN]
         props = self.props[self.pprop[p]]
         kn = props[:, K.P_KN] * length
@@ -331,22 +363,16 @@ class Engine:
         pt = slot[:, [K.PX, K.PY]]
         ra = pt - self.pos[a]
         rb = pt - self.pos[b]
-        scale = np.sqrt(self.inv_mass)  # 0 for dofs that do not move
         rows = np.zeros((self.nb, 3))
         for stiff, d in ((kn, n), (ks, t)):
             ga = np.column_stack([-d[:, 0], -d[:, 1], -(ra[:, 0] * d[:, 1] - ra[:, 1] * d[:, 0])])
             gb = np.column_stack([d[:, 0], d[:, 1], rb[:, 0] * d[:, 1] - rb[:, 1] * d[:, 0]])
             ga = np.abs(ga) * scale[a]
             gb = np.abs(gb) * scale[b]
-            s = ga.sum(1) + gb.sum(1)
+            s = ga.sum(1) + gb.sum(1)  # row i of |g gᵀ| sums to |g_i| Σ|g|
             np.add.at(rows, a, (stiff * s)[:, None] * ga)
             np.add.at(rows, b, (stiff * s)[:, None] * gb)
-        lam = rows.max()
-        if lam <= 0:
-            return math.inf
-        omega = math.sqrt(lam)
-        xi = 0.5 * beta * omega
-        return 2.0 / omega * (math.sqrt(1.0 + xi * xi) - xi)
+        return float(rows.max())
 
     # ---------------------------------------------------------------------- state summaries --
     def strain_energy(self) -> float:

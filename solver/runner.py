@@ -169,6 +169,8 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
     eng.rebuild()
     eng.detect()
     alpha_mass, beta = _rayleigh(stage)
+    eng.quiet_edges = (quiet_edge_table(eng, settings.quiet) if dynamic and settings.quiet
+                       else np.zeros((0, 8)))  # before the step limit: the dashpots lower it
     limit = eng.stable_time_step(beta)
     if stage.time_step_s is not None:
         if stage.time_step_s > limit:
@@ -181,8 +183,6 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
     else:  # no contact at all: free flight, the step only limits the record interval
         dt = (stage.duration_s or 1.0) / 1000.0
     n_steps = math.ceil(stage.duration_s / dt) if dynamic else stage.max_steps
-    eng.quiet_edges = (quiet_edge_table(eng, settings.quiet) if dynamic and settings.quiet
-                       else np.zeros((0, 8)))
     inputs = settings.velocity_inputs if dynamic else ()
     if stage.history_every:
         chunk = stage.history_every

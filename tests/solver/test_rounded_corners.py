@@ -262,3 +262,4 @@ def test_default_rounding_is_the_one_the_block_model_was_built_for(how):
     assert abs(eng.median_edge_m * 0.01 - built_for) > 0.2 * built_for  # the two rules differ here
     assert eng.rounding_m == built_for
     assert Engine(model, replace(settings, rounding_m=0.02)).rounding_m == 0.02
+

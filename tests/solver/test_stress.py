@@ -7,7 +7,6 @@ a diagnostic. Every Result is checked for NaN / inf in all its arrays and in its
 from __future__ import annotations
 
 import json
-import math
 
 import numpy as np
 import pytest

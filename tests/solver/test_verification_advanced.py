@@ -27,7 +27,7 @@ from rockmass.solver import (BoundaryStress, ContinuouslyYielding, Coulomb, Fix,
                              VelocityInput, run)
 from rockmass.solver.engine import Engine
 
-from ._models import column, incline, shear_box
+from ._models import column, hand_model, incline, rect, shear_box
 from ._models_advanced import (chain_column, chain_reflection, chain_transmission, cy_branch,
                                finite_arrays, roof_wedge)
 
@@ -499,3 +499,23 @@ def test_wave_transmission_across_a_joint():
     t_all = np.abs(chain_transmission(omega, WV_KN, WV_RHO * WV_S, kappa, dt))
     predicted = (t_all ** 2 * np.abs(spec_a) ** 2).sum() / (np.abs(spec_a) ** 2).sum()
     assert abs(energy - predicted) < 0.01 * predicted
+
+
+def test_quiet_boundary_dashpot_limits_the_time_step():
+    """A free 0.1 m block falling onto nothing but a quiet (viscous) bottom edge: the dashpot
+    c = ρ C_p L gives the terminal velocity v* = −m g / c (the fixed point of the explicit update,
+    whatever the step) approached as v(t) = v*(1 − e^(−c t/m)). Explicit damping is stable only for
+    Δt below ~2m/c; without contacts the old step (duration/1000 = 1e-3 s, c Δt/m ≈ 30) blew up."""
+    side, rho, k_bulk, g_shear = 0.1, 2700.0, 30e9, 20e9
+    model = hand_model([rect(0.0, 0.0, side, side)], [])
+    settings = Settings(joints={"default": Coulomb(1e9, 1e9, 30.0)},
+                        material=Material(rho, k_bulk, g_shear), gravity_m_s2=(0.0, -9.81),
+                        quiet=QuietBoundary(("bottom",)),
+                        stages=(Stage("fall", "dynamic", duration_s=1.0),))
+    result = run(model, settings)
+    assert result.status == "ok", result.diagnostic
+    c_p = math.sqrt((k_bulk + 4 * g_shear / 3) / rho)
+    mass, c = rho * side * side, rho * c_p * side
+    assert c / mass * result.stages[0].time_step_s <= 2.0
+    v_terminal = -mass * 9.81 / c  # reached: e^(−c t/m) underflows long before 1 s
+    np.testing.assert_allclose(result.velocity_m_s[0], [0.0, v_terminal], rtol=1e-9, atol=1e-15)
