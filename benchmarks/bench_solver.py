@@ -164,7 +164,7 @@ def static_only(n_blocks, steps):
             st = replace(st, stages=(replace(stage, duration_s=steps * dt),))
         res = run(model, st)
         s = res.stages[0]
-        rows.append({"stage": kind, "blocks": model.n_blocks, "steps": s.steps,
+        rows.append({"stage": kind, "blocks": model.n_blocks, "steps": s.steps, "status": s.status,
                      "ms_per_step": 1e3 * s.wall_time_s / s.steps,
                      "max_disp_m": s.max_displacement_m})
     return rows
@@ -196,7 +196,7 @@ def main(argv):
                      ("disp_diff_m", ".2e")]))
     t4 = static_only(2000 if quick else 10000, steps)
     print("\nTable 4 — static-only path (same model, same number of steps)")
-    print(table(t4, [("stage", ""), ("blocks", "d"), ("steps", "d"), ("ms_per_step", ".3f"),
+    print(table(t4, [("stage", ""), ("blocks", "d"), ("steps", "d"), ("status", ""), ("ms_per_step", ".3f"),
                      ("max_disp_m", ".2e")]))
     save("bench_solver", {"scaling": t1, "time_step": t2, "sleeping": t3, "static_only": t4})
 
