@@ -89,15 +89,17 @@ def _connect(address: str, timeout_s: float):
         raise InputError(f"--scheduler {address}: cannot reach the Dask scheduler: {exc}") from exc
 
 
-def _preflight(case, config_path) -> None:
-    """Build the first pending case's blocks and solver settings: a ``[solve]`` that does not fit
-    the model (an excavation name that is not a region, a selector) is bad input, found before any
-    case runs."""
+def _preflight(pending, config_path) -> None:
+    """Build the blocks and solver settings of the first pending case whose input files are all
+    there: a ``[solve]`` that does not fit the model (an excavation name that is not a region, a
+    selector) is bad input, found before any case runs. A case with a missing input file is left to
+    fail on its own (its error is its result)."""
     from .study import _build_model
 
-    solve = getattr(case.document, "solve", None)
-    if solve is None:
+    case = next((c for c in pending if "missing" not in c.inputs.values()), None)
+    if case is None or case.document.solve is None:
         return
+    solve = case.document.solve
     try:
         model = _build_model(case.document, config_path)
     except RunError:
@@ -110,6 +112,16 @@ def _case_header(case, config_path) -> str:
             f"# {_params_text(case.params) or 'base config'}; realization {case.realization}, "
             f"seed {case.seed}\n# rerun it alone with its outputs: rockmass solve config.toml "
             "--out DIR (or rockmass blocks)\n")
+
+
+def _write_case_config(folder, case, config_path) -> None:
+    """``folder/config.toml``: the case as a config of its own (atomically), headed by
+    :func:`_case_header`."""
+    from .atomic import atomic_write_text
+    from .study_config import standalone_config, toml_text
+
+    atomic_write_text(folder / "config.toml", _case_header(case, config_path)
+                      + toml_text(standalone_config(case, config_path)))
 
 
 def _params_text(params: dict) -> str:
@@ -127,11 +139,12 @@ def run(args) -> int:
     from .outputs import output_folder, print_json
     from .study import (RESULTS_FILE, CASE_FILE, case_cost, csv_text, load_finished, results_rows,
                         run_tasks)
-    from .study_config import expand_cases, load_study, standalone_config, toml_text
+    from .study_config import expand_cases, input_records, load_study
 
     t_start = time.perf_counter()
     document, raw = load_study(args.config)
-    cases = expand_cases(document, raw, args.config)
+    digests: dict = {}  # each file the cases read, hashed once (case ids, then the manifest)
+    cases = expand_cases(document, raw, args.config, digests)
     study = document.study
     t_cases = time.perf_counter()
 
@@ -150,7 +163,7 @@ def run(args) -> int:
     scheduler = args.scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS") or None
     client = None
     if pending:
-        _preflight(pending[0], args.config)
+        _preflight(pending, args.config)
         if scheduler is not None:
             client = _connect(scheduler, args.connect_timeout)
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
@@ -175,8 +188,7 @@ def run(args) -> int:
             case = by_id[result["case_id"]]
             record = {**result, "case_id": case.case_id, "config": case.raw}
             folder = out / "cases" / case.short_id
-            atomic_write_text(folder / "config.toml", _case_header(case, args.config)
-                              + toml_text(standalone_config(case, args.config)))
+            _write_case_config(folder, case, args.config)
             atomic_write_json(folder / CASE_FILE, record, nan_as_null=True)  # last: marks it done
             if result["status"] == "ok":
                 finished[case.case_id] = record
@@ -197,10 +209,9 @@ def run(args) -> int:
                  f"({result.get('wall_time_s') or 0.0:.1f} s)")
 
         for case in cases:  # folders of an older rockmass, or copied without it
-            standalone = out / "cases" / case.short_id / "config.toml"
-            if case.case_id in finished and not standalone.exists():
-                atomic_write_text(standalone, _case_header(case, args.config)
-                                  + toml_text(standalone_config(case, args.config)))
+            folder = out / "cases" / case.short_id
+            if case.case_id in finished and not (folder / "config.toml").exists():
+                _write_case_config(folder, case, args.config)
         _log(f"rockmass study: {len(cases)} cases, {len(cases) - len(pending)} already finished "
              f"(skipped), {len(pending)} to run")
         write_results()
@@ -226,8 +237,7 @@ def run(args) -> int:
             except Exception as exc:  # noqa: BLE001 - a report problem must not hide the results
                 _log(f"rockmass study: report.html not written: {type(exc).__name__}: {exc}")
             manifest = build_manifest(
-                command=args.argv if hasattr(args, "argv") else ["rockmass", "study"],
-                config=document, inputs=[args.config, *sorted({p for c in cases for p in c.inputs})],
+                command=args.argv, config=document, inputs=[args.config],
                 seeds={"root": study.seed, "realizations": study.realizations,
                        "rule": "realization r: 63 bits of SeedSequence(root, spawn_key=(r,)), "
                                "written into " + ", ".join(study.seed_fields or ["blocks.seed"]),
@@ -239,6 +249,7 @@ def run(args) -> int:
                 extra={**summary, "workers": workers if scheduler is None else None,
                        "scheduler": scheduler,
                        "case_ids": {c.short_id: c.index for c in cases}})
+            manifest["inputs"] += input_records(digests)  # hashed once, by expand_cases
             atomic_write_json(out / "manifest.json", manifest)
     if interrupted:
         _log(f"rockmass study: interrupted: {len(finished)} of {len(cases)} cases are finished and "

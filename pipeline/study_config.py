@@ -48,7 +48,7 @@ from .strict import StrictModel, field_problem
 
 __all__ = ["StudyConfig", "StudyDocument", "StudyCase", "load_study", "expand_cases",
            "realization_seed", "parse_path", "set_path", "get_path", "flatten_overrides",
-           "toml_text", "standalone_config"]
+           "toml_text", "standalone_config", "input_records"]
 
 MAX_CASES = 100_000
 _PATH_TOKEN = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)|\[(\d+)\]")
@@ -264,36 +264,64 @@ def _seed_fields(study: StudyConfig, base: dict) -> list[str]:
     return fields
 
 
-def _input_files(document, config_path) -> dict[str, str]:
-    """Files a case reads besides the config (their content is part of the case id)."""
+def _hash_once(path, digests: dict) -> str:
+    """SHA-256 of ``path`` ("missing" when it cannot be read), hashed once per distinct path:
+    ``digests`` maps path -> (sha256, bytes), or None for a file that is missing or unreadable."""
+    from .errors import InputError
     from .manifest import file_sha256
 
+    key = os.fspath(path)
+    if key not in digests:
+        try:
+            digests[key] = file_sha256(path)
+        except InputError:
+            digests[key] = None
+    found = digests[key]
+    return "missing" if found is None else found[0]
+
+
+def _input_files(document, config_path, digests: dict) -> dict[str, str]:
+    """Files a case reads besides the config -> sha256 or "missing" (their content is part of the
+    case id; a missing file fails its case when it runs, not the study). ``digests``: see
+    :func:`_hash_once`."""
     paths = []
     if document.blocks is not None:
         p = document.blocks.traces_path(config_path)
         if p is not None:
             paths.append(p)
-    solve = getattr(document, "solve", None)
+    solve = document.solve
     if solve is not None:
-        p = solve.blocks_path(config_path) if hasattr(solve, "blocks_path") else None
+        p = solve.blocks_path(config_path)
         if p is not None:
             paths.append(p)
         base = Path(config_path).parent
-        for v in getattr(solve, "velocity_inputs", ()):
-            if getattr(v.history, "type", None) == "csv":
-                paths.append(v.history.path(base))
-    out = {}
-    for p in paths:
-        try:
-            out[os.fspath(p)] = file_sha256(p)[0]
-        except ValueError:
-            out[os.fspath(p)] = "missing"
-    return out
+        paths += [v.history.path(base) for v in solve.velocity_inputs if v.history.type == "csv"]
+    return {os.fspath(p): _hash_once(p, digests) for p in paths}
 
 
-def expand_cases(document: StudyDocument, raw: dict, config_path) -> list[StudyCase]:
+def input_records(digests: dict) -> list[dict]:
+    """Manifest ``inputs`` records of the files the cases read, from the digests taken when the
+    cases were expanded (:func:`expand_cases`; nothing is hashed again): ``{"path", "sha256",
+    "bytes"}`` sorted by path, and ``"missing": true`` with null hash and size for a file that could
+    not be read."""
+    records = []
+    for path in sorted(digests):
+        found = digests[path]
+        if found is None:
+            records.append({"path": path, "sha256": None, "bytes": None, "missing": True})
+        else:
+            records.append({"path": path, "sha256": found[0], "bytes": found[1]})
+    return records
+
+
+def expand_cases(document: StudyDocument, raw: dict, config_path,
+                 digests: dict | None = None) -> list[StudyCase]:
     """Every case of the study, validated; raises :class:`ConfigError` (exit 2) naming the study
-    field and the case before anything runs."""
+    field and the case before anything runs.
+
+    ``digests``: a dict filled with path -> (sha256, bytes), or None when missing, for every file a
+    case reads, each distinct path hashed once (pass one to record the inputs in a manifest with
+    :func:`input_records` without hashing them again)."""
     from .config import config_hash
 
     shown = os.fspath(config_path)
@@ -322,6 +350,7 @@ def expand_cases(document: StudyDocument, raw: dict, config_path) -> list[StudyC
     if n > MAX_CASES:
         raise ConfigError(shown, [("study", f"{n} cases; at most {MAX_CASES} per study (split it)")])
 
+    digests = {} if digests is None else digests
     cases: list[StudyCase] = []
     seen: dict[str, int] = {}
     grid_paths = list(grid)
@@ -349,7 +378,7 @@ def expand_cases(document: StudyDocument, raw: dict, config_path) -> list[StudyC
                 except ValidationError as exc:
                     raise ConfigError(shown, _case_problems(exc, data, params, entry, index)) \
                         from None
-                inputs = _input_files(doc, config_path)
+                inputs = _input_files(doc, config_path, digests)
                 digest = hashlib.sha256(canonical_json(
                     {"config_hash": config_hash(doc), "inputs": inputs}).encode()).hexdigest()
                 if digest in seen:

@@ -309,6 +309,53 @@ def test_a_failing_case_is_recorded_and_the_others_finish(tmp_path, monkeypatch,
     assert [r["status"] for r in _rows(out / "results.csv")] == ["ok"] * 4
 
 
+def test_a_case_with_a_missing_input_file_fails_alone_and_the_manifest_is_written(
+        tmp_path, monkeypatch, capsys):
+    """A grid over blocks.traces with one file absent: that case fails with the file named, the
+    others run, manifest.json records every input once (the absent one as missing) and the exit
+    code is 1 (was 2: the manifest re-hashed the inputs and raised). Each distinct input is
+    hashed once, not once per case and again for the manifest."""
+    import hashlib
+
+    import rockmass.manifest as manifest_module
+
+    (tmp_path / "t.csv").write_text("x0,y0,x1,y1,set\n-5,-4,5,3,1\n-5,4,4,-5,1\n",
+                                    encoding="utf-8")
+    cfg = _write(tmp_path, BASE + """
+[study]
+realizations = 2
+[study.grid]
+"blocks.traces" = ["absent.csv", "t.csv"]
+""")
+    real = manifest_module.file_sha256
+    hashed = []
+
+    def counting(path):
+        hashed.append(Path(path).name)
+        return real(path)
+
+    monkeypatch.setattr(manifest_module, "file_sha256", counting)
+    out = tmp_path / "out"
+    assert main(["study", str(cfg), "--out", str(out), "--workers", "1"]) == 1
+    err = capsys.readouterr().err
+    assert "2 of 4 cases failed" in err
+    rows = _rows(out / "results.csv")
+    assert [r["status"] for r in rows] == ["failed", "failed", "ok", "ok"]
+    for r in rows[:2]:
+        assert "absent.csv: cannot read the blocks.traces file" in r["error"]
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["extra"]["failed"] == 2 and manifest["extra"]["finished"] == 2
+    inputs = {Path(i["path"]).name: i for i in manifest["inputs"]}
+    assert len(inputs) == len(manifest["inputs"]) == 3
+    assert inputs["absent.csv"] == {"path": str(tmp_path / "absent.csv"), "sha256": None,
+                                    "bytes": None, "missing": True}
+    data = (tmp_path / "t.csv").read_bytes()
+    assert inputs["t.csv"]["sha256"] == hashlib.sha256(data).hexdigest()
+    assert inputs["t.csv"]["bytes"] == len(data)
+    assert inputs["study.toml"]["sha256"] == hashlib.sha256(cfg.read_bytes()).hexdigest()
+    assert sorted(hashed) == ["absent.csv", "study.toml", "t.csv"]
+
+
 def test_joint_network_is_the_models_joints(tmp_path):
     """The box-counted segments are the joints the builder cut: same total length as the model's
     joint contacts (persistent sets, so every joint segment is a contact)."""
