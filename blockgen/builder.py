@@ -37,7 +37,7 @@ import math
 import numpy as np
 import shapely
 
-from .convex import convex_cuts, reflex_vertices
+from .convex import convex_cuts, is_reflex, reflex_vertices
 from .cracks import Cracks, crack_segments, select_parents
 from .excavations import Excavation, _as_ring
 from .joints import JointSet, set_segments
@@ -130,14 +130,14 @@ def _pairs(faces, grid_m):
     return seg[a_idx], face_a, face_b
 
 
-def _is_convex(poly, reflex_sin, reflex_m=0.0):
+def _is_convex(poly, reflex_sin, reflex_m):
     if len(poly.interiors):
         return False
     xy = np.asarray(poly.exterior.coords)[:-1]
     return len(reflex_vertices(xy, reflex_sin, reflex_m)) == 0
 
 
-def _concave_mask(faces, reflex_sin, reflex_m=0.0):
+def _concave_mask(faces, reflex_sin, reflex_m):
     """Faces that have a hole or a reflex vertex (vectorised over all faces; the rule of
     :func:`rockmass.blockgen.convex.reflex_vertices`)."""
     coords, index = shapely.get_coordinates(shapely.get_exterior_ring(faces), return_index=True)
@@ -152,12 +152,8 @@ def _concave_mask(faces, reflex_sin, reflex_m=0.0):
     pos = np.arange(len(xy)) - first[face]
     prev = first[face] + (pos - 1) % k[face]
     nxt = first[face] + (pos + 1) % k[face]
-    e_in, e_out = xy - xy[prev], xy[nxt] - xy
-    cross = e_in[:, 0] * e_out[:, 1] - e_in[:, 1] * e_out[:, 0]
-    norm = np.hypot(e_in[:, 0], e_in[:, 1]) * np.hypot(e_out[:, 0], e_out[:, 1])
-    chord = np.hypot(*(e_in + e_out).T)
-    is_reflex = (cross < -reflex_sin * norm) & (-cross > reflex_m * chord)
-    reflex = np.bincount(face, is_reflex, len(faces)) > 0
+    reflex_at = is_reflex(xy - xy[prev], xy[nxt] - xy, reflex_sin, reflex_m)
+    reflex = np.bincount(face, reflex_at, len(faces)) > 0
     return reflex | (shapely.get_num_interior_rings(faces) > 0)
 
 
@@ -335,15 +331,15 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
     def make_convex(noded, faces, region):
         # a cut of one face can end on a vertex shared with a neighbour and leave that neighbour
         # with a new reflex vertex: repeat until every face is convex (reported rounds)
-        n_concave = int(_concave_mask(faces, tol.reflex_sin, tol.reflex_m).sum())
+        concave = np.flatnonzero(_concave_mask(faces, tol.reflex_sin, tol.reflex_m))
         rounds = 0
-        while n_concave and rounds < 8:
+        while len(concave) and rounds < 8:
             rounds += 1
-            noded, faces, region = _make_convex(noded, faces, region, tol, report, sources,
-                                                excavations, label_m, collapse)
-            n_concave = int(_concave_mask(faces, tol.reflex_sin, tol.reflex_m).sum())
+            noded, faces, region = _make_convex(noded, faces, region, concave, tol, report,
+                                                sources, excavations, label_m, collapse)
+            concave = np.flatnonzero(_concave_mask(faces, tol.reflex_sin, tol.reflex_m))
         report["convex_rounds"] = report.get("convex_rounds", 0) + rounds
-        report["concave_blocks_left"] = n_concave
+        report["concave_blocks_left"] = len(concave)
         return noded, faces, region
 
     if convex:
@@ -532,12 +528,11 @@ def _rows_in(a, b):
     return np.isin(inv[:len(a)], inv[len(a):])
 
 
-def _make_convex(noded, faces, region, tol, report, sources, excavations, label_m, collapse):
-    concave = np.flatnonzero(_concave_mask(faces, tol.reflex_sin, tol.reflex_m)).tolist()
-    if not concave:
-        return noded, faces, region
+def _make_convex(noded, faces, region, concave, tol, report, sources, excavations, label_m,
+                 collapse):
+    """Cut the faces ``concave`` (indices, :func:`_concave_mask`) into convex pieces."""
     cuts = []
-    for i in concave:
+    for i in concave.tolist():
         c, n_snapped, n_failed = convex_cuts(faces[i], tol.reflex_sin, tol.min_edge_m,
                                              16 * tol.snap_m, reflex_m=tol.reflex_m)
         report["snapped_cuts"] += int(n_snapped)

@@ -16,7 +16,16 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
-__all__ = ["reflex_vertices", "convex_cuts"]
+__all__ = ["reflex_vertices", "convex_cuts", "is_reflex"]
+
+
+def is_reflex(e_in: np.ndarray, e_out: np.ndarray, reflex_sin: float, reflex_m: float) -> np.ndarray:
+    """Reflex test of vertices from their incoming and outgoing edges ((m, 2) each); the rule of
+    :func:`reflex_vertices`."""
+    cross = e_in[:, 0] * e_out[:, 1] - e_in[:, 1] * e_out[:, 0]
+    norm = np.hypot(e_in[:, 0], e_in[:, 1]) * np.hypot(e_out[:, 0], e_out[:, 1])
+    chord = np.hypot(*(e_in + e_out).T)
+    return (cross < -reflex_sin * norm) & (-cross > reflex_m * chord)
 
 
 def reflex_vertices(xy: np.ndarray, reflex_sin: float, reflex_m: float = 0.0) -> np.ndarray:
@@ -29,10 +38,7 @@ def reflex_vertices(xy: np.ndarray, reflex_sin: float, reflex_m: float = 0.0) ->
     """
     e_in = xy - np.roll(xy, 1, axis=0)
     e_out = np.roll(xy, -1, axis=0) - xy
-    cross = e_in[:, 0] * e_out[:, 1] - e_in[:, 1] * e_out[:, 0]
-    norm = np.hypot(*e_in.T) * np.hypot(*e_out.T)
-    chord = np.hypot(*(e_in + e_out).T)
-    return np.flatnonzero((cross < -reflex_sin * norm) & (-cross > reflex_m * chord))
+    return np.flatnonzero(is_reflex(e_in, e_out, reflex_sin, reflex_m))
 
 
 def _bisector(xy, i, ccw_interior=True):

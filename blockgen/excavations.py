@@ -61,14 +61,16 @@ def _as_ring(xy, name: str) -> np.ndarray:
     if not poly.is_valid or poly.area <= 0:
         raise ValueError(f"{name} is a degenerate or self-intersecting polygon "
                          f"({shapely.is_valid_reason(poly)}, area {poly.area:g})")
-    if _signed_area(xy) < 0:
+    if signed_area(xy) < 0:
         xy = xy[::-1].copy()
     xy.setflags(write=False)
     return xy
 
 
-def _signed_area(xy: np.ndarray) -> float:
-    x, y = xy[:, 0], xy[:, 1]
+def signed_area(xy: np.ndarray) -> float:
+    """Shoelace area of an open ring ((k, 2); > 0 counter-clockwise), about its first vertex (no
+    cancellation of large coordinates)."""
+    x, y = xy[:, 0] - xy[0, 0], xy[:, 1] - xy[0, 1]
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
 
 

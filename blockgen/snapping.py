@@ -34,6 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from .convex import reflex_vertices
+from .excavations import signed_area
 from .model import KIND_DOMAIN, KIND_EXCAVATION
 from .network import unique_rows
 
@@ -41,11 +42,6 @@ __all__ = ["snap_short_edges", "AREA_RTOL"]
 
 #: relative change of the area of the touched blocks (per region) accepted as none.
 AREA_RTOL = 1e-12
-
-
-def _signed_area(xy):
-    x, y = xy[:, 0] - xy[0, 0], xy[:, 1] - xy[0, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
 
 
 def snap_short_edges(noded, kind, src, faces, region, min_edge_m, grid_m, reflex_sin,
@@ -241,7 +237,7 @@ def _collinear_on_outline(target, mover, xy, pinned_dirs, reflex_sin):
 def _mean_width(xy):
     """2·area / perimeter of a ring (the sliver measure of :mod:`rockmass.blockgen.builder`)."""
     perimeter = float(np.sum(np.hypot(*(np.roll(xy, -1, axis=0) - xy).T)))
-    return 2.0 * abs(_signed_area(xy)) / perimeter if perimeter > 0 else 0.0
+    return 2.0 * abs(signed_area(xy)) / perimeter if perimeter > 0 else 0.0
 
 
 def _try(p, u, v, rings, regions, reflex_sin, reflex_m, min_width=0.0):
@@ -253,7 +249,7 @@ def _try(p, u, v, rings, regions, reflex_sin, reflex_m, min_width=0.0):
     after: dict[int, float] = {}
     out = []
     for (ring_xy, ids), reg in zip(rings, regions):
-        before[reg] = before.get(reg, 0.0) + _signed_area(ring_xy)
+        before[reg] = before.get(reg, 0.0) + signed_area(ring_xy)
         merged = (ids == u) | (ids == v)
         keep = ~(merged & np.roll(merged, 1))  # one vertex for u, v adjacent (cyclic)
         if int((merged & keep).sum()) > 1:
@@ -264,7 +260,7 @@ def _try(p, u, v, rings, regions, reflex_sin, reflex_m, min_width=0.0):
         new_xy = ring_xy.copy()
         new_xy[merged] = p
         new_xy = new_xy[keep]
-        area = _signed_area(new_xy)
+        area = signed_area(new_xy)
         if area <= 0 or len(reflex_vertices(new_xy, reflex_sin, reflex_m)):
             return None
         width = _mean_width(new_xy)

@@ -287,7 +287,8 @@ class Engine:
                          np.zeros(K.N_ENERGY))
 
     def excavate(self, regions):
-        """Remove the blocks of the given excavation stages (regions) and rebuild the contacts."""
+        """Remove the blocks of the given excavation stages (regions) and wake every block; the
+        caller rebuilds the contacts (the runner does once the stage's modes are set)."""
         if not len(regions):
             return
         gone = np.isin(self.model.region, np.asarray(regions))
@@ -296,7 +297,6 @@ class Engine:
         self.omg[gone] = 0.0
         self.movable &= self.active
         self.wake_all()
-        self.rebuild()
 
     def _active_slots(self):
         """(pair, slot, state rows) of the active contact slots."""

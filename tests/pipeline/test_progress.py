@@ -36,8 +36,13 @@ def bars(monkeypatch):
     return _FakeBar.made
 
 
-def test_no_bars_off_a_terminal_or_when_quiet(monkeypatch):
-    monkeypatch.setattr("sys.stderr.isatty", lambda: False, raising=False)
+def test_no_bars_off_a_terminal(monkeypatch):
+    class Pipe:
+        def isatty(self):
+            return False
+
+    monkeypatch.setattr("sys.stderr", Pipe())
+    monkeypatch.delenv("ROCKMASS_QUIET", raising=False)
     for bars in (progress.solver_bar(), progress.step_bar("x", ["a"]),
                  progress.count_bar("x", 5, "item")):
         with bars as bar:
@@ -102,6 +107,12 @@ def test_extract_command_bar_goes_through_every_step(bars, tmp_path):
 def test_solve_command_bar_per_dem_stage(bars, tmp_path):
     from .test_cli_solve import _tiny
 
+    import json
+
     assert main(["solve", str(_tiny(tmp_path)), "--out", str(tmp_path / "out")]) == 0
+    stages = json.loads((tmp_path / "out" / "result.json").read_text())["stages"]
     assert [b.desc for b in bars] == ["solve: gravity", "solve: shake"]
-    assert all(b.closed and 0 < b.n <= b.total for b in bars)
+    # each bar ends at the steps its stage took, out of its step budget (the static stage's
+    # max_steps = 3000; the dynamic one's duration / step)
+    assert [b.n for b in bars] == [s["steps"] for s in stages]
+    assert bars[0].total == 3000 and all(b.closed and b.n <= b.total for b in bars)

@@ -62,6 +62,8 @@ def test_sharp_sliver_gets_the_largest_radius_that_keeps_half_of_each_edge_flat(
     assert radius[0] < 0.05
     flat = length - tangent - np.roll(tangent, -1)
     assert (flat >= 0.5 * length - 1e-12).all()
+    # the largest such radius: the binding edge keeps exactly half flat (independent of the formula)
+    assert (flat / length).min() == pytest.approx(0.5, rel=1e-12)
 
 
 def _sweep_engine():
@@ -112,6 +114,10 @@ def test_block_sliding_off_a_corner_follows_the_rounded_closed_form():
         assert table["overlap_m"][0] == pytest.approx(overlap, abs=1e-12)
         np.testing.assert_allclose([table["nx"][0], table["ny"][0]],
                                    [h / centre_gap, (2 * D - d0) / centre_gap], atol=1e-9)
+        # the joint law on the closed-form overlap (whatever length the slot stands for) ...
+        assert table["normal_stress_pa"][0] == pytest.approx(KN * max(overlap, 0.0), rel=1e-9,
+                                                             abs=1e-3)
+        # ... over the face part it stands for (at least d)
         length = max(w, D) if w >= 0 else D
         assert force == pytest.approx(KN * max(overlap, 0.0) * length, rel=1e-9, abs=1e-6)
     # no jump anywhere along the sweep (steps of 0.2 mm): the largest change between neighbours
@@ -211,7 +217,7 @@ def test_block_sliding_off_an_incline_over_its_corner_keeps_the_energy_ledger():
     """A block slides down a 30° incline (φ = 10°) off the lower end of a 2 m base, tips over the
     rounded corner and falls. A jump in the contact force as it passes the corner would create or
     destroy energy; the ledger (gravity work = kinetic + strain + slip dissipation) closes to
-    5e-4 of the work in with the small step used for dynamic ledgers elsewhere (safety 0.1;
+    2e-4 of the work in with the small step used for dynamic ledgers elsewhere (safety 0.1;
     measured 4.2e-5), and the block really went over: it ends below the base's top corner."""
     from ._models import incline
 
@@ -223,7 +229,7 @@ def test_block_sliding_off_an_incline_over_its_corner_keeps_the_energy_ledger():
     assert result.ok, result.diagnostic
     e = st.energy
     work_in = e["work_gravity_j"] + e["work_boundary_j"]
-    assert abs(e["residual_j"]) < 5e-4 * work_in, e["residual_j"] / work_in
+    assert abs(e["residual_j"]) < 2e-4 * work_in, e["residual_j"] / work_in
     corner_y = -math.sin(math.radians(30.0))  # the base's lower top corner, (−cos 30°, −sin 30°)
     final = result.frames[-1]
     assert final.position_m[1, 1] < corner_y
