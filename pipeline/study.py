@@ -162,26 +162,26 @@ def case_cost(document) -> float:
             p32 = sum(s.intensity.value for s in document.dfn.sets)
             crossings += 0.5 * p32 * p32
         blocks = 1.0 + area * crossings
-        solve = getattr(document, "solve", None)
+        solve = document.solve
         steps = float(sum(st.max_steps for st in solve.stages)) if solve is not None else 1.0
         return blocks * steps
     except Exception:  # noqa: BLE001 - an estimate: a config it does not understand costs 1
         return 1.0
 
 
-def joint_network_segments(document, config_path, model=None):
+def joint_network_segments(document, config_path, model=None, traces=None):
     """(n, 4) segments ``x0, y0, x1, y1`` of the joint network of a ``[blocks]`` section, clipped
     to its domain: the joint sets as the builder generated them (same seeds) and the traces.
 
-    Dangling-end extensions, excavation outlines and potential cracks are not joints and are left
-    out (Jiang et al. count the joint network drawn on the section).
+    ``traces``: the TraceMap that cut the model (the DFN section :func:`_build_model` generated, or
+    the trace file it read), so they are not made again; None: read / generate what the config
+    names. Dangling-end extensions, excavation outlines and potential cracks are not joints and are
+    left out (Jiang et al. count the joint network drawn on the section).
     """
     import numpy as np
     import shapely
 
     from .blockgen.joints import set_segments
-    from .blocks_cmd import dfn_section_traces
-    from .inputs import read_trace_file
 
     cfg = document.blocks
     if model is not None:
@@ -196,15 +196,10 @@ def joint_network_segments(document, config_path, model=None):
         for i, js in enumerate(sets):  # as rockmass.blockgen.build draws them
             raw = set_segments(js, domain_xy, np.random.default_rng(children[i]), i)
             parts.append(np.asarray(raw, float).reshape(-1, 4))
-    traces = None
-    path = cfg.traces_path(config_path)
-    if path is not None:
-        traces = read_trace_file(path, "blocks.traces")
-    if cfg.dfn_section is not None:
-        traces, _ = dfn_section_traces(document, config_path)
+    if traces is None:
+        traces = _traces(document, config_path)
     if traces is not None:
-        segs = traces.segments() if hasattr(traces, "segments") else np.asarray(traces, float)
-        parts.append(np.asarray(segs, float).reshape(-1, 4))
+        parts.append(np.asarray(traces.segments(), float).reshape(-1, 4))
     if not parts:
         return np.empty((0, 4))
     segs = np.concatenate(parts)
@@ -219,43 +214,47 @@ def joint_network_segments(document, config_path, model=None):
     return np.concatenate(out) if out else np.empty((0, 4))
 
 
-def _build_model(document, config_path):
-    from .blockgen import build, check_model
-    from .blocks_cmd import _field_message, dfn_section_traces
-    from .errors import InputError, RunError
+def _dfn_section(document, config_path):
+    """``(TraceMap, window)`` of the case's ``[blocks.dfn_section]``
+    (:func:`rockmass.blocks_cmd.dfn_section_traces`), or None without one."""
+    from .blocks_cmd import dfn_section_traces
+
+    if document.blocks.dfn_section is None:
+        return None
+    return dfn_section_traces(document, config_path)
+
+
+def _traces(document, config_path, section=None):
+    """The TraceMap that cuts the case's blocks: the DFN ``section``'s (generated when not given),
+    the ``blocks.traces`` file's, or None."""
     from .inputs import read_trace_file
 
-    cfg = document.blocks
-    domain_xy = None if cfg.domain is None else cfg.domain.xy_m()
-    traces = None
-    try:
-        path = cfg.traces_path(config_path)
-        if path is not None:
-            traces = read_trace_file(path, "blocks.traces")
-        if cfg.dfn_section is not None:
-            traces, window = dfn_section_traces(document, config_path)
-            domain_xy = window if domain_xy is None else domain_xy
-        model = build(domain_xy, cfg.joint_sets(), traces, [e.to_excavation() for e in cfg.excavations],
-                      dangling=cfg.dangling, seed=cfg.seed, rounding_m=cfg.rounding_m,
-                      min_edge_m=cfg.min_edge_m, merge_slivers=cfg.merge_slivers,
-                      convex=cfg.convex, snap_edges=cfg.snap_edges,
-                      cracks=None if cfg.cracks is None else cfg.cracks.to_cracks())
-    except InputError:
-        raise
-    except ValueError as exc:
-        raise InputError(f"{config_path}: {_field_message(exc)}") from exc
-    invariants = check_model(model)
-    if not invariants["ok"]:
-        raise RunError(f"the block model fails its invariants {invariants}")
+    if document.blocks.dfn_section is not None:
+        return (section or _dfn_section(document, config_path))[0]
+    path = document.blocks.traces_path(config_path)
+    return None if path is None else read_trace_file(path, "blocks.traces")
+
+
+def _build_model(document, config_path, section=None):
+    """The case's block model, built and checked as ``rockmass blocks`` builds it
+    (:func:`rockmass.blocks_cmd.compute`); ``section``: the ``(TraceMap, window)`` of its DFN
+    section when already generated (:func:`_dfn_section`)."""
+    import types
+
+    from .blocks_cmd import compute
+
+    _, model, _, _ = compute(types.SimpleNamespace(config=config_path), document, section)
     return model
 
 
-def _fractal(document, config_path, model) -> dict:
+def _fractal(document, config_path, model, traces=None) -> dict:
+    """D_box (with R², standard error, spread over shifted grids), P21 and the segment count of
+    the case's joint network (:func:`joint_network_segments`; ``traces`` as it takes them)."""
     from .config import FractalConfig
     from .fractal import box_count
 
     fcfg = document.fractal or FractalConfig()
-    segs = joint_network_segments(document, config_path, model)
+    segs = joint_network_segments(document, config_path, model, traces)
     if not len(segs):
         return {"d_box": None, "d_box_r2": None, "d_box_stderr": None, "d_box_offset_sd": None,
                 "p21_per_m": 0.0, "n_joint_segments": 0}
@@ -271,26 +270,22 @@ def _fractal(document, config_path, model) -> dict:
 def _p32(document) -> float | None:
     """Total P32 (m²/m³, one-sided) of the ``[dfn]`` sets when blocks are cut by a DFN section and
     every set is given by P32; None otherwise (2D joint sets have no P32)."""
-    dfn = getattr(document, "dfn", None)
+    dfn = document.dfn
     if dfn is None or document.blocks.dfn_section is None or not dfn.sets:
         return None
-    if any(getattr(s.intensity, "measure", None) != "P32" for s in dfn.sets):
+    if any(s.intensity.measure != "P32" for s in dfn.sets):
         return None
     return float(sum(s.intensity.value for s in dfn.sets))
 
 
 def _solve(document, config_path, model) -> dict:
-    from .errors import InputError
-    from .solver import run as solver_run
+    """The case's DEM stages (:func:`rockmass.solve_cmd.solve`) summed up for results.csv; {}
+    without ``[solve]``."""
+    from .solve_cmd import solve as solve_stages
 
-    solve = getattr(document, "solve", None)
-    if solve is None:
+    if document.solve is None:
         return {}
-    settings = solve.to_settings(model, config_path)
-    try:
-        result = solver_run(model, settings)
-    except ValueError as exc:
-        raise InputError(f"{config_path}: solve: {exc}") from exc
+    result = solve_stages(model, document.solve.to_settings(model, config_path), config_path)
     last = result.stages[-1]
     stages = [{"name": s.name, "status": s.status, "steps": int(s.steps), "converged": s.converged,
                "max_displacement_m": float(s.max_displacement_m),
@@ -339,11 +334,12 @@ def run_case(task: dict) -> dict:
         document = RockmassConfig.model_validate(task["config"])
         path = task["config_path"]
         t = time.perf_counter()
-        model = _build_model(document, path)
+        section = _dfn_section(document, path)  # generated once: the blocks and the box count
+        model = _build_model(document, path, section)
         timings["blocks_s"] = time.perf_counter() - t
         out.update({"n_blocks": int(model.n_blocks), "n_contacts": int(model.n_contacts)})
         t = time.perf_counter()
-        out.update(_fractal(document, path, model))
+        out.update(_fractal(document, path, model, _traces(document, path, section)))
         out["p32"] = _p32(document)
         timings["boxcount_s"] = time.perf_counter() - t
         t = time.perf_counter()

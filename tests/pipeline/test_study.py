@@ -291,10 +291,10 @@ def test_a_failing_case_is_recorded_and_the_others_finish(tmp_path, monkeypatch,
     cfg = _write(tmp_path, BASE + STUDY)
     real = study._fractal
 
-    def boom(document, path, model):
+    def boom(document, path, model, traces=None):
         if document.blocks.two_sets.theta_deg == 90.0:
             raise RuntimeError("simulated failure")
-        return real(document, path, model)
+        return real(document, path, model, traces)
 
     monkeypatch.setattr(study, "_fractal", boom)
     out = tmp_path / "out"
