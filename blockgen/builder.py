@@ -336,7 +336,7 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
         while len(concave) and rounds < 8:
             rounds += 1
             noded, faces, region = _make_convex(noded, faces, region, concave, tol, report,
-                                                sources, excavations, label_m, collapse)
+                                                sources, excavations, collapse)
             concave = np.flatnonzero(_concave_mask(faces, tol.reflex_sin, tol.reflex_m))
         report["convex_rounds"] = report.get("convex_rounds", 0) + rounds
         report["concave_blocks_left"] = len(concave)
@@ -407,11 +407,17 @@ def _add_cracks(noded, faces, region, cracks, seq, tol, report, sources, excavat
     segs = snap_to_grid(segs, tol.grid_m)
     segs = segs[np.any(segs[:, 0] != segs[:, 1], axis=1)]
     sources.add(segs, KIND_GLUED, SOURCE_CRACK, priority=5)
-    bseg = _ring_edges(faces[parents])[0]
+    return _insert_segments(noded, faces, region, parents, segs, tol, excavations, collapse)
+
+
+def _insert_segments(noded, faces, region, changed, segs, tol, excavations, collapse):
+    """Re-node only the boundaries of the faces ``changed`` with the new segments ``segs`` (cuts
+    or cracks inside them) and rebuild those faces: (noded, faces, region)."""
+    bseg = _ring_edges(faces[changed])[0]
     touched = _rows_in(segment_keys(noded, tol.grid_m), segment_keys(bseg, tol.grid_m))
     renoded = node(np.concatenate([noded[touched], segs]), tol.grid_m)
     noded = collapse(np.concatenate([noded[~touched], renoded]))
-    faces, region = _local_faces(noded, faces, region, parents, excavations, tol.grid_m)
+    faces, region = _local_faces(noded, faces, region, changed, excavations, tol.grid_m)
     return noded, faces, region
 
 
@@ -528,8 +534,7 @@ def _rows_in(a, b):
     return np.isin(inv[:len(a)], inv[len(a):])
 
 
-def _make_convex(noded, faces, region, concave, tol, report, sources, excavations, label_m,
-                 collapse):
+def _make_convex(noded, faces, region, concave, tol, report, sources, excavations, collapse):
     """Cut the faces ``concave`` (indices, :func:`_concave_mask`) into convex pieces."""
     cuts = []
     for i in concave.tolist():
@@ -546,14 +551,7 @@ def _make_convex(noded, faces, region, concave, tol, report, sources, excavation
         return noded, faces, region
     cuts = np.array(cuts)
     sources.add(cuts, KIND_GLUED, SOURCE_CONVEX_CUT, priority=4)
-    # re-node only the boundaries of the concave faces with the cuts
-    bseg = _ring_edges(faces[concave])[0]
-    keys = segment_keys(noded, tol.grid_m)
-    touched = _rows_in(keys, segment_keys(bseg, tol.grid_m))
-    renoded = node(np.concatenate([noded[touched], cuts]), tol.grid_m)
-    noded = collapse(np.concatenate([noded[~touched], renoded]))
-    faces, region = _local_faces(noded, faces, region, concave, excavations, tol.grid_m)
-    return noded, faces, region
+    return _insert_segments(noded, faces, region, concave, cuts, tol, excavations, collapse)
 
 
 def _assemble(faces, region, noded, kind, src, tol, report, domain_xy, excavations, set_names,
