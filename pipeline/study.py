@@ -465,13 +465,14 @@ def run_tasks(tasks: list[dict], on_done: Callable[[dict], None], *, workers: in
     """Run ``run_case`` over ``tasks`` and call ``on_done(result)`` in this process as each one
     finishes (any order). Returns a description of the executor.
 
-    ``scheduler`` (or an already connected Dask ``client``): a Dask cluster; else ``workers`` > 1: a
-    local process pool (spawned processes, one thread each); else serially in this process, in case
-    order. Pools and Dask get the tasks longest first (``task["cost"]``).
+    ``client`` (a connected Dask client; ``scheduler``: its address, for the description): on that
+    Dask cluster; else ``workers`` > 1: a local process pool (spawned processes, one thread each);
+    else serially in this process, in case order. Pools and Dask get the tasks longest first
+    (``task["cost"]``).
     """
     if not tasks:
         return "none (every case was finished)"
-    if client is not None or scheduler is not None:
+    if client is not None:
         from dask.distributed import as_completed
 
         # one thread per library and the kernels loaded, once per worker (and on workers that join)

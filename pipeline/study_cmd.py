@@ -108,8 +108,11 @@ def _preflight(pending, config_path) -> None:
 
 
 def _case_header(case, config_path) -> str:
+    """The comment lines that head a case's config.toml: where it comes from, how to rerun it."""
+    from .study_config import params_text
+
     return (f"# study case {case.index} ({case.case_id}) of {os.path.abspath(config_path)}\n"
-            f"# {_params_text(case.params) or 'base config'}; realization {case.realization}, "
+            f"# {params_text(case.params) or 'base config'}; realization {case.realization}, "
             f"seed {case.seed}\n# rerun it alone with its outputs: rockmass solve config.toml "
             "--out DIR (or rockmass blocks)\n")
 
@@ -124,14 +127,6 @@ def _write_case_config(folder, case, config_path) -> None:
                       + toml_text(standalone_config(case, config_path)))
 
 
-def _params_text(params: dict) -> str:
-    """``theta_deg=60.0, ...``: the last part of each field path, or the whole path when two
-    fields share it (``dfn.sets[0].intensity.value=...``)."""
-    last = [k.rsplit(".", 1)[-1] for k in params]
-    return ", ".join(f"{k if last.count(n) > 1 else n}={v}" for k, n, v in
-                     zip(params, last, params.values()))
-
-
 def run(args) -> int:
     """Handler of ``rockmass study``."""
     from .atomic import atomic_write_json, atomic_write_text
@@ -139,7 +134,7 @@ def run(args) -> int:
     from .outputs import output_folder, print_json
     from .study import (RESULTS_FILE, CASE_FILE, case_cost, csv_text, load_finished, results_rows,
                         run_tasks)
-    from .study_config import expand_cases, input_records, load_study
+    from .study_config import expand_cases, input_records, load_study, params_text
 
     t_start = time.perf_counter()
     document, raw = load_study(args.config)
@@ -157,7 +152,7 @@ def run(args) -> int:
         for c in cases:
             state = "finished" if c.case_id in finished else "pending"
             print(f"{c.index:5d}  {c.short_id}  {state:8s}  r={c.realization} seed={c.seed}  "
-                  f"{_params_text(c.params) or '(base)'}")
+                  f"{params_text(c.params) or '(base)'}")
         return 0
 
     scheduler = args.scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS") or None
@@ -205,7 +200,7 @@ def run(args) -> int:
             if result["status"] != "ok":
                 what = f"FAILED: {result['error']}"
             _log(f"[{counter['done']}/{len(pending)}] case {case.index} ({case.short_id}) "
-                 f"{_params_text(case.params)} r={case.realization}: {what} "
+                 f"{params_text(case.params)} r={case.realization}: {what} "
                  f"({result.get('wall_time_s') or 0.0:.1f} s)")
 
         for case in cases:  # folders of an older rockmass, or copied without it

@@ -48,7 +48,7 @@ from .strict import StrictModel, field_problem
 
 __all__ = ["StudyConfig", "StudyDocument", "StudyCase", "load_study", "expand_cases",
            "realization_seed", "parse_path", "set_path", "get_path", "flatten_overrides",
-           "toml_text", "standalone_config", "input_records"]
+           "toml_text", "standalone_config", "input_records", "params_text"]
 
 MAX_CASES = 100_000
 _PATH_TOKEN = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)|\[(\d+)\]")
@@ -383,28 +383,40 @@ def expand_cases(document: StudyDocument, raw: dict, config_path,
                     {"config_hash": config_hash(doc), "inputs": inputs}).encode()).hexdigest()
                 if digest in seen:
                     raise ConfigError(shown, [("study", f"cases {seen[digest]} and {index} are the "
-                                               f"same config ({_params_text(params)}); a study "
+                                               f"same config ({params_text(params) or 'the base config'}); a study "
                                                "runs each config once")])
                 seen[digest] = index
                 cases.append(StudyCase(index, params, r, seed, data, doc, digest, inputs))
     return cases
 
 
-def _params_text(params: dict) -> str:
-    return ", ".join(f"{k} = {v!r}" for k, v in params.items()) or "the base config"
+def params_text(params: dict) -> str:
+    """A case's parameters as ``theta_deg=60.0, ...`` (empty for the base config): the last part of
+    each field path, or the whole path when two fields share it.
+
+    >>> params_text({"blocks.two_sets.theta_deg": 60.0, "dfn.sets[0].intensity.value": 1.0,
+    ...              "dfn.sets[1].intensity.value": 2.0})
+    'theta_deg=60.0, dfn.sets[0].intensity.value=1.0, dfn.sets[1].intensity.value=2.0'
+    """
+    last = [k.rsplit(".", 1)[-1] for k in params]
+    return ", ".join(f"{k if last.count(n) > 1 else n}={v}" for k, n, v in
+                     zip(params, last, params.values()))
 
 
 def _case_problems(exc: ValidationError, data: dict, params: dict, entry: dict, index: int):
+    """(field, message) problems of a case that fails validation, each charged to the study field
+    that set the value when one did, naming the case and its parameters."""
+    case = f"study case {index}: {params_text(params) or 'the base config'}"
     problems = []
     for fld, message in problems_from_validation_error(exc, RockmassConfig, data):
         culprit = next((p for p in params if fld == p or fld.startswith(p + ".")
                         or fld.startswith(p + "[") or p.startswith(fld + ".")), None)
         if culprit is not None:
             where = f"study.cases.{culprit}" if culprit in entry else f"study.grid.{culprit}"
-            message = f"{fld}: {message} (study case {index}: {_params_text(params)})"
+            message = f"{fld}: {message} ({case})"
             problems.append((where, message))
         else:
-            problems.append((fld, f"{message} (study case {index}: {_params_text(params)})"))
+            problems.append((fld, f"{message} ({case})"))
     return problems
 
 

@@ -20,6 +20,7 @@ from .html_report import BASE_CSS, figure, pyplot
 from .html_report import fmt as _fmt
 from .html_report import png_base64 as _png
 from .html_report import table as _table
+from .study_config import params_text
 
 __all__ = ["write_report", "colour_field", "groups"]
 
@@ -153,7 +154,7 @@ def _figures(study, cases, finished) -> list[tuple[str, str]]:
     labels, dvals, yvals, cols = [], [], [], []
     for gkey, members in grouped.items():
         c0 = members[0][0]
-        labels.append(_params_short(c0.params) or "base")
+        labels.append(params_text(c0.params) or "base")
         dvals.append([r.get("d_box") for _, r in members if r.get("d_box") is not None])
         yvals.append([r.get(key) * 1e3 for _, r in members if r.get(key) is not None])
         cols.append(colours[_label(_value(c0, cfield)) if cfield else "all"])
@@ -215,22 +216,18 @@ def _model_thumbnails(study, cases, finished, config_path, limit: int = 6) -> li
             except Exception:  # noqa: BLE001 - a missing thumbnail must not stop the report
                 continue
             disp = rec.get(key)
-            cap = (f"case {c.index}: {_params_short(c.params) or 'base'}; D_box "
+            cap = (f"case {c.index}: {params_text(c.params) or 'base'}; D_box "
                    f"{rec['d_box']:.3f}, {model.n_blocks} blocks"
                    + (f", max displacement {disp * 1e3:.3g} mm" if disp is not None else ""))
             out.append((cap, base64.b64encode(path.read_bytes()).decode("ascii")))
     return out
 
 
-def _params_short(params: dict) -> str:
-    return ", ".join(f"{k.rsplit('.', 1)[-1]}={_label(v)}" for k, v in params.items())
-
-
 def write_report(path, document, cases, finished: dict, failed: dict, summary: dict,
                  config_path) -> None:
     """Write ``report.html`` (atomically)."""
     from .atomic import atomic_write_text
-    from .study import csv_text, results_rows  # noqa: F401
+    from .study import results_rows
 
     study = document.study
     key = _disp_key(study)
@@ -239,7 +236,7 @@ def write_report(path, document, cases, finished: dict, failed: dict, summary: d
     srows = []
     for members in grouped.values():
         c0 = members[0][0]
-        row = [_params_short(c0.params) or "base", str(len(members))]
+        row = [params_text(c0.params) or "base", str(len(members))]
         for k, scale in (("d_box", 1.0), ("d_box_r2", 1.0), ("p21_per_m", 1.0), ("n_blocks", 1.0),
                          (key, 1e3)):
             m, sd, n = _mean_sd([(r.get(k) * scale) if r.get(k) is not None else None
