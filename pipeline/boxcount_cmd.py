@@ -70,8 +70,9 @@ FLAGS = {"grid": "--grid", "method": "--method", "range_px": "--range", "n_offse
          "skeletonize": "--skeletonize"}
 
 
-def _resolve_settings(args, image_side: int | None):
-    """The FractalConfig from ``--config`` (or defaults), overridden by the flags given.
+def _resolve_settings(args, image_side: int | None, document=None):
+    """The FractalConfig from ``document`` (a validated RockmassConfig, e.g. the one ``rockmass
+    run`` planned with) or else ``--config`` (or defaults), overridden by the flags given.
 
     For an image the grid is the image's own (padded) side, so a fit range is checked against it.
     """
@@ -80,8 +81,10 @@ def _resolve_settings(args, image_side: int | None):
     from .config import FractalConfig, load_config, problems_from_validation_error
 
     base = FractalConfig()
-    if args.config:
-        base = load_config(args.config).fractal or base
+    if document is None and args.config:
+        document = load_config(args.config)
+    if document is not None:
+        base = document.fractal or base
     overrides = {k: getattr(args, k) for k in FLAGS if getattr(args, k) is not None}
     if "range_px" in overrides:
         overrides["range_px"] = tuple(overrides["range_px"])
@@ -127,8 +130,10 @@ def _read_image_file(path: Path, what: str):
         raise InputError(f"{path}: cannot read the {what} image: {exc.strerror or exc}") from exc
 
 
-def compute(args) -> tuple[dict, object, dict]:
-    """Read, count and fit; return the JSON document, the BoxCount and the settings used."""
+def compute(args, document=None) -> tuple[dict, object, dict]:
+    """Read, count and fit; return the JSON document, the BoxCount and the settings used.
+    ``document``: the validated config to take ``[fractal]`` from instead of loading
+    ``args.config``."""
     from .fractal import box_count
     from .fractal.image import padded_side
 
@@ -139,7 +144,8 @@ def compute(args) -> tuple[dict, object, dict]:
         raise InputError("--grid applies to traces; an image is counted on its own pixel grid")
     if kind == "image" and args.window is not None:
         raise InputError("--window applies to traces, not to an image")
-    settings = _resolve_settings(args, padded_side(*data.shape) if kind == "image" else None)
+    settings = _resolve_settings(args, padded_side(*data.shape) if kind == "image" else None,
+                                 document)
     mask = _load_mask(args.mask, kind)
     t1 = time.perf_counter()
     try:
@@ -174,15 +180,16 @@ def summary_line(result) -> str:
     return text
 
 
-def produce(args, out_dir=None):
+def produce(args, out_dir=None, document=None):
     """Count and fit, and write every output into the folder ``out_dir`` when given; return
     (document, BoxCount).
 
-    The work of ``rockmass boxcount`` (and of the ``boxcount`` stage of ``rockmass run``).
+    The work of ``rockmass boxcount`` (and of the ``boxcount`` stage of ``rockmass run``, which
+    passes its planned, validated ``document`` so that the config file is not read again).
     """
     from contextlib import ExitStack
 
-    document, result, extra = compute(args)
+    data, result, extra = compute(args, document)
     if out_dir:
         from .atomic import atomic_path, atomic_write_json
         from .fractal.plot import plot_box_count
@@ -194,7 +201,7 @@ def produce(args, out_dir=None):
             png = stack.enter_context(atomic_path(out / "boxcount.png"))
             js = stack.enter_context(atomic_path(out / "boxcount.json"))
             plot_box_count(result, png, title=f"{Path(args.file).name}: box counting")
-            atomic_write_json(js, document)
+            atomic_write_json(js, data)
             timings = {**extra["timings"], "write_s": time.perf_counter() - t0}
             manifest = build_manifest(command=args.argv,
                                       config={"fractal": extra["settings"].model_dump(mode="json")},
@@ -202,7 +209,7 @@ def produce(args, out_dir=None):
                                       extra={"dimension": result.dimension})
             mf = stack.enter_context(atomic_path(out / "manifest.json"))
             atomic_write_json(mf, manifest)
-    return document, result
+    return data, result
 
 
 def run(args) -> int:

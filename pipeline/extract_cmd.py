@@ -62,12 +62,17 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     return p
 
 
-def _settings(args):
+def _settings(args, document=None):
+    """The ``[imaging]`` settings as a dict: from ``document`` (a validated RockmassConfig, e.g. the
+    one ``rockmass run`` planned with) when given, else from ``--config`` (or the defaults), then
+    overridden by the flags given."""
     from .config import ImagingConfig, load_config
 
     section = ImagingConfig()
-    if args.config:
-        section = load_config(args.config).imaging or section
+    if document is None and args.config:
+        document = load_config(args.config)
+    if document is not None:
+        section = document.imaging or section
     values = section.model_dump()
     for key in ("m_per_px", "joint_width_px", "face_dip_deg", "face_dip_direction_deg"):
         if getattr(args, key) is not None:
@@ -77,9 +82,10 @@ def _settings(args):
     return values
 
 
-def compute(args):
+def compute(args, document=None):
     """Extract and analyse; return (summary, extraction, traces with sets, image, set ids, timings,
-    settings used)."""
+    settings used). ``document``: the validated config to take ``[imaging]`` from instead of
+    loading ``args.config``."""
     import dataclasses
 
     import numpy as np
@@ -91,7 +97,7 @@ def compute(args):
     from .imaging.extract import STEPS, ExtractParams
     from .progress import step_bar
 
-    settings = _settings(args)
+    settings = _settings(args, document)
     path = Path(args.photo)
     t0 = time.perf_counter()
     try:
@@ -142,16 +148,17 @@ def compute(args):
     return summary, result, traces, image, set_ids, timings, settings
 
 
-def produce(args, out_dir):
+def produce(args, out_dir, document=None):
     """Extract, analyse and write every output into the folder ``out_dir``; return the summary.
 
-    The work of ``rockmass extract`` (and of the ``extract`` stage of ``rockmass run``).
+    The work of ``rockmass extract`` (and of the ``extract`` stage of ``rockmass run``, which passes
+    its planned, validated ``document`` so that the config file is not read again).
     """
     from contextlib import ExitStack
 
     import numpy as np
 
-    summary, result, traces, image, set_ids, timings, settings = compute(args)
+    summary, result, traces, image, set_ids, timings, settings = compute(args, document)
     from .atomic import atomic_path, atomic_write_json
     from .dfn import write_traces
     from .dfn.plots import rose_diagram

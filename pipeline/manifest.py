@@ -10,11 +10,13 @@ stays fast, and a manifest can be written before anything heavy is loaded).
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import datetime as _dt
 import hashlib
 import os
 import platform
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
@@ -22,7 +24,8 @@ from typing import Any
 from .atomic import atomic_write_json, to_jsonable
 from .errors import InputError
 
-__all__ = ["MANIFEST_NAME", "TRACKED_DISTRIBUTIONS", "build_manifest", "write_manifest", "file_sha256"]
+__all__ = ["MANIFEST_NAME", "TRACKED_DISTRIBUTIONS", "build_manifest", "digest_cache", "file_sha256",
+           "write_manifest"]
 
 MANIFEST_NAME = "manifest.json"
 MANIFEST_VERSION = 1
@@ -43,6 +46,9 @@ TRACKED_DISTRIBUTIONS = (
 )
 
 _CHUNK = 1 << 20  # 1 MiB
+
+#: The digest cache of :func:`digest_cache` in force (None: every call reads its file).
+_DIGESTS: contextvars.ContextVar[dict | None] = contextvars.ContextVar("rockmass_digests", default=None)
 
 
 def _dist_version(name: str) -> str | None:
@@ -76,6 +82,45 @@ def file_sha256(path: str | os.PathLike) -> tuple[str, int]:
     InputError
         If the file does not exist, is a folder, or cannot be read; the message names the file.
     """
+    cache = _DIGESTS.get()
+    key = _cache_key(path) if cache is not None else None
+    if key is not None and key in cache:
+        return cache[key]
+    result = _read_sha256(path)
+    if key is not None:
+        cache[key] = result
+    return result
+
+
+@contextlib.contextmanager
+def digest_cache(cache: dict) -> Iterator[dict]:
+    """Within the block, :func:`file_sha256` keeps each file's digest in ``cache`` and reads a file
+    again only when it changed.
+
+    A file is the same file while its resolved path, device, inode, size and modification time
+    (ns) are, so a file rewritten or replaced in between is read again. Meant for one command (one
+    ``rockmass run`` hashes each input for its stage hashes, the stage manifests and the run's
+    manifest); pass the same dict to several blocks to share it between them.
+    """
+    token = _DIGESTS.set(cache)
+    try:
+        yield cache
+    finally:
+        _DIGESTS.reset(token)
+
+
+def _cache_key(path) -> tuple | None:
+    """(resolved path, device, inode, size, mtime ns) of a file, or None if it cannot be stat'ed
+    (then it is read, and the read reports the problem)."""
+    try:
+        st = os.stat(path)
+        return (os.path.realpath(path), st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns)
+    except (OSError, ValueError):
+        return None
+
+
+def _read_sha256(path) -> tuple[str, int]:
+    """SHA-256 hex digest and size of a file, read in chunks (errors as :func:`file_sha256`)."""
     shown = os.fspath(path)
     digest = hashlib.sha256()
     size = 0

@@ -24,7 +24,6 @@ written atomically after the stages, then ``report.html`` (:func:`rockmass.run_r
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import shutil
@@ -68,8 +67,8 @@ class RunPlan:
     trace_map: Path | None            # the run's trace map (extract's output or [run] traces)
     scanline: Path | None
     out_dir: Path
-    requested: list[str] = field(default_factory=list)
     config: dict = field(default_factory=dict)  # the document as written, [run] included (JSON)
+    digests: dict = field(default_factory=dict)  # file digests of this run (manifest.digest_cache)
 
 
 # ----------------------------------------------------------------------------------- planning --
@@ -144,6 +143,7 @@ def plan_run(config_path, out_dir, document=None) -> RunPlan:
     """
     from . import __version__
     from .config import load_config
+    from .manifest import digest_cache
 
     config_path = Path(config_path)
     out_dir = Path(out_dir)
@@ -275,16 +275,18 @@ def plan_run(config_path, out_dir, document=None) -> RunPlan:
     }
     plans: list[StagePlan] = []
     hashes: dict[str, str] = {}
-    for name in STAGES:
-        if name not in needed:
-            continue
-        sp = StagePlan(name, sections[name], stage_files[name], upstream[name])
-        sp.hash = stage_hash(sp, {u: hashes[u] for u in sp.upstream}, __version__, config_path,
-                             out_dir)
-        hashes[name] = sp.hash
-        plans.append(sp)
+    digests: dict = {}
+    with digest_cache(digests):
+        for name in STAGES:
+            if name not in needed:
+                continue
+            sp = StagePlan(name, sections[name], stage_files[name], upstream[name])
+            sp.hash = stage_hash(sp, {u: hashes[u] for u in sp.upstream}, __version__, config_path,
+                                 out_dir)
+            hashes[name] = sp.hash
+            plans.append(sp)
     return RunPlan(config_path=config_path, document=document, stages=plans, trace_map=trace_map,
-                   scanline=scanline, out_dir=out_dir, requested=requested, config=as_written)
+                   scanline=scanline, out_dir=out_dir, config=as_written, digests=digests)
 
 
 def _references(run_document, trace_map) -> tuple[set[str], set[str]]:
@@ -335,7 +337,7 @@ def stage_hash(stage: StagePlan, upstream_hashes: dict[str, str], version: str, 
     folder keeps its hashes; a run's own outputs (``@traces`` of a photo) enter through the upstream
     hash, not as files.
     """
-    from .config import canonical_json
+    from .config import config_hash
 
     base = Path(config_path).resolve().parent
     files = []
@@ -346,7 +348,7 @@ def stage_hash(stage: StagePlan, upstream_hashes: dict[str, str], version: str, 
     sections = _relative_paths(stage.sections, base, Path(out_dir).resolve())
     doc = {"stage": stage.name, "sections": sections, "files": files,
            "upstream": upstream_hashes, "rockmass_version": version}
-    return hashlib.sha256(canonical_json(doc).encode("utf-8")).hexdigest()
+    return config_hash(doc)
 
 
 def _relative_paths(obj: Any, base: Path, out_dir: Path) -> Any:
@@ -374,7 +376,8 @@ def _ns(plan: RunPlan, argv, **kwargs) -> types.SimpleNamespace:
 
 def _run_stage(plan: RunPlan, stage: StagePlan, folder: Path, argv) -> dict:
     """Run one stage into ``folder`` with its subcommand's compute-and-write function; return
-    notes for the log (e.g. a solver run that stopped)."""
+    notes for the log (e.g. a solver run that stopped). Every stage takes its settings from the
+    planned document (what its hash was computed from), never from the config file again."""
     doc = plan.document
     run = doc.run
     notes: dict = {}
@@ -384,7 +387,7 @@ def _run_stage(plan: RunPlan, stage: StagePlan, folder: Path, argv) -> dict:
         produce(_ns(plan, argv, photo=str(run.path("photo", plan.config_path)), out=str(folder),
                     m_per_px=None, control_points=None, joint_width_px=None, face_dip_deg=None,
                     face_dip_direction_deg=None, roi=None, roi_px=None, bright_lines=False,
-                    n_sets=run.trace_sets, debug=False), folder)
+                    n_sets=run.trace_sets, debug=False), folder, document=doc)
     elif stage.name == "traces":
         from .traces_cmd import produce
 
@@ -395,7 +398,7 @@ def _run_stage(plan: RunPlan, stage: StagePlan, folder: Path, argv) -> dict:
 
         produce(_ns(plan, argv, file=str(plan.trace_map), grid=None, method=None, range_px=None,
                     n_offsets=None, line_rule=None, window=None, mask="auto", threshold=None,
-                    invert=None, skeletonize=None, out=str(folder)), folder)
+                    invert=None, skeletonize=None, out=str(folder)), folder, document=doc)
     elif stage.name == "scanline":
         from .scanline_cmd import DEFAULT_SEED, produce
 
@@ -483,11 +486,21 @@ def execute(plan: RunPlan, *, force: bool = False, argv=("rockmass", "run"),
     """Run (or reuse) every planned stage, then write run.json, report.html and manifest.json.
 
     Returns the ``run.json`` document. Raises :class:`RunError` (exit 1) after writing everything
-    when the solver stopped (overlap, unstable); its outputs say why.
+    when the solver stopped (overlap, unstable); its outputs say why. Each file is hashed once per
+    run (``plan.digests``), unless it changes meanwhile.
     """
+    from .manifest import digest_cache
+
+    with digest_cache(plan.digests):
+        return _execute(plan, force, argv, log)
+
+
+def _execute(plan: RunPlan, force: bool, argv, log: Callable[[str], None]) -> dict:
+    """The work of :func:`execute`."""
     from . import __version__
     from .atomic import atomic_write_json
     from .config import config_hash
+    from .run_report import write_run_report
 
     t_start = time.perf_counter()
     out = plan.out_dir
@@ -529,7 +542,7 @@ def execute(plan: RunPlan, *, force: bool = False, argv=("rockmass", "run"),
     if others:
         log(f"kept {', '.join(others)} from an earlier run in {out} (not asked for by this run: "
             "not in its manifest or report; reused if asked for again unchanged)")
-    _write_report(out, log)
+    write_run_report(out)
     _write_manifest(plan, document, argv, failures, others)
     if failures:
         raise RunError("; ".join(failures) + f" (every output is in {out})")
@@ -554,20 +567,10 @@ def _replace_folder(partial: Path, folder: Path) -> None:
     shutil.rmtree(old, ignore_errors=True)
 
 
-def _write_report(out: Path, log) -> None:
-    try:
-        from .run_report import write_run_report
-    except ImportError:
-        log("report.html not written: rockmass.run_report is not installed in this version")
-        return
-    write_run_report(out)
-
-
 def _write_manifest(plan: RunPlan, document: dict, argv, failures: list[str],
                     others: list[str]) -> None:
     """manifest.json: every file of this run (not the stage folders ``others`` of earlier runs)."""
-    from .atomic import atomic_write_json
-    from .manifest import MANIFEST_NAME, build_manifest, file_sha256
+    from .manifest import MANIFEST_NAME, file_sha256, write_manifest
 
     out = plan.out_dir
     files = []
@@ -579,9 +582,8 @@ def _write_manifest(plan: RunPlan, document: dict, argv, failures: list[str],
         sha, size = file_sha256(p)
         files.append({"path": rel, "sha256": sha, "bytes": size})
     inputs = [plan.config_path] + sorted({p for s in plan.stages for p in s.files}, key=str)
-    manifest = build_manifest(
-        command=list(argv), config=plan.config, inputs=inputs,
+    write_manifest(
+        out, command=list(argv), config=plan.config, inputs=inputs,
         timings_s={s["name"]: s["wall_s"] for s in document["stages"]} | {"total": document["total_wall_s"]},
         extra={"stages": [{k: s[k] for k in ("name", "status", "hash")} for s in document["stages"]],
                "files": files, "failures": failures})
-    atomic_write_json(out / MANIFEST_NAME, manifest)

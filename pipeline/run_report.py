@@ -38,11 +38,9 @@ from pathlib import Path
 
 from .html_report import (BASE_CSS, PRINT_CSS, figure, file_data_uri, fmt, note, png_base64, pyplot,
                           table)
+from .run_config import STAGES  # stage folder names, in the order a run runs them
 
 __all__ = ["STAGES", "write_run_report"]
-
-#: Stage folder names, in chain order.
-STAGES = ("extract", "traces", "scanline", "boxcount", "dfn", "blocks", "solve")
 
 
 class _Note(Exception):
@@ -52,12 +50,15 @@ class _Note(Exception):
 class _Run:
     """The run folder: ``run.json`` (or ``None`` and a note) and the stage folders it lists — stage
     folders that earlier runs left in DIR are not part of this run and are not shown; without a
-    readable run.json, every stage folder present."""
+    readable run.json, every stage folder present. Each JSON file is parsed once per report
+    (:meth:`read`), the DFN realizations listed once (:meth:`realizations`)."""
 
     def __init__(self, out: Path):
         self.out, self.doc, self.note = out, None, None
+        self._parsed: dict[Path, object] = {}
+        self._realizations = None
         try:
-            doc = _json(out / "run.json", out)
+            doc = self.read(out / "run.json")
             if not isinstance(doc, dict) or not isinstance(doc.get("stages", []), list):
                 raise _Note("run.json is not a run record (an object with a list of stages)")
             self.doc = doc
@@ -75,8 +76,33 @@ class _Run:
     def has(self, *names: str) -> bool:
         return any(n in self.dirs for n in names)
 
+    def read(self, path: Path):
+        """The parsed JSON file ``path`` (parsed on first use, then the same object; the report only
+        reads it), or :class:`_Note` when it is missing or unreadable (every time)."""
+        if path not in self._parsed:
+            try:
+                self._parsed[path] = _json(path, self.out)
+            except _Note as exc:
+                self._parsed[path] = exc
+        value = self._parsed[path]
+        if isinstance(value, _Note):
+            raise _Note(str(value))
+        return value
+
     def json(self, stage: str, name: str):
-        return _json(self.dirs[stage] / name, self.out)
+        """The parsed ``<stage>/<name>`` (see :meth:`read`)."""
+        return self.read(self.dirs[stage] / name)
+
+    def realizations(self) -> tuple[list[tuple[int, dict]], list[str]]:
+        """:func:`_realizations` of this run, found and read once."""
+        if self._realizations is None:
+            try:
+                self._realizations = _realizations(self)
+            except _Note as exc:
+                self._realizations = exc
+        if isinstance(self._realizations, _Note):
+            raise _Note(str(self._realizations))
+        return self._realizations
 
 
 # ------------------------------------------------------------------------------------ helpers --
@@ -261,7 +287,7 @@ def _intensity_rows_boxcount(run: _Run) -> list[list[str]]:
 
 def _intensity_rows_dfn(run: _Run) -> list[list[str]]:
     rows = []
-    for i, summary in _realizations(run)[0]:  # the DFN section notes unreadable ones
+    for i, summary in run.realizations()[0]:  # the DFN section notes unreadable ones
         total = summary.get("total") or {}
         rows.append(["P32 target", fmt(total.get("target_p32")), "m²/m³", f"dfn, realization {i}"])
         rows.append(["P32 achieved", fmt(total.get("achieved_p32")), "m²/m³", f"dfn, realization {i}"])
@@ -299,7 +325,7 @@ def _realizations(run: _Run) -> tuple[list[tuple[int, dict]], list[str]]:
         raise _Note(f"{_rel(run.dirs['dfn'], run.out)} holds no realization_NNNN folder")
     for folder in folders:
         try:
-            out.append((int(folder.name[12:]), _json(folder / "summary.json", run.out)))
+            out.append((int(folder.name[12:]), run.read(folder / "summary.json")))
         except _Note as exc:
             notes.append(f"{exc}.")
     return out, notes
@@ -336,7 +362,7 @@ def _size_text(family: str, params: dict) -> str:
 
 def _section_dfn(run: _Run) -> str:
     """Per set: orientation and size law (fitted or given), P32 target and achieved per realization."""
-    realizations, notes = _realizations(run)
+    realizations, notes = run.realizations()
     try:
         laws = _set_laws(run)
         law_note = ""
@@ -363,7 +389,7 @@ def _dfn_validation(run: _Run, indices: list[int]) -> str:
         if not path.exists():
             continue
         try:
-            rows = _json(path, run.out).get("rows") or []
+            rows = run.read(path).get("rows") or []
             ok = sum(1 for r in rows if r.get("ok"))
             lines.append(f"realization {i}: {ok} of {len(rows)} field measures within tolerance")
         except (_Note, AttributeError) as exc:

@@ -53,17 +53,10 @@ def first_run(tmp_path_factory):
     return config, out
 
 
-def _has_report() -> bool:
-    import importlib.util
-
-    return importlib.util.find_spec("rockmass.run_report") is not None
-
-
 def test_run_writes_every_stage_folder_run_json_manifest_and_report(first_run):
     _, out = first_run
-    report = ["report.html"] if _has_report() else []  # rockmass.run_report is another change
     assert sorted(p.name for p in out.iterdir()) == sorted(STAGES + ["run.json", "manifest.json",
-                                                                     *report])
+                                                                     "report.html"])
     run = json.loads((out / "run.json").read_text())
     assert set(run) == {"config", "config_hash", "rockmass_version", "stages", "total_wall_s"}
     assert [s["name"] for s in run["stages"]] == STAGES
@@ -82,7 +75,7 @@ def test_run_writes_every_stage_folder_run_json_manifest_and_report(first_run):
     manifest = json.loads((out / "manifest.json").read_text())
     listed = {f["path"] for f in manifest["extra"]["files"]}
     assert {"run.json", "solve/result.json", "dfn/fitted.json"} <= listed
-    assert ("report.html" in listed) == _has_report()
+    assert "report.html" in listed and (out / "report.html").stat().st_size > 0
     assert len(list(out.glob("*.partial"))) == 0
 
 
@@ -126,8 +119,8 @@ def test_photo_extraction_finds_the_synthetic_faces_two_sets(first_run):
     truth = json.loads((SAMPLES / "quickstart_face_meta.json").read_text())["trace_angles_deg"]
     means = sorted(s["Mean Angle"]["value"] for s in summary["sets"])
     assert len(means) >= 2
-    for angle in truth:  # every true set has an extracted set within 10 degrees (axial)
-        assert min(min(abs(angle - m), 180 - abs(angle - m)) for m in means) < 10.0
+    for angle in truth:  # every true set has an extracted set within 3 degrees (axial; 1.0, 1.5 seen)
+        assert min(min(abs(angle - m), 180 - abs(angle - m)) for m in means) < 3.0
 
 
 @pytest.fixture
@@ -195,14 +188,60 @@ def test_stage_folders_of_an_earlier_run_are_kept_but_not_part_of_this_run(copy_
     listed = {f["path"].split("/")[0] for f in json.loads((out / "manifest.json").read_text())
               ["extra"]["files"]}
     assert listed == {"extract", "boxcount", "run.json", "report.html"}
-    if _has_report():
-        report = (out / "report.html").read_text()
-        assert "stages in this folder:\nextract, boxcount." in report
-        assert 'id="sec-solver"' not in report and 'id="sec-boxcount"' in report
+    report = (out / "report.html").read_text()
+    assert "stages in this folder:\nextract, boxcount." in report
+    assert 'id="sec-solver"' not in report and 'id="sec-boxcount"' in report
     # still there, and reused when asked for again
     assert all((out / s / "stage.json").is_file() for s in others)
     assert main(["run", str(config), "--out", str(out)]) == 0
     assert _statuses(out) == {s: "reused" for s in STAGES}
+
+
+def test_extract_and_boxcount_run_with_the_planned_settings_not_the_file_at_run_time(
+        tmp_path, monkeypatch):
+    from rockmass import run as run_module
+
+    text = _config_text().replace('[run]\n', '[run]\nstages = ["boxcount"]\n', 1)
+    config = _write(tmp_path, text)
+    planned = run_module.plan_run
+
+    def plan_then_edit(*args, **kwargs):
+        plan = planned(*args, **kwargs)  # the config file changes after planning, before running
+        config.write_text(text.replace("joint_width_px = 3.0", "joint_width_px = 5.0")
+                          .replace("[fractal]\ngrid = 360", "[fractal]\ngrid = 256"))
+        return plan
+
+    monkeypatch.setattr(run_module, "plan_run", plan_then_edit)
+    out = tmp_path / "out"
+    assert main(["run", str(config), "--out", str(out)]) == 0
+    assert "grid = 256" in config.read_text()
+    assert json.loads((out / "boxcount" / "boxcount.json").read_text())["grid"] == 360
+    imaging = json.loads((out / "extract" / "manifest.json").read_text())["config"]["imaging"]
+    assert imaging["joint_width_px"] == 3.0
+
+
+def test_each_input_file_is_hashed_once_per_run(tmp_path, monkeypatch):
+    from collections import Counter
+
+    from rockmass import manifest
+
+    text = _config_text().replace('[run]\n', '[run]\nstages = ["boxcount"]\n', 1)
+    config = _write(tmp_path, text)
+    opened = Counter()
+
+    def counting_open(path, *args, **kwargs):
+        opened[Path(path).resolve()] += 1
+        return open(path, *args, **kwargs)
+
+    monkeypatch.setattr(manifest, "open", counting_open, raising=False)
+    out = tmp_path / "out"
+    assert main(["run", str(config), "--out", str(out)]) == 0
+    # for the stage hash, extract's manifest.json and the run's manifest.json: read once
+    photo = (SAMPLES / "quickstart_face.png").resolve()
+    assert opened[photo] == 1 and opened[config.resolve()] == 1
+    inputs = json.loads((out / "manifest.json").read_text())["inputs"]
+    assert {Path(i["path"]).resolve() for i in inputs} == {photo, config.resolve()}
+    assert max(opened.values()) == 1
 
 
 @pytest.mark.parametrize("edit, message", [
@@ -249,12 +288,15 @@ def test_dfn_fit_recovers_the_sets_the_scanline_was_drawn_from(first_run):
                                                     f["orientation"]["dip_direction_deg"])))
                   for f in fitted]
         best = fitted[angles.index(min(angles))]
-        # within 3 x alpha95 of the truth (a Fisher mean's 95 % cone, from the fit itself)
-        assert min(angles) < 3 * best["orientation"]["alpha95_deg"]
+        # a fixed bound, not one from the fit itself (1.4 and 3.0 degrees seen); kappa 40 is
+        # estimated from 16 and 13 poles (21.9 and 43.3 seen): within a factor 2.5
+        assert min(angles) < 5.0
+        assert o["kappa"] / 2.5 < best["orientation"]["kappa"] < o["kappa"] * 2.5
 
 
 def test_solver_progress_reports_every_stage_up_to_its_steps(first_run, tmp_path):
     import types
+    from itertools import pairwise
 
     from rockmass.blockgen import read_json
     from rockmass.config import load_config
@@ -263,20 +305,29 @@ def test_solver_progress_reports_every_stage_up_to_its_steps(first_run, tmp_path
     config, out = first_run
     calls = []
     document = load_config(config)
+    # report every 60 steps (not every 500), so each 200-step stage reports several times
+    solve = document.solve.model_copy(update={"stages": [
+        s.model_copy(update={"history_every": 60}) for s in document.solve.stages]})
+    document = document.model_copy(update={"solve": solve})
     model = read_json(out / "blocks" / "blocks.json")
     args = types.SimpleNamespace(config=str(config), argv=["test"])
     _, doc = produce(args, tmp_path / "solve", document=document, model=model,
                      progress=lambda done, total, stage: calls.append((done, total, stage)))
-    # one run of increasing counts per solver stage, ending at the stage's step count
-    runs, last = [], None
+    # one run of strictly increasing counts per solver stage, each with the stage's step budget
+    # as total and ending at the steps the stage took
+    runs = []
     for done, total, stage in calls:
-        if last is None or done <= last[0]:
+        if not runs or runs[-1][-1][2] != stage or done <= runs[-1][-1][0]:
             runs.append([])
         runs[-1].append((done, total, stage))
-        last = (done, total)
-    assert [r[-1][0] for r in runs] == [s["steps"] for s in doc["stages"]]
-    assert [{c[2] for c in r} for r in runs] == [{s["name"]} for s in doc["stages"]]
-    assert all(done <= total for done, total, _ in calls)
+    budgets = [s.max_steps for s in solve.stages]
+    assert [r[0][2] for r in runs] == [s["name"] for s in doc["stages"]]
+    for run, budget, stage in zip(runs, budgets, doc["stages"], strict=True):
+        assert len(run) > 1
+        assert all(a[0] < b[0] for a, b in pairwise(run))
+        assert {total for _, total, _ in run} == {budget}
+        assert {name for _, _, name in run} == {stage["name"]}
+        assert run[-1][0] == stage["steps"]
 
 
 def test_a_stage_killed_while_writing_never_looks_finished(copy_of_run, tmp_path, monkeypatch):

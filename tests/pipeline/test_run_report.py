@@ -151,10 +151,63 @@ def _stage_json(out: Path, stage: str, name: str):
 # ---------------------------------------------------------------------------------- sections --
 
 
-def test_report_is_written_atomically_at_the_returned_path(run_dir):
+def test_report_is_written_atomically_at_the_returned_path(run_dir, tmp_path, monkeypatch):
+    from rockmass.dfn import _atomic
+
     out, _, path, _ = run_dir
     assert path == out / "report.html" and path.is_file()
     assert not list(out.glob(".tmp-*"))
+    # a writer that fails halfway through the new page leaves the previous report as it was
+    out = tmp_path / "out"
+    shutil.copytree(run_dir[0], out)
+    before = (out / "report.html").read_bytes()
+    _write_run_json(out, STAGES, {s: "reused" for s in STAGES})  # the new page would differ
+
+    class _HalfWritten:
+        def __init__(self, handle):
+            self.handle = handle
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return self.handle.__exit__(*exc)
+
+        def write(self, data):
+            self.handle.write(data[:len(data) // 2])
+            self.handle.flush()
+            raise OSError(28, "No space left on device")
+
+    def half_open(*args, **kwargs):
+        return _HalfWritten(open(*args, **kwargs))  # closed by _HalfWritten.__exit__
+
+    monkeypatch.setattr(_atomic, "open", half_open, raising=False)
+    with pytest.raises(OSError, match="No space left"):
+        write_run_report(out)
+    monkeypatch.undo()
+    assert (out / "report.html").read_bytes() == before
+    assert not list(out.glob(".tmp-*"))
+    assert write_run_report(out).read_bytes() != before  # and the page did change
+
+
+def test_each_json_file_is_parsed_once_per_report(run_dir, tmp_path, monkeypatch):
+    from collections import Counter
+
+    from rockmass import run_report
+
+    out = _copy(run_dir, tmp_path)
+    (out / "solve" / "result.json").write_text("not json", encoding="utf-8")  # a note, still once
+    parsed, parse = Counter(), run_report._json
+
+    def counting(path, root):
+        parsed[Path(path).relative_to(out).as_posix()] += 1
+        return parse(path, root)
+
+    monkeypatch.setattr(run_report, "_json", counting)
+    write_run_report(out)
+    assert parsed["solve/result.json"] == 1 and parsed["traces/summary.json"] == 1
+    assert parsed["dfn/realization_0000/summary.json"] == 1
+    assert max(parsed.values()) == 1
 
 
 def test_every_section_appears_when_every_stage_is_present(run_dir):
