@@ -28,8 +28,9 @@ import numpy as np
 from numba import njit
 
 # --- slot state columns -------------------------------------------------------------------------
-ACT, U0, DIL, TAU, PHIM, RREV, DIR, COORD, BRK, LEN, FN, FS, SLIP, OVL, PX, PY, NX, NY, USP = range(19)
-N_SLOT_COLUMNS = 19
+(ACT, U0, DIL, TAU, PHIM, RREV, DIR, COORD, BRK, LEN, FN, FS, SLIP, OVL, PX, PY, NX, NY, USP,
+ NEW) = range(20)
+N_SLOT_COLUMNS = 20  # NEW: activated since advance() last looked (its time-step check)
 
 # --- world vertex table columns (world_vertices) ------------------------------------------------
 W_X, W_Y, W_NX, W_NY, W_CX, W_CY, W_TAN, W_RAD = range(8)
@@ -43,11 +44,11 @@ MODEL_COULOMB, MODEL_CY = 0, 1
 
 # --- energy accumulator entries -----------------------------------------------------------------
 (E_GRAVITY, E_EXTERNAL, E_LOCAL_DAMP, E_VISCOUS, E_QUIET, E_CONTACT_FREE, E_CONTACT_PRESC,
- E_SLIP, E_BROKEN, E_NEW_BROKEN) = range(10)
-N_ENERGY = 10
+ E_SLIP, E_BROKEN, E_NEW_BROKEN, E_NEW_SLOTS) = range(11)
+N_ENERGY = 11
 
 # --- return codes of advance() ------------------------------------------------------------------
-RC_DONE, RC_REBUILD, RC_CONVERGED, RC_OVERLAP, RC_NONFINITE = range(5)
+RC_DONE, RC_REBUILD, RC_CONVERGED, RC_OVERLAP, RC_NONFINITE, RC_STIFF = range(6)
 
 _CY_SLIP_F = 0.05  # a CY slot with F below this counts as slipping in the reports
 _FACING_COS = -0.99  # edges whose normals are this close to anti-parallel face each other
@@ -286,7 +287,26 @@ def _update_slot(S, p, k, prop, delta, dus, length, E):
 
 
 @njit(cache=True)
-def _open_slot(S, p, k):
+def _open_slot(S, p, k, prop, pinit, init_brk, E):
+    """Open slot k of pair p: the blocks moved apart beyond the detection gap there (or the
+    contact no longer uses the slot).
+
+    A bond still intact (tension or cohesion > 0) has failed: a bond that separates beyond the
+    tolerance cannot hold (with T/k_n above the tolerance it would otherwise open before its
+    tension is exceeded, and bond again on closing). It is marked broken and counted, and its
+    elastic energy at the last update is booked as breakage (the energy ledger stays closed). A
+    broken slot of a block-model contact is remembered in ``init_brk``, so the contact comes back
+    broken when it closes again (:func:`_activate_slot`), not intact.
+    """
+    if S[p, k, BRK] == 0.0 and (prop[P_TEN] > 0.0 or prop[P_COH] > 0.0):
+        S[p, k, BRK] = 1.0
+        E[E_NEW_BROKEN] += 1.0
+        length = S[p, k, LEN]
+        if length > 0.0:
+            sig = S[p, k, FN] / length
+            E[E_BROKEN] += 0.5 * (sig * sig / prop[P_KN] + S[p, k, TAU] ** 2 / prop[P_KS]) * length
+    if S[p, k, BRK] != 0.0 and pinit[p] >= 0:
+        init_brk[pinit[p]] = 1.0
     S[p, k, ACT] = 0.0
     S[p, k, FN] = 0.0
     S[p, k, FS] = 0.0
@@ -298,10 +318,10 @@ def _open_slot(S, p, k):
 
 
 @njit(cache=True)
-def _open_pair(S, p):
+def _open_pair(S, p, prop, pinit, init_brk, E):
     for k in range(2):
         if S[p, k, ACT] != 0.0:
-            _open_slot(S, p, k)
+            _open_slot(S, p, k, prop, pinit, init_brk, E)
 
 
 @njit(cache=True)
@@ -314,6 +334,7 @@ def _activate_slot(S, p, k, prop, broken):
     S[p, k, DIR] = 0.0
     S[p, k, PHIM] = prop[P_PHIM0]
     S[p, k, BRK] = broken
+    S[p, k, NEW] = 1.0
 
 
 @njit(cache=True)
@@ -452,7 +473,7 @@ def contact_forces(wv, off, pos, vel, omg, radius, still, pa, pb, pprop, pref, p
         dy = pos[b, 1] - pos[a, 1]
         reach = radius[a] + radius[b] + tol
         if dx * dx + dy * dy > reach * reach:  # bounding circles apart: no contact
-            _open_pair(S, p)
+            _open_pair(S, p, prop, pinit, init_brk, E)
             continue
         sep_a, e_a = _max_separation(wv, off, a, b, tol, hyst)
         sep_b = np.inf
@@ -460,7 +481,7 @@ def contact_forces(wv, off, pos, vel, omg, radius, still, pa, pb, pprop, pref, p
         if sep_a <= tol:
             sep_b, e_b = _max_separation(wv, off, b, a, tol, hyst)
         if sep_a > tol or sep_b > tol:
-            _open_pair(S, p)
+            _open_pair(S, p, prop, pinit, init_brk, E)
             continue
         ref = pref[p]
         if ref == 0 and sep_b > sep_a + hyst:
@@ -547,7 +568,7 @@ def contact_forces(wv, off, pos, vel, omg, radius, still, pa, pb, pprop, pref, p
                 gy = nry
                 sep = min(max(sep_a, sep_b), -rsum)
             if sep > tol:
-                _open_pair(S, p)
+                _open_pair(S, p, prop, pinit, init_brk, E)
                 continue
             nkeep = 1
             # the face parts it stands for (lift-off: one end, sliding off a corner: both)
@@ -586,9 +607,9 @@ def contact_forces(wv, off, pos, vel, omg, radius, still, pa, pb, pprop, pref, p
             else:
                 used1 = True
         if not used0 and S[p, 0, ACT] != 0.0:
-            _open_slot(S, p, 0)
+            _open_slot(S, p, 0, prop, pinit, init_brk, E)
         if not used1 and S[p, 1, ACT] != 0.0:
-            _open_slot(S, p, 1)
+            _open_slot(S, p, 1, prop, pinit, init_brk, E)
         broken = init_brk[pinit[p]] if pinit[p] >= 0 else 0.0
         for q in range(nkeep):
             k = slot_of[q]
@@ -596,6 +617,7 @@ def contact_forces(wv, off, pos, vel, omg, radius, still, pa, pb, pprop, pref, p
                 # a corner that comes into contact across a gap is a new touch, not a bond
                 bonded = face or pdel[q] >= -1e-6 * rounding
                 _activate_slot(S, p, k, prop, broken if bonded else 1.0)
+                E[E_NEW_SLOTS] += 1.0
             px = ptx[q]
             py = pty[q]
             rax = px - pos[a, 0]
@@ -703,15 +725,67 @@ def quiet_forces(edges, pos, vel, omg, rot, qf):
 
 
 @njit(cache=True)
+def _stiffest_new_slot(S, pa, pb, pprop, props, pos, inv_mass):
+    """Largest ω² = k l gᵀM⁻¹g over the slots flagged ``NEW`` (and clear the flags): the
+    eigenvalue of one slot's stiffness alone, g its relative-displacement row over the six dofs of
+    its two blocks (normal with k_n, tangential with k_s; a continuously-yielding joint at its
+    tangent stiffness). The system's ω_max² is at least this large."""
+    w2 = 0.0
+    for p in range(len(pa)):
+        for k in range(2):
+            if S[p, k, NEW] == 0.0:
+                continue
+            S[p, k, NEW] = 0.0
+            if S[p, k, ACT] == 0.0:
+                continue
+            prop = props[pprop[p]]
+            length = S[p, k, LEN]
+            kn = prop[P_KN]
+            ks = prop[P_KS]
+            if prop[P_MODEL] == MODEL_CY:
+                sig = max(2.0 * S[p, k, FN] / max(length, 1e-300), 1.0)
+                kn *= sig ** prop[P_EN]
+                ks *= sig ** prop[P_ES]
+            a = pa[p]
+            b = pb[p]
+            nx = S[p, k, NX]
+            ny = S[p, k, NY]
+            rax = S[p, k, PX] - pos[a, 0]
+            ray = S[p, k, PY] - pos[a, 1]
+            rbx = S[p, k, PX] - pos[b, 0]
+            rby = S[p, k, PY] - pos[b, 1]
+            for m in range(2):
+                dx = nx if m == 0 else -ny
+                dy = ny if m == 0 else nx
+                stiff = kn if m == 0 else ks
+                ga = rax * dy - ray * dx
+                gb = rbx * dy - rby * dx
+                g2 = (dx * dx * inv_mass[a, 0] + dy * dy * inv_mass[a, 1] + ga * ga * inv_mass[a, 2]
+                      + dx * dx * inv_mass[b, 0] + dy * dy * inv_mass[b, 1] + gb * gb * inv_mass[b, 2])
+                w2 = max(w2, stiff * length * g2)
+    return w2
+
+
+@njit(cache=True)
 def advance(n_steps, loc, lgeo, off, pos, rot, vel, omg, inv_mass, mass, mode, dof_input, presc_val,
             active, movable, gravity, ext_f, ext_a, ext_b, quiet_edges, pa, pb, pprop, pref, pinit,
             init_brk, props, S, ref_pos, ref_rot, radius, dt, ctol, hyst, rounding, ovl_limit,
-            margin, alpha_local, alpha_mass, beta, tol_ratio, check_every, wv, fpair, bp_ptr,
-            bp_idx, E, out, asleep, calm, sleep_ratio, sleep_steps, sleep_speed):
-    """Central-difference steps (REFERENCE.md §5). Stops early with a return code: converged
-    (static, unbalanced ratio < ``tol_ratio``), rebuild needed (a block moved > margin/2 since the
-    last broad phase), overlap above the limit, or a non-finite value. ``out`` receives
-    [steps done, unbalanced ratio, max overlap, pair of max overlap, max velocity].
+            margin, alpha_local, alpha_mass, beta, tol_ratio, block_tol, check_every, wv, fpair,
+            bp_ptr, bp_idx, E, out, asleep, calm, sleep_ratio, sleep_steps, sleep_speed, w2_new):
+    """Central-difference steps (REFERENCE.md §5). Stops early with a return code: converged,
+    rebuild needed (a block moved > margin/2 since the last broad phase), overlap above the limit,
+    a non-finite value, or a new contact too stiff for the step (``RC_STIFF``: a slot that formed
+    in this step has ω² above ``w2_new`` on its own, :func:`_stiffest_new_slot`; the step is not
+    integrated and the caller redoes the chunk with a shorter Δt). ``out`` receives [steps done, unbalanced ratio, max overlap, pair of max
+    overlap, max velocity, worst block ratio, worst block, kinetic energy at the last check]; its
+    entry 7 is also read as the kinetic energy of the previous check (``inf`` at a stage's start).
+
+    Equilibrium (static stages, tested every ``check_every`` steps) needs all three of: the model's
+    ratio Σ_b|F_unb,b| / Σ_b F_app,b below ``tol_ratio``; every block's own ratio
+    max(|F_unb|, |M_unb|/r_b) / F_app,b below ``block_tol`` (F_app,b = Σ|contact forces| + |m g| +
+    |external force| on block b, r_b its circumradius, so the moment is weighed like a force at
+    the block's rim); and a kinetic energy no larger than at the previous test. The mean ratio
+    alone lets one falling block hide among thousands at rest.
 
     Forces on block b: contacts (gathered over its pairs in a fixed order: deterministic), gravity
     m g, external forces ``ext_f`` with moment cos θ·ext_a + sin θ·ext_b (constant tractions on
@@ -731,6 +805,7 @@ def advance(n_steps, loc, lgeo, off, pos, rot, vel, omg, inv_mass, mass, mode, d
     fg = np.zeros(3)
     fe = np.zeros(3)
     ratio = np.inf
+    ke_prev = out[7]
     for step in range(n_steps):
         world_vertices(loc, lgeo, off, pos, rot, active, wv)
         max_ovl, max_pair = contact_forces(wv, off, pos, vel, omg, radius, asleep, pa, pb, pprop,
@@ -741,11 +816,19 @@ def advance(n_steps, loc, lgeo, off, pos, rot, vel, omg, inv_mass, mass, mode, d
             out[2] = max_ovl
             out[3] = max_pair
             return RC_OVERLAP
+        if E[E_NEW_SLOTS] != 0.0:
+            E[E_NEW_SLOTS] = 0.0
+            if _stiffest_new_slot(S, pa, pb, pprop, props, pos, inv_mass) > w2_new:
+                out[0] = step
+                return RC_STIFF
         if len(quiet_edges):
             qf[:] = 0.0
             quiet_forces(quiet_edges, pos, vel, omg, rot, qf)
         sum_unb = 0.0
         sum_app = 0.0
+        worst = 0.0
+        worst_b = -1
+        ke = 0.0
         moved = False
         vmax = 0.0
         for b in range(nb):
@@ -774,13 +857,19 @@ def advance(n_steps, loc, lgeo, off, pos, rot, vel, omg, inv_mass, mass, mode, d
                 fx = fc[0] + fg[0] + fe[0] + qf[b, 0]
                 fy = fc[1] + fg[1] + fe[1] + qf[b, 1]
                 own = math.sqrt(fx * fx + fy * fy)
+                if mode[b, 2] == 0:
+                    own = max(own, abs(fc[2] + fe[2] + qf[b, 2]) / radius[b])
                 sum_unb += own
                 sum_app += app
                 if own <= 10.0 * sleep_ratio * app:
+                    if own > worst * app:
+                        worst = own / app
+                        worst_b = b
                     continue
                 asleep[b] = 0
                 calm[b] = 0
             unb = 0.0
+            unb_m = 0.0
             for d in range(3):
                 v_old = vel[b, d] if d < 2 else omg[b]
                 if mode[b, d] == 1:
@@ -793,6 +882,8 @@ def advance(n_steps, loc, lgeo, off, pos, rot, vel, omg, inv_mass, mass, mode, d
                     f = fc[d] + fg[d] + fe[d] + qf[b, d] + fv
                     if d < 2:
                         unb += f * f
+                    else:
+                        unb_m = abs(f) / radius[b]
                     fd = 0.0
                     if alpha_local > 0.0 and v_old != 0.0:
                         fd = -alpha_local * abs(f) * (1.0 if v_old > 0 else -1.0)
@@ -812,8 +903,14 @@ def advance(n_steps, loc, lgeo, off, pos, rot, vel, omg, inv_mass, mass, mode, d
                 else:
                     omg[b] = v_new
                     rot[b] += v_new * dt
+                if mode[b, d] == 0:
+                    ke += 0.5 * mass[b, d] * v_new * v_new
             sum_unb += math.sqrt(unb)
             sum_app += app
+            own = max(math.sqrt(unb), unb_m)
+            if own > worst * app:
+                worst = own / app if app > 0.0 else np.inf
+                worst_b = b
             if sleep_ratio > 0.0:
                 speed = math.sqrt(vel[b, 0] ** 2 + vel[b, 1] ** 2) + abs(omg[b]) * radius[b]
                 if math.sqrt(unb) < sleep_ratio * app and speed < sleep_speed:
@@ -838,10 +935,16 @@ def advance(n_steps, loc, lgeo, off, pos, rot, vel, omg, inv_mass, mass, mode, d
         out[0] = step + 1
         out[1] = ratio
         out[4] = vmax
+        out[5] = worst
+        out[6] = worst_b
+        if tol_ratio > 0.0 and (step + 1) % check_every == 0:
+            falling = ke <= ke_prev
+            ke_prev = ke
+            out[7] = ke
+            if ratio < tol_ratio and worst < block_tol and falling and not moved:
+                return RC_CONVERGED
         if moved:
             return RC_REBUILD
-        if tol_ratio > 0.0 and (step + 1) % check_every == 0 and ratio < tol_ratio:
-            return RC_CONVERGED
     out[0] = n_steps
     out[1] = ratio
     return RC_DONE

@@ -154,6 +154,7 @@ class Engine:
         polar = model.second_moment_m4[:, 0] + model.second_moment_m4[:, 1]
         self.mass = np.ascontiguousarray(np.column_stack([rho * area, rho * area, rho * polar]))
         self.active = np.ones(nb, np.bool_)
+        self.failed = np.zeros(nb, np.bool_)  # taken out by the runner: kept moving
         self.radius = np.sqrt(np.maximum.reduceat((self.loc ** 2).sum(1), self.off[:-1]))
         edge = self.loc[ring_neighbours(self.off)[0]] - self.loc
         normal = np.column_stack([edge[:, 1], -edge[:, 0]]) / np.hypot(edge[:, 0], edge[:, 1])[:, None]
@@ -291,10 +292,14 @@ class Engine:
         caller rebuilds the contacts (the runner does once the stage's modes are set)."""
         if not len(regions):
             return
-        gone = np.isin(self.model.region, np.asarray(regions))
-        self.active[gone] = False
-        self.vel[gone] = 0.0
-        self.omg[gone] = 0.0
+        self.remove_blocks(np.isin(self.model.region, np.asarray(regions)))
+
+    def remove_blocks(self, which):
+        """Take blocks (ids or a mask) out of the model: inactive, at rest, every other block
+        awake; the caller rebuilds the contacts."""
+        self.active[which] = False
+        self.vel[which] = 0.0
+        self.omg[which] = 0.0
         self.movable &= self.active
         self.wake_all()
 

@@ -6,16 +6,31 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-__all__ = ["StageResult", "Frame", "Result", "STATUS_OK", "FAILED_STATUSES"]
+__all__ = ["StageResult", "Frame", "Result", "STATUS_OK", "STATUS_FAILED_BLOCKS", "FAILED_STATUSES"]
 
 STATUS_OK = "ok"
+STATUS_FAILED_BLOCKS = "failed_blocks"
 FAILED_STATUSES = ("overlap", "unstable")
 
 
 @dataclass
 class StageResult:
     """Report of one stage (every number finite; ``status`` says how the stage ended:
-    ``converged`` / ``max_steps`` (static), ``completed`` (dynamic), ``overlap`` / ``unstable``)."""
+    ``converged`` / ``max_steps`` (static), ``failed_blocks`` (static: blocks kept moving and were
+    taken out, ``converged`` says whether the rest reached equilibrium), ``completed`` (dynamic),
+    ``overlap`` / ``unstable``).
+
+    Displacements are the largest vertex displacement of a block from the run's reference state
+    (after the initial equilibrium stage): ``max_displacement_m`` over the blocks still in the
+    model, ``max_displacement_boundary_m`` over those that touched an excavated block;
+    ``..._equilibrium_m`` the same without blocks smaller than ``Settings.sliver_area_m2``;
+    ``max_displacement_stage_m`` from the stage's start. ``monitors``: displacement of the points
+    fixed on the excavation boundary (``crown``, ``left_wall``, ``right_wall``, ``invert``; empty
+    before anything is excavated). ``time_step_cuts``: how often contacts that formed during the
+    stage lowered the time step. ``worst_block`` / ``worst_ratio``: the block with the largest
+    own unbalanced force or moment ratio at the end (−1 / 0 when none moves).
+    ``failed_blocks``: :meth:`rockmass.solver.failure.FailedBlock.to_dict` of each block taken out.
+    """
 
     name: str
     kind: str
@@ -29,6 +44,12 @@ class StageResult:
     max_displacement_m: float
     max_displacement_boundary_m: float
     max_displacement_stage_m: float
+    max_displacement_equilibrium_m: float
+    max_displacement_boundary_equilibrium_m: float
+    monitors: dict
+    worst_block: int
+    worst_ratio: float
+    failed_blocks: list
     slipping_contacts: int
     open_contacts: int
     newly_broken_contacts: int
@@ -39,6 +60,7 @@ class StageResult:
     wall_time_s: float
     contact_rebuilds: int
     diagnostic: str | None = None
+    time_step_cuts: int = 0
 
 
 @dataclass
@@ -64,7 +86,9 @@ class Result:
     ``<name>_contact_fx_n`` (sum of contact forces on the block), …). ``contacts``: the active
     contact slots at the end (:meth:`Engine.contact_table`).
     ``block_energy``: per block volume (area × 1 m), mass, peak velocity and peak kinetic energy
-    over the dynamic stages (seed 001 Fig. 7). ``status`` is ``ok`` or the failure of the last stage.
+    over the dynamic stages (seed 001 Fig. 7). ``status`` is ``ok``, ``failed_blocks`` (blocks kept
+    moving in a static stage and were taken out; ``failed`` marks them) or the failure of the last
+    stage.
     """
 
     stages: list
@@ -79,6 +103,7 @@ class Result:
     status: str = STATUS_OK
     diagnostic: str | None = None
     info: dict = field(default_factory=dict)
+    failed: np.ndarray | None = None
 
     @property
     def ok(self) -> bool:

@@ -27,8 +27,10 @@ import numpy as np
 
 from . import _kernels as K
 from .engine import FIXED, Engine
+from .failure import FailureWatch
 from .loading import apply_boundary_stress, apply_insitu, quiet_edge_table
-from .result import FAILED_STATUSES, Frame, Result, StageResult
+from .monitoring import boundary_points, point_displacement_from
+from .result import FAILED_STATUSES, STATUS_FAILED_BLOCKS, STATUS_OK, Frame, Result, StageResult
 from .selectors import block_at_point
 from .settings import Settings, Stage
 
@@ -38,6 +40,8 @@ _CHECK_EVERY = 10         # static convergence test interval (steps)
 _STATIC_CHUNK = 500       # steps between records in static stages
 _DYNAMIC_RECORDS = 400    # records per dynamic stage (history rows) when history_every == 0
 _SLEEP_STEPS = 100        # steps a block stays calm (ratio < tolerance / 10, slow) before it sleeps
+_STEP_CUT_SLACK = 0.01  # the step is lowered when the safe step falls by more than this fraction
+_FAILURE_ROUNDINGS = 5.0  # default failure displacement, in rounding lengths d
 _SLEEP_CREEP = 1e-3       # calm = moving less than this fraction of the rounding in _SLEEP_STEPS steps
 
 
@@ -160,8 +164,73 @@ def _detached(eng: Engine, removed: np.ndarray) -> int:
     return int((inside & eng.active).sum())
 
 
+def _energy_ledger(eng: Engine, dt: float, ke0: float, se0: float, se0_shadow: float,
+                   removed_j: float) -> dict:
+    """The stage's energy ledger so far (module docstring); ``removed_j``: kinetic and strain
+    energy that left with blocks taken out during the stage (failed blocks)."""
+    wn, ws = eng.contact_increment_work(dt)
+    ke1, se1 = eng.kinetic_energy(), eng.strain_energy()
+    se1_shadow = se1 + 0.5 * (wn + ws)
+    E = eng.E
+    work_in = E[K.E_GRAVITY] + E[K.E_EXTERNAL] - E[K.E_CONTACT_PRESC]
+    damping = -(E[K.E_LOCAL_DAMP] + E[K.E_VISCOUS] + E[K.E_QUIET])
+    stored = ((ke1 - ke0) + (se1_shadow - se0_shadow) + E[K.E_SLIP] + E[K.E_BROKEN] + damping
+              + removed_j)
+    energy = {"work_gravity_j": E[K.E_GRAVITY],
+              "work_boundary_j": E[K.E_EXTERNAL] - E[K.E_CONTACT_PRESC],
+              "kinetic_start_j": ke0, "kinetic_end_j": ke1,
+              "strain_start_j": se0, "strain_end_j": se1,
+              "slip_dissipation_j": E[K.E_SLIP], "breakage_dissipation_j": E[K.E_BROKEN],
+              "damping_dissipation_j": damping,
+              "local_damping_j": -E[K.E_LOCAL_DAMP], "viscous_damping_j": -E[K.E_VISCOUS],
+              "quiet_boundary_j": -E[K.E_QUIET], "removed_blocks_j": removed_j,
+              "residual_j": work_in - stored}
+    return {k: float(v) for k, v in energy.items()}
+
+
+def ledger_error(energy: dict) -> float:
+    """|residual| over the energy turned over in the stage: the work in, the changes of kinetic and
+    strain energy, every dissipation and the energy removed with blocks, plus 10⁻⁶ of the strain
+    energy stored (round-off of a large stored energy is not an error of the stage)."""
+    turnover = (abs(energy["work_gravity_j"]) + abs(energy["work_boundary_j"])
+                + abs(energy["kinetic_end_j"] - energy["kinetic_start_j"])
+                + abs(energy["strain_end_j"] - energy["strain_start_j"])
+                + abs(energy["slip_dissipation_j"]) + abs(energy["breakage_dissipation_j"])
+                + abs(energy["damping_dissipation_j"]) + abs(energy["removed_blocks_j"])
+                + 1e-6 * (energy["strain_start_j"] + energy["strain_end_j"]))
+    return abs(energy["residual_j"]) / turnover if turnover > 0 else 0.0
+
+
+def _remove_failed(eng: Engine, watch: FailureWatch, ids: np.ndarray, dt: float) -> tuple[list, float]:
+    """Take failing blocks out of the model; their reports and the energy that left with them."""
+    failed = watch.classify(ids)
+    before = eng.kinetic_energy() + eng.strain_energy()
+    eng.remove_blocks(ids)
+    eng.failed[ids] = True
+    eng.rebuild()
+    eng.detect()
+    return failed, before - (eng.kinetic_energy() + eng.strain_energy())
+
+
+def _auto_time_step(eng: Engine, settings: Settings, beta: float) -> tuple[float, float]:
+    """(Δt, stable limit) for the present contacts: safety × the limit; without any contact the
+    limit is infinite and Δt only sets the record interval (the caller's fallback)."""
+    limit = eng.stable_time_step(beta)
+    return settings.time_step_safety * limit, limit
+
+
+def _monitor_displacements(points, eng: Engine, ref) -> dict:
+    """Displacement (m) of each boundary point from the reference placement; a point whose block
+    was taken out (failed) is left out — the stage's ``failed_blocks`` name that block."""
+    kept = [p for p in points if eng.active[p.block]]
+    if not kept:
+        return {}
+    disp = point_displacement_from(kept, eng.pos, eng.rot, *ref)
+    return {p.name: float(disp[f"{p.name}_u_m"]) for p in kept}
+
+
 def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, ref,
-               progress=None) -> StageResult:
+               progress=None, points=()) -> StageResult:
     wall0 = time.perf_counter()
     eng.excavate(list(stage.excavate))
     dynamic = stage.kind == "dynamic"
@@ -171,16 +240,14 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
     alpha_mass, beta = _rayleigh(stage)
     eng.quiet_edges = (quiet_edge_table(eng, settings.quiet) if dynamic and settings.quiet
                        else np.zeros((0, 8)))  # before the step limit: the dashpots lower it
-    limit = eng.stable_time_step(beta)
+    dt, limit = _auto_time_step(eng, settings, beta)
     if stage.time_step_s is not None:
         if stage.time_step_s > limit:
             raise ValueError(f"stage {stage.name!r}: time_step_s = {stage.time_step_s:.6g} s exceeds "
                              f"the stable limit {limit:.6g} s (2/ω_max of the contact stiffnesses"
                              f"{' with Rayleigh damping' if beta else ''}); use at most that")
         dt = stage.time_step_s
-    elif math.isfinite(limit):
-        dt = settings.time_step_safety * limit
-    else:  # no contact at all: free flight, the step only limits the record interval
+    elif not math.isfinite(limit):  # no contact at all: free flight
         dt = (stage.duration_s or 1.0) / 1000.0
     n_steps = math.ceil(stage.duration_s / dt) if dynamic else stage.max_steps
     inputs = settings.velocity_inputs if dynamic else ()
@@ -199,7 +266,8 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
     wn, ws = eng.contact_increment_work(dt)
     ke0, se0 = eng.kinetic_energy(), eng.strain_energy()
     se0_shadow = se0 - 0.5 * wn + 0.5 * ws
-    out = np.zeros(5)
+    out = np.zeros(8)
+    out[7] = math.inf  # kinetic energy of the previous convergence check
     done = 0
     status = "max_steps" if not dynamic else "completed"
     diagnostic = None
@@ -211,6 +279,12 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
     tol = stage.tolerance if not dynamic else 0.0
     alpha_local = stage.local_damping if not dynamic else 0.0
     sleep_ratio = 0.1 * stage.tolerance if (settings.sleep and not dynamic) else 0.0
+    watch = None if dynamic else FailureWatch(
+        eng, settings.failure_displacement_m or _FAILURE_ROUNDINGS * eng.rounding_m,
+        settings.failure_checks, settings.sliver_area_m2)
+    failed, removed_j = [], 0.0
+    safety = settings.time_step_safety
+    step_cuts = 0
     while done < n_steps:
         todo = min(chunk - done % chunk, n_steps - done)
         t_half = eng.time_s - stage_t0 + (np.arange(todo) + 0.5) * dt
@@ -218,16 +292,36 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
         for i, inp in enumerate(inputs):
             presc[:, i] = inp.history(t_half)
         snap = eng.snapshot()
+        ke_check = out[7]
         rc = K.advance(todo, eng.loc, eng.lgeo, eng.off, eng.pos, eng.rot, eng.vel, eng.omg, eng.inv_mass,
                        eng.mass, eng.mode, eng.dof_input, presc, eng.active, eng.movable,
                        eng.gravity, eng.ext_f, eng.ext_a, eng.ext_b, eng.quiet_edges, eng.pa,
                        eng.pb, eng.pprop, eng.pref, eng.pinit, eng.init_brk, eng.props, eng.S,
                        eng.ref_pos, eng.ref_rot, eng.radius, dt, eng.ctol_m, eng.hysteresis_m,
                        eng.rounding_m, eng.overlap_limit_m, eng.margin, alpha_local, alpha_mass,
-                       beta, tol, _CHECK_EVERY, eng.wv, eng.fpair, eng.bp_ptr, eng.bp_idx, eng.E,
-                       out, eng.asleep, eng.calm, sleep_ratio, _SLEEP_STEPS,
-                       _SLEEP_CREEP * eng.rounding_m / (_SLEEP_STEPS * dt))
+                       beta, tol, stage.block_tolerance, _CHECK_EVERY, eng.wv, eng.fpair,
+                       eng.bp_ptr, eng.bp_idx, eng.E, out, eng.asleep, eng.calm, sleep_ratio,
+                       _SLEEP_STEPS, _SLEEP_CREEP * eng.rounding_m / (_SLEEP_STEPS * dt),
+                       (2.0 * (safety if stage.time_step_s is None else 1.0) / dt) ** 2)
         steps = int(out[0])
+        dt_used = dt
+        if rc == K.RC_STIFF:  # a contact formed that this step cannot resolve: shorter step
+            new_dt, new_limit = _auto_time_step(eng, settings, beta)
+            eng.restore(snap)
+            out[7] = ke_check
+            if stage.time_step_s is not None or not new_dt < dt:
+                status = "unstable"
+                diagnostic = (f"a contact that formed during the stage needs a time step below "
+                              f"{new_limit:.4g} s; the step is {dt:.4g} s"
+                              f"{' (the stage time_step_s)' if stage.time_step_s else ''}; the "
+                              f"state of step {done} is kept")
+                break
+            if dynamic:
+                n_steps = done + max(1, math.ceil((stage.duration_s - (eng.time_s - stage_t0))
+                                                  / new_dt))
+            dt, limit = new_dt, new_limit
+            step_cuts += 1
+            continue
         if rc == K.RC_NONFINITE:
             eng.restore(snap)
             status = "unstable"
@@ -235,8 +329,34 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
                           f"Δt = {dt:.4g} s (stable limit {limit:.4g} s); the state of step {done} is "
                           "kept — lower the time step or check the joint stiffnesses")
             break
+        # the step follows the contacts: one that formed in this chunk may be stiffer (or its
+        # blocks lighter) than any at the chunk's start. Above the stable limit the chunk is done
+        # again with the new step; within it (the safety factor's margin) the new step applies
+        # from here on
+        if rc != K.RC_REBUILD or (done + steps) % chunk == 0:
+            new_dt, new_limit = _auto_time_step(eng, settings, beta)
+            redo = math.isfinite(new_limit) and dt > new_limit
+            if redo and stage.time_step_s is not None:
+                eng.restore(snap)
+                status = "unstable"
+                diagnostic = (f"contacts that formed during the stage lower the stable time step "
+                              f"to {new_limit:.4g} s, below the stage's time_step_s = {dt:.4g} s; "
+                              f"the state of step {done} is kept")
+                break
+            if (stage.time_step_s is None and math.isfinite(new_limit)
+                    and dt > new_dt * (1 + _STEP_CUT_SLACK)):
+                kept = 0 if redo else steps  # steps of this chunk that stand
+                if dynamic:
+                    left = stage.duration_s - (eng.time_s + kept * dt - stage_t0)
+                    n_steps = done + kept + max(0, math.ceil(left / new_dt))
+                dt, limit = new_dt, new_limit
+                step_cuts += 1
+                if redo:
+                    eng.restore(snap)
+                    out[7] = ke_check
+                    continue
         done += steps
-        eng.time_s += steps * dt
+        eng.time_s += steps * dt_used
         if progress is not None:
             progress(done, n_steps, stage.name)
         ratio = out[1]
@@ -250,51 +370,74 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
             eng.rebuild()
         if done % chunk == 0 or done == n_steps or rc == K.RC_CONVERGED:
             rec.record(stage.name, ratio)
+            energy = _energy_ledger(eng, dt, ke0, se0, se0_shadow, removed_j)
+            err = ledger_error(energy)
+            if err > settings.energy_tolerance:
+                status = "unstable"
+                diagnostic = (f"the energy ledger does not close after {done} steps: residual "
+                              f"{energy['residual_j']:.4g} J is {err:.3g} of the energy turned over "
+                              f"(tolerance {settings.energy_tolerance}); Δt = {dt:.4g} s, stable "
+                              f"limit {limit:.4g} s — a block was thrown by a contact the time step "
+                              "did not resolve; lower time_step_safety")
+                break
         if frame_every and done % frame_every == 0 and done < n_steps:
             rec.frame(stage.name, done)
         if rc == K.RC_CONVERGED:
             status = "converged"
             break
+        if watch is not None and done % chunk == 0:
+            going = watch.check()
+            if len(going):
+                gone, energy_out = _remove_failed(eng, watch, going, dt)
+                failed += gone
+                removed_j += energy_out
+                out[7] = math.inf
     if stage.frames:
         rec.frame(stage.name, done)
 
-    removed = ~eng.active & (eng.model.region > 0)
+    removed = ~eng.active & (eng.model.region > 0) & ~eng.failed
     disp_ref = eng.vertex_displacement(*ref)
     disp_stage = eng.vertex_displacement(stage_pos, stage_rot)
     live = eng.active
+    counted = live & (eng.model.area_m2 >= settings.sliver_area_m2)
     boundary = _boundary_blocks(eng, removed)
     slipping, n_open, n_broken = _contact_counts(eng)
-    wn, ws = eng.contact_increment_work(dt)
-    ke1, se1 = eng.kinetic_energy(), eng.strain_energy()
-    se1_shadow = se1 + 0.5 * (wn + ws)
-    E = eng.E
-    work_in = E[K.E_GRAVITY] + E[K.E_EXTERNAL] - E[K.E_CONTACT_PRESC]
-    damping = -(E[K.E_LOCAL_DAMP] + E[K.E_VISCOUS] + E[K.E_QUIET])
-    stored = (ke1 - ke0) + (se1_shadow - se0_shadow) + E[K.E_SLIP] + E[K.E_BROKEN] + damping
-    energy = {"work_gravity_j": E[K.E_GRAVITY],
-              "work_boundary_j": E[K.E_EXTERNAL] - E[K.E_CONTACT_PRESC],
-              "kinetic_start_j": ke0, "kinetic_end_j": ke1,
-              "strain_start_j": se0, "strain_end_j": se1,
-              "slip_dissipation_j": E[K.E_SLIP], "breakage_dissipation_j": E[K.E_BROKEN],
-              "damping_dissipation_j": damping,
-              "local_damping_j": -E[K.E_LOCAL_DAMP], "viscous_damping_j": -E[K.E_VISCOUS],
-              "quiet_boundary_j": -E[K.E_QUIET],
-              "residual_j": work_in - stored}
-    energy = {k: float(v) for k, v in energy.items()}
+    energy = _energy_ledger(eng, dt, ke0, se0, se0_shadow, removed_j)
+    worst_block, worst_ratio = int(out[6]), float(out[5])
+    if failed and status in ("converged", "max_steps"):
+        diagnostic = (f"{len(failed)} block(s) kept moving and were taken out: "
+                      + ", ".join(f"{f.block} ({f.mechanism}, {f.area_m2:.3g} m²)"
+                                  for f in failed[:10]) + (" …" if len(failed) > 10 else "")
+                      + ("; the rest reached equilibrium" if status == "converged" else
+                         "; the rest did not reach equilibrium within max_steps"))
+        converged_rest = status == "converged"
+        status = "failed_blocks"
+    else:
+        converged_rest = status == "converged"
+    if status == "max_steps":
+        diagnostic = (f"no equilibrium within {done} steps: model ratio {ratio:.3g} (tolerance "
+                      f"{stage.tolerance}), worst block {worst_block} at {worst_ratio:.3g} (block "
+                      f"tolerance {stage.block_tolerance})")
     return StageResult(
         name=stage.name, kind=stage.kind, status=status, steps=done, time_step_s=float(dt),
         stable_time_step_s=float(limit) if math.isfinite(limit) else 0.0,
-        simulated_time_s=float(done * dt),
-        converged=(status == "converged") if not dynamic else None,
+        simulated_time_s=float(eng.time_s - stage_t0),
+        converged=converged_rest if not dynamic else None,
         unbalanced_ratio=float(ratio) if math.isfinite(ratio) else 0.0,
         max_displacement_m=float(disp_ref[live].max(initial=0.0)),
         max_displacement_boundary_m=float(disp_ref[boundary].max(initial=0.0)),
         max_displacement_stage_m=float(disp_stage[live].max(initial=0.0)),
+        max_displacement_equilibrium_m=float(disp_ref[counted].max(initial=0.0)),
+        max_displacement_boundary_equilibrium_m=float(disp_ref[boundary & counted].max(initial=0.0)),
+        monitors=_monitor_displacements(points, eng, ref),
+        worst_block=worst_block, worst_ratio=min(worst_ratio, 1e300),
+        failed_blocks=[f.to_dict() for f in failed],
         slipping_contacts=slipping, open_contacts=n_open,
-        newly_broken_contacts=int(E[K.E_NEW_BROKEN]), broken_contacts=n_broken,
+        newly_broken_contacts=int(eng.E[K.E_NEW_BROKEN]), broken_contacts=n_broken,
         detached_blocks=_detached(eng, removed), blocks_removed=int(removed.sum()),
         energy=energy, wall_time_s=time.perf_counter() - wall0,
-        contact_rebuilds=int(eng.n_rebuilds - rebuilds0), diagnostic=diagnostic)
+        contact_rebuilds=int(eng.n_rebuilds - rebuilds0), diagnostic=diagnostic,
+        time_step_cuts=step_cuts)
 
 
 def run(model, settings: Settings, *,
@@ -317,13 +460,18 @@ def run(model, settings: Settings, *,
     rec = _Recorder(eng, settings)
     ref = (eng.pos0.copy(), np.zeros(eng.nb))
     stages = []
-    status, diagnostic = "ok", None
+    status, diagnostic = STATUS_OK, None
+    dug: list[int] = []
     for i, stage in enumerate(settings.stages):
-        res = _run_stage(eng, stage, settings, rec, ref, progress)
+        dug += [r for r in stage.excavate if r not in dug]
+        points = boundary_points(model, dug) if dug else []
+        res = _run_stage(eng, stage, settings, rec, ref, progress, points)
         stages.append(res)
         if res.status in FAILED_STATUSES:
             status, diagnostic = res.status, res.diagnostic
             break
+        if res.failed_blocks and status == STATUS_OK:
+            status, diagnostic = STATUS_FAILED_BLOCKS, res.diagnostic
         if i == 0 and not stage.excavate and stage.kind == "static" and len(settings.stages) > 1:
             ref = (eng.pos.copy(), eng.rot.copy())  # displacements after initial equilibrium
     mass = eng.mass[:, 0]
@@ -337,4 +485,4 @@ def run(model, settings: Settings, *,
                   velocity_m_s=eng.vel.copy(), active=eng.active.copy(), history=rec.history(),
                   contacts=eng.contact_table(),
                   frames=rec.frames, block_energy=block_energy, status=status,
-                  diagnostic=diagnostic, info=info)
+                  diagnostic=diagnostic, info=info, failed=eng.failed.copy())

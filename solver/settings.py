@@ -316,8 +316,10 @@ class Monitor:
 class Stage:
     """One stage of a run.
 
-    ``kind="static"``: local non-viscous damping ``local_damping`` (0.8), stepping until the
-    unbalanced-force ratio < ``tolerance`` (1e-5) or ``max_steps``. ``kind="dynamic"``: no local
+    ``kind="static"``: local non-viscous damping ``local_damping`` (0.8), stepping until
+    equilibrium — the model's unbalanced-force ratio < ``tolerance`` (1e-5), every block's own
+    force and moment ratio < ``block_tolerance`` (1e-3) and the kinetic energy falling
+    (:func:`rockmass.solver._kernels.advance`) — or ``max_steps``. ``kind="dynamic"``: no local
     damping, Rayleigh damping (``rayleigh_ratio`` ξ at ``rayleigh_frequency_hz``; ``rayleigh_mode``
     ``"mass_stiffness"`` (minimum at f), ``"mass"`` or ``"stiffness"`` only — the stiffness part
     shortens the stable step, the mass part damps rigid-body motion), velocity inputs
@@ -331,6 +333,7 @@ class Stage:
     excavate: tuple[int, ...] = ()
     max_steps: int = 200_000
     tolerance: float = 1e-5
+    block_tolerance: float = 1e-3
     local_damping: float = 0.8
     duration_s: float | None = None
     rayleigh_ratio: float = 0.0
@@ -347,6 +350,7 @@ class Stage:
         if self.max_steps < 1:
             raise ValueError(f"stage {self.name!r}: max_steps must be >= 1")
         _positive(f"stage {self.name!r}: tolerance", self.tolerance)
+        _positive(f"stage {self.name!r}: block_tolerance", self.block_tolerance)
         if not 0.0 <= self.local_damping < 1.0:
             raise ValueError(f"stage {self.name!r}: local_damping must be in [0, 1), got {self.local_damping}")
         if self.kind == "dynamic":
@@ -383,6 +387,14 @@ class Settings:
     stages, blocks whose own unbalanced-force ratio stays below the stage tolerance stop being
     integrated until a neighbour disturbs them (REFERENCE.md §6; speed-up and the displacement error
     it adds are measured in ``benchmarks/bench_solver.py``).
+
+    Failing blocks (:mod:`rockmass.solver.failure`): in static stages a block that has moved more
+    than ``failure_displacement_m`` (None: 5 × the rounding d) and has not slowed down over
+    ``failure_checks`` consecutive checks (500 steps apart) is taken out and reported; failing
+    blocks smaller than ``sliver_area_m2`` are reported as slivers, and blocks that small are left
+    out of the displacement measures. ``energy_tolerance``: the energy ledger is checked after
+    every chunk of steps; a residual above this fraction of the energy turned over in the stage
+    ends it with status ``unstable``.
     """
 
     joints: dict
@@ -399,6 +411,10 @@ class Settings:
     contact_tolerance_m: float | None = None
     time_step_safety: float = 0.5
     sleep: bool = False
+    failure_displacement_m: float | None = None
+    failure_checks: int = 3
+    sliver_area_m2: float = 0.0
+    energy_tolerance: float = 0.2
 
     def __post_init__(self):
         for name in ("stages", "fixes", "boundary_stress", "velocity_inputs", "monitors"):
@@ -419,6 +435,12 @@ class Settings:
             _positive("rounding_m", self.rounding_m)
         if self.contact_tolerance_m is not None:
             _positive("contact_tolerance_m", self.contact_tolerance_m)
+        if self.failure_displacement_m is not None:
+            _positive("failure_displacement_m", self.failure_displacement_m)
+        if self.failure_checks < 1:
+            raise ValueError(f"failure_checks must be >= 1, got {self.failure_checks}")
+        _positive("sliver_area_m2", self.sliver_area_m2, allow_zero=True)
+        _positive("energy_tolerance", self.energy_tolerance)
         if not 0 < self.time_step_safety <= 1:
             raise ValueError(f"time_step_safety must be in (0, 1], got {self.time_step_safety}")
         names = [s.name for s in self.stages]
