@@ -331,6 +331,7 @@ class StageConfig(StrictModel):
                         Field(max_length=64)] = Field(default_factory=list)
     max_steps: int = Field(200_000, ge=1, le=10 ** 10)
     tolerance: float = Field(1e-5, gt=0, le=1)
+    block_tolerance: float = Field(1e-3, gt=0, le=1)
     local_damping: float = Field(0.8, ge=0, lt=1)
     duration_s: float | None = Field(None, gt=0, le=1e6)
     rayleigh_ratio: float = Field(0.0, ge=0, lt=1)
@@ -380,7 +381,8 @@ class SolveConfig(StrictModel):
     stages : list of StageConfig
         At least one, unique names, run in order.
     material, gravity_m_s2, insitu, fixes, boundary_stress, velocity_inputs, quiet, monitors,
-    rounding_m, contact_tolerance_m, time_step_safety, sleep
+    rounding_m, contact_tolerance_m, time_step_safety, sleep, failure_displacement_m,
+    failure_checks, sliver_area_m2, energy_tolerance
         As in :class:`rockmass.solver.Settings`.
     """
 
@@ -404,6 +406,10 @@ class SolveConfig(StrictModel):
     contact_tolerance_m: float | None = Field(None, gt=0, le=1e6)
     time_step_safety: float = Field(0.5, gt=0, le=1)
     sleep: bool = False
+    failure_displacement_m: float | None = Field(None, gt=0, le=1e6)
+    failure_checks: int = Field(3, ge=1, le=1000)
+    sliver_area_m2: float = Field(0.0, ge=0, le=1e12)
+    energy_tolerance: float = Field(0.2, gt=0, le=1e6)
 
     @model_validator(mode="after")
     def _cross(self):
@@ -484,7 +490,10 @@ class SolveConfig(StrictModel):
             quiet=None if self.quiet is None else QuietBoundary(tuple(self.quiet.sides)),
             monitors=tuple(monitors), rounding_m=self.rounding_m,
             contact_tolerance_m=self.contact_tolerance_m,
-            time_step_safety=self.time_step_safety, sleep=self.sleep))
+            time_step_safety=self.time_step_safety, sleep=self.sleep,
+            failure_displacement_m=self.failure_displacement_m,
+            failure_checks=self.failure_checks, sliver_area_m2=self.sliver_area_m2,
+            energy_tolerance=self.energy_tolerance))
 
 
 class SolveDocument(StrictModel):

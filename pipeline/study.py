@@ -10,10 +10,17 @@ this process, in a local process pool or on a Dask worker:
    builder used, so they are the model's joints) and any traces, clipped to the domain, rasterised
    on the ``[fractal]`` grid (360 x 360 by default, 1-pixel lines, as Jiang et al. seed 000 §4.1)
    with the domain as the face: D_box with R², its spread over shifted grids, and P21;
-3. run the DEM stages of ``[solve]`` when the base has one (:func:`rockmass.solver.run`): the
-   maximum displacement after the last stage (of the blocks on the excavation boundary, and of any
-   block), whether every stage converged, and how many blocks ended inside the opening (fallen
-   or falling: their displacement is a fall, and while they fall the stage does not converge).
+3. run the DEM stages of ``[solve]`` when the base has one (:func:`rockmass.solver.run`) and
+   classify the case (:func:`case_outcome`): ``ok`` (every static stage reached equilibrium, no
+   block failed), ``failed_blocks`` (blocks kept moving, falling, sliding or rotating, and the
+   solver took them out; the rest reached equilibrium without them), ``not_converged`` (a static
+   stage reached ``max_steps`` without equilibrium), ``unstable`` / ``overlap`` (the solver stopped
+   the run) or ``error`` (an exception: a missing file, a bad model, a lost worker). Displacements
+   are those of the blocks that stay in equilibrium (failed blocks and slivers below the solver's
+   size cap left out), so a fall is never a displacement: ``max_displacement_m`` (boundary or
+   overall, as ``study.displacement`` says) is filled for ``ok`` and ``failed_blocks`` only, and
+   the failed blocks are counted apart (number, area, mechanisms). The monitoring points fixed on
+   the excavation boundary (crown, walls, invert) give the last stage's displacements there.
 
 Numba runs one thread per task (``numba.set_num_threads(1)``), and worker processes get
 ``NUMBA_NUM_THREADS``, ``OMP_NUM_THREADS``, ``MKL_NUM_THREADS`` and ``OPENBLAS_NUM_THREADS`` = 1
@@ -28,8 +35,11 @@ results are the same whatever the executor, worker count and order.
 
 The parent process is the only writer: each finished case goes to ``cases/<id>/case.json``
 (atomically), then ``results.csv`` is rebuilt from all finished cases in case order (atomically), so
-a killed study loses at most the cases that were running; re-running it skips every case whose
-``case.json`` holds the same case id with status ``ok``.
+a killed study loses at most the cases that were running. Re-running it keeps every case whose
+``case.json`` holds the same case id, the current :data:`RECORD_VERSION` and an outcome other than
+``error``: the chain is deterministic, so a case that failed blocks, did not converge or was
+stopped by the solver would end the same way again (change its config to change it); ``error``
+cases (and records of an older rockmass, whose displacements may include falls) run again.
 """
 
 from __future__ import annotations
@@ -43,7 +53,10 @@ from pathlib import Path
 from typing import Any, Callable
 
 __all__ = ["run_case", "joint_network_segments", "CSV_COLUMNS", "results_rows", "csv_text",
-           "run_tasks", "init_worker", "load_finished", "case_cost"]
+           "run_tasks", "init_worker", "load_finished", "case_cost", "case_outcome",
+           "outcome_counts", "outcome_summary", "OUTCOMES", "IN_EQUILIBRIUM", "RETRIED",
+           "SOLVER_STOPPED", "MECHANISMS", "RECORD_VERSION", "displacement_m",
+           "failed_mechanism_counts", "MONITOR_COLUMNS"]
 
 CASE_FILE = "case.json"
 RESULTS_FILE = "results.csv"
@@ -52,8 +65,30 @@ RESULTS_FILE = "results.csv"
 # runs of the same study, so the rest can be compared as they are)
 CSV_COLUMNS = ("d_box", "d_box_r2", "d_box_stderr", "d_box_offset_sd", "p21_per_m", "p32",
                "n_joint_segments", "n_blocks", "n_contacts", "max_displacement_m",
-               "max_displacement_boundary_m", "max_displacement_overall_m", "converged",
-               "solve_status", "steps", "broken_contacts", "detached_blocks", "status", "error", "wall_time_s")
+               "max_displacement_boundary_m", "max_displacement_overall_m",
+               "crown_displacement_m", "left_wall_displacement_m", "right_wall_displacement_m",
+               "invert_displacement_m", "failed_blocks", "failed_area_m2", "failed_mechanisms",
+               "worst_ratio", "converged", "solve_status", "steps", "broken_contacts",
+               "detached_blocks", "status", "error", "wall_time_s")
+
+#: A case's outcome (results.csv ``status``), in the order reports list them.
+OUTCOMES = ("ok", "failed_blocks", "not_converged", "unstable", "overlap", "error")
+#: Outcomes whose model (what is left of it) ended in equilibrium: ``max_displacement_m`` is
+#: filled for them only.
+IN_EQUILIBRIUM = ("ok", "failed_blocks")
+#: Outcomes a re-run of the study runs again; a case of any other outcome is kept (deterministic).
+RETRIED = ("error",)
+#: Solver statuses that stop a run: no displacement of it is valid; the study exits 1.
+SOLVER_STOPPED = ("overlap", "unstable")
+#: Failure mechanisms of the solver's failed blocks, in the order they are written.
+MECHANISMS = ("fall", "slide", "rotation")
+#: Version of case.json records; a record of another version runs again on resume (version 1,
+#: before outcomes, counted falls as displacements).
+RECORD_VERSION = 2
+#: Monitoring points on the excavation boundary -> results.csv column.
+MONITOR_COLUMNS = {"crown": "crown_displacement_m", "left_wall": "left_wall_displacement_m",
+                   "right_wall": "right_wall_displacement_m",
+                   "invert": "invert_displacement_m"}
 
 
 # ------------------------------------------------------------------------------------ workers
@@ -278,29 +313,111 @@ def _p32(document) -> float | None:
     return float(sum(s.intensity.value for s in dfn.sets))
 
 
+def case_outcome(result) -> tuple[str, str | None]:
+    """Outcome of a case's DEM run and its reason (None for ``ok`` and ``failed_blocks``, whose
+    failed blocks are described by their own columns).
+
+    Parameters
+    ----------
+    result : rockmass.solver.Result
+        The run; ``result.status`` is one of ok, failed_blocks, overlap, unstable.
+
+    Returns
+    -------
+    (str, str or None)
+        The first that applies: ``overlap`` / ``unstable`` (the solver stopped the run; reason: its
+        diagnostic); ``not_converged`` (a stage ended at ``max_steps``, or a static stage with
+        ``converged`` False: the blocks left are not at rest; reason: the stage and its
+        diagnostic, else its step count, worst block and unbalanced ratio); ``failed_blocks`` (blocks failed and were taken out, every static
+        stage reached equilibrium without them); ``ok``.
+
+    Raises
+    ------
+    ValueError
+        ``result.status`` is none of the solver's statuses (the case becomes an ``error``).
+    """
+    if result.status in SOLVER_STOPPED:
+        return result.status, f"solver stopped ({result.status}): {result.diagnostic}"
+    if result.status not in ("ok", "failed_blocks"):
+        raise ValueError(f"unknown solver status {result.status!r} (expected ok, failed_blocks, "
+                         f"{', '.join(SOLVER_STOPPED)})")
+    for s in result.stages:
+        if s.status == "max_steps" or s.converged is False:
+            return "not_converged", f"stage {s.name!r}: " + (
+                s.diagnostic or f"no equilibrium after {s.steps} steps ({s.status}); worst block "
+                                f"{s.worst_block}, unbalanced ratio {s.worst_ratio:.3g}")
+    if result.status == "failed_blocks" or any(s.failed_blocks for s in result.stages):
+        return "failed_blocks", None
+    return "ok", None
+
+
+def _failed_blocks(stages) -> dict:
+    """The failed blocks of every stage: count, total area, mechanisms (``"fall:2 slide:1"`` and
+    counts) and the list (each with its stage)."""
+    listed = [{"stage": s.name, **{k: _plain(k, v) for k, v in fb.items()}}
+              for s in stages for fb in s.failed_blocks]
+    counts = {m: 0 for m in MECHANISMS}
+    for fb in listed:
+        counts[fb["mechanism"]] = counts.get(fb["mechanism"], 0) + 1
+    counts = {m: n for m, n in counts.items() if n}
+    return {"failed_blocks": len(listed),
+            "failed_area_m2": float(sum(fb["area_m2"] for fb in listed)),
+            "failed_mechanisms": " ".join(f"{m}:{n}" for m, n in counts.items()),
+            "failed_mechanism_counts": counts, "failed_block_list": listed}
+
+
+def _plain(key: str, value):
+    """A failed block's field as JSON data: text and flags as they are, ``block`` an int, numbers
+    floats."""
+    if isinstance(value, (str, bool)) or value is None:
+        return value
+    return int(value) if key == "block" else float(value)
+
+
 def _solve(document, config_path, model) -> dict:
-    """The case's DEM stages (:func:`rockmass.solve_cmd.solve`) summed up for results.csv; {}
-    without ``[solve]``."""
+    """The case's DEM stages (:func:`rockmass.solve_cmd.solve`) summed up for results.csv, with
+    its ``outcome`` and ``reason`` (:func:`case_outcome`); {} without ``[solve]``.
+
+    Displacements are the last stage's over the blocks in equilibrium (failed blocks and slivers
+    left out): ``max_displacement_boundary_m`` of those on the excavation boundary,
+    ``max_displacement_overall_m`` of any; the monitors' (crown, walls, invert) from the last stage.
+    ``worst_ratio``: the largest per-block unbalanced ratio at the end of the static stages (of the
+    last stage when every stage is dynamic).
+    """
     from .solve_cmd import solve as solve_stages
 
     if document.solve is None:
         return {}
     result = solve_stages(model, document.solve.to_settings(model, config_path), config_path)
+    outcome, reason = case_outcome(result)
     last = result.stages[-1]
-    stages = [{"name": s.name, "status": s.status, "steps": int(s.steps), "converged": s.converged,
-               "max_displacement_m": float(s.max_displacement_m),
-               "max_displacement_boundary_m": float(s.max_displacement_boundary_m),
-               "unbalanced_ratio": float(s.unbalanced_ratio),
-               "broken_contacts": int(s.broken_contacts), "wall_time_s": float(s.wall_time_s)}
+    stages = [{"name": s.name, "kind": s.kind, "status": s.status, "steps": int(s.steps),
+               "converged": s.converged,
+               "max_displacement_equilibrium_m": float(s.max_displacement_equilibrium_m),
+               "max_displacement_boundary_equilibrium_m":
+                   float(s.max_displacement_boundary_equilibrium_m),
+               "max_displacement_any_block_m": float(s.max_displacement_m),
+               "monitors": {k: float(v) for k, v in s.monitors.items()},
+               "failed_blocks": len(s.failed_blocks), "worst_block": int(s.worst_block),
+               "worst_ratio": float(s.worst_ratio), "unbalanced_ratio": float(s.unbalanced_ratio),
+               "broken_contacts": int(s.broken_contacts), "wall_time_s": float(s.wall_time_s),
+               "diagnostic": s.diagnostic}
               for s in result.stages]
-    converged = all(s.converged is not False for s in result.stages) and result.status == "ok"
-    return {"max_displacement_boundary_m": float(last.max_displacement_boundary_m),
-            "max_displacement_overall_m": float(last.max_displacement_m),
-            "converged": bool(converged), "solve_status": str(result.status),
-            "steps": int(sum(s.steps for s in result.stages)),
-            "broken_contacts": int(last.broken_contacts),
-            "detached_blocks": int(last.detached_blocks), "stages": stages,
-            "diagnostic": result.diagnostic}
+    static = [s for s in result.stages if s.kind == "static"] or [last]
+    converged = result.status in IN_EQUILIBRIUM and all(s.converged is not False
+                                                        for s in result.stages)
+    out = {"max_displacement_boundary_m": float(last.max_displacement_boundary_equilibrium_m),
+           "max_displacement_overall_m": float(last.max_displacement_equilibrium_m),
+           **{col: (float(last.monitors[name]) if name in last.monitors else None)
+              for name, col in MONITOR_COLUMNS.items()},
+           **_failed_blocks(result.stages),
+           "worst_ratio": float(max(s.worst_ratio for s in static)),
+           "converged": bool(converged), "solve_status": str(result.status),
+           "steps": int(sum(s.steps for s in result.stages)),
+           "broken_contacts": int(last.broken_contacts),
+           "detached_blocks": int(last.detached_blocks), "stages": stages,
+           "diagnostic": result.diagnostic, "outcome": outcome, "reason": reason}
+    return out
 
 
 def run_case(task: dict) -> dict:
@@ -315,10 +432,11 @@ def run_case(task: dict) -> dict:
     Returns
     -------
     dict
-        The task's keys (without ``config``) plus the measured values, ``status`` ("ok" or
-        "failed": an exception, or a solver run stopped by an overlap or an instability),
-        ``error`` (the reason, or None) and ``timings_s``. Never raises for a failure of
-        the case itself: a study goes on with the other cases.
+        The task's keys (without ``config``) plus the measured values, ``status`` (the outcome:
+        one of :data:`OUTCOMES`; ``ok`` without ``[solve]``), ``error`` (the reason for
+        not_converged / unstable / overlap / error, else None), ``record_version`` and
+        ``timings_s``. Never raises for a failure of the case itself: a study goes on with the
+        other cases.
     """
     from .config import RockmassConfig
 
@@ -328,7 +446,7 @@ def run_case(task: dict) -> dict:
     cpu0 = time.process_time()
     started = time.time()
     out = {k: task[k] for k in ("case", "case_id", "params", "realization", "seed")}
-    out.update({"status": "ok", "error": None})
+    out.update({"status": "ok", "error": None, "record_version": RECORD_VERSION})
     timings = {}
     try:
         document = RockmassConfig.model_validate(task["config"])
@@ -343,15 +461,13 @@ def run_case(task: dict) -> dict:
         out["p32"] = _p32(document)
         timings["boxcount_s"] = time.perf_counter() - t
         t = time.perf_counter()
-        out.update(_solve(document, path, model))
+        solved = _solve(document, path, model)
         timings["solve_s"] = time.perf_counter() - t
-        if out.get("solve_status", "ok") != "ok":
-            # a run stopped by an overlap or an instability has no valid displacement: the case
-            # is a failure with the solver's diagnostic (its row stays in results.csv)
-            out["status"] = "failed"
-            out["error"] = f"solver stopped ({out['solve_status']}): {out.get('diagnostic')}"
+        out["status"] = solved.pop("outcome", "ok")
+        out["error"] = solved.pop("reason", None)
+        out.update(solved)
     except Exception as exc:  # noqa: BLE001 - a failed case is a result, not the study's end
-        out["status"] = "failed"
+        out["status"] = "error"
         out["error"] = f"{type(exc).__name__}: {exc}"
         out["traceback"] = traceback.format_exc(limit=8)
     out["timings_s"] = timings
@@ -389,7 +505,12 @@ def _cell(value: Any) -> str:
 
 
 def results_rows(cases, finished: dict, displacement: str = "boundary") -> tuple[list[str], list[list[str]]]:
-    """(header, rows) of results.csv: one row per finished case, in case order."""
+    """(header, rows) of results.csv: one row per finished case (any outcome), in case order.
+
+    ``max_displacement_m`` is the record's boundary or overall displacement (``displacement``),
+    over the blocks in equilibrium, for the outcomes in :data:`IN_EQUILIBRIUM` only; empty for a
+    case whose model is not in equilibrium (not_converged, unstable, overlap, error).
+    """
     param_paths: list[str] = []
     for case in cases:
         for p in case.params:
@@ -402,15 +523,66 @@ def results_rows(cases, finished: dict, displacement: str = "boundary") -> tuple
         if rec is None:
             continue
         values = dict(rec)
-        key = "max_displacement_boundary_m" if displacement == "boundary" else \
-            "max_displacement_overall_m"
-        values["max_displacement_m"] = rec.get(key)
+        values["max_displacement_m"] = displacement_m(rec, displacement)
         row = [str(case.index), case.short_id,
                *[_cell(case.params.get(p)) for p in param_paths],
                str(case.realization), str(case.seed),
                *[_cell(values.get(c)) for c in CSV_COLUMNS]]
         rows.append(row)
     return header, rows
+
+
+def displacement_m(record: dict, displacement: str = "boundary") -> float | None:
+    """A case's maximum displacement over its blocks in equilibrium (``displacement``: "boundary"
+    or "overall"), or None when its outcome is not in :data:`IN_EQUILIBRIUM` or it has no
+    ``[solve]``: the only displacement a study compares, plots or averages."""
+    if record.get("status") not in IN_EQUILIBRIUM:
+        return None
+    return record.get("max_displacement_boundary_m" if displacement == "boundary"
+                      else "max_displacement_overall_m")
+
+
+def outcome_counts(records) -> dict[str, int]:
+    """Number of cases per outcome (every key of :data:`OUTCOMES`, in that order); ``records``:
+    an iterable of case records."""
+    counts = {o: 0 for o in OUTCOMES}
+    for rec in records:
+        status = rec.get("status")
+        counts[status if status in counts else "error"] += 1
+    return counts
+
+
+def failed_mechanism_counts(records) -> dict[str, int]:
+    """Failed blocks per mechanism over the cases whose outcome is ``failed_blocks``."""
+    counts: dict[str, int] = {}
+    for rec in records:
+        if rec.get("status") == "failed_blocks":
+            for m, n in (rec.get("failed_mechanism_counts") or {}).items():
+                counts[m] = counts.get(m, 0) + int(n)
+    return {m: counts[m] for m in [*MECHANISMS, *sorted(set(counts) - set(MECHANISMS))]
+            if counts.get(m)}
+
+
+def outcome_summary(records, n_cases: int) -> str:
+    """One line: how many of the study's ``n_cases`` cases ended in equilibrium (``ok``) and what
+    happened to the others, e.g. ``"5 of 8 cases in equilibrium; 2 with failed blocks (3 blocks:
+    fall 2, slide 1); 1 not converged"`` (``"; 2 not run"`` for cases without a record)."""
+    records = list(records)
+    counts = outcome_counts(records)
+    parts = [f"{counts['ok']} of {n_cases} cases in equilibrium"]
+    if counts["failed_blocks"]:
+        mech = failed_mechanism_counts(records)
+        blocks = sum(mech.values())
+        detail = ", ".join(f"{m} {n}" for m, n in mech.items())
+        parts.append(f"{counts['failed_blocks']} with failed blocks ({blocks} "
+                     f"block{'s' if blocks != 1 else ''}{': ' + detail if detail else ''})")
+    for outcome, label in (("not_converged", "not converged"), ("unstable", "unstable"),
+                           ("overlap", "overlap"), ("error", "error")):
+        if counts[outcome]:
+            parts.append(f"{counts[outcome]} {label}")
+    if len(records) < n_cases:
+        parts.append(f"{n_cases - len(records)} not run")
+    return "; ".join(parts)
 
 
 def csv_text(header: list[str], rows: list[list[str]]) -> str:
@@ -426,7 +598,8 @@ def csv_text(header: list[str], rows: list[list[str]]) -> str:
 
 def load_finished(out_dir: Path, cases) -> dict:
     """Finished cases in ``out_dir/cases``: case id -> record, for cases of this study whose
-    case.json holds the same id and status ok (anything else runs again)."""
+    case.json holds the same id, :data:`RECORD_VERSION` and an outcome of :data:`OUTCOMES` other
+    than those re-run (:data:`RETRIED`: ``error``); anything else runs again."""
     finished = {}
     for case in cases:
         path = out_dir / "cases" / case.short_id / CASE_FILE
@@ -434,7 +607,8 @@ def load_finished(out_dir: Path, cases) -> dict:
             rec = json.loads(path.read_text(encoding="utf-8"))
         except (OSError, ValueError):
             continue
-        if rec.get("case_id") == case.case_id and rec.get("status") == "ok":
+        if (rec.get("case_id") == case.case_id and rec.get("record_version") == RECORD_VERSION
+                and rec.get("status") in OUTCOMES and rec.get("status") not in RETRIED):
             finished[case.case_id] = rec
     return finished
 
@@ -444,13 +618,13 @@ def load_finished(out_dir: Path, cases) -> dict:
 
 def _result(future, task: dict) -> dict:
     """A finished future's result; a failure of the executor itself (a worker process killed, a
-    broken pool, a lost Dask worker) becomes a failed case that a re-run retries."""
+    broken pool, a lost Dask worker) becomes an ``error`` case that a re-run retries."""
     try:
         return future.result()
     except Exception as exc:  # noqa: BLE001 - run_case never raises: this is the executor failing
         out = {k: task[k] for k in ("case", "case_id", "params", "realization", "seed")}
-        out.update({"status": "failed", "error": f"executor: {type(exc).__name__}: {exc}",
-                    "timings_s": {}, "wall_time_s": None})
+        out.update({"status": "error", "error": f"executor: {type(exc).__name__}: {exc}",
+                    "record_version": RECORD_VERSION, "timings_s": {}, "wall_time_s": None})
         return out
 
 

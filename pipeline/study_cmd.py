@@ -12,14 +12,20 @@ Writes under ``--out``:
   case as a config of its own (``rockmass solve cases/<id>/config.toml --out DIR`` reruns it with
   every output of the single-stage commands);
 - ``results.csv``: one row per finished case in case order, rebuilt (atomically) after every case;
-- ``report.html``: self-contained (images embedded): D_box against the maximum displacement coloured
-  by θ (Jiang et al., seed 000 Figs. 7–8), the spread over realizations, the table;
+- ``report.html``: self-contained (images embedded): the cases per outcome, D_box against the
+  maximum displacement of the cases in equilibrium coloured by θ (Jiang et al., seed 000 Figs.
+  7–8; failed-block cases apart), the spread over realizations, the cases not in equilibrium with
+  their reason, the table;
 - ``manifest.json``: command, config and its hash, seeds, executor, counts, timings.
 
-Every case is validated before any runs (exit 2 naming the study field and the case). Re-running
-the same study skips every finished case (same case id = hash of the resolved case config). Cases
-that fail are recorded with their error, the others go on; the exit code is then 1 and a re-run
-retries only the failed and missing cases.
+Every case is validated before any runs (exit 2 naming the study field and the case). Each case
+ends with an outcome (results.csv ``status``, :data:`rockmass.study.OUTCOMES`): ok, failed_blocks,
+not_converged, unstable, overlap or error. Re-running the same study skips every finished case
+(same case id = hash of the resolved case config) of any outcome but ``error`` (the chain is
+deterministic). Cases that fail are recorded with their error or diagnostic, the others go on.
+Exit code: 0 when every case ended ok, failed_blocks or not_converged (blocks that fail and stages
+that do not converge are results of the study, counted in its summary); 1 when a case ended in
+error (a re-run retries it) or was stopped by the solver (overlap, unstable: a re-run keeps it).
 
 Executors: ``--scheduler ADDRESS`` (or the ``DASK_SCHEDULER_ADDRESS`` environment variable) runs on
 a Dask cluster (``pip install rockmass[dask]``; the workers need rockmass installed); otherwise a
@@ -132,8 +138,9 @@ def run(args) -> int:
     from .atomic import atomic_write_json, atomic_write_text
     from .manifest import build_manifest
     from .outputs import output_folder, print_json
-    from .study import (RESULTS_FILE, CASE_FILE, case_cost, csv_text, load_finished, results_rows,
-                        run_tasks)
+    from .study import (CASE_FILE, RESULTS_FILE, RETRIED, SOLVER_STOPPED, case_cost, csv_text,
+                        displacement_m, load_finished, outcome_counts, outcome_summary,
+                        results_rows, run_tasks)
     from .study_config import expand_cases, input_records, load_study, params_text
 
     t_start = time.perf_counter()
@@ -185,19 +192,24 @@ def run(args) -> int:
             folder = out / "cases" / case.short_id
             _write_case_config(folder, case, args.config)
             atomic_write_json(folder / CASE_FILE, record, nan_as_null=True)  # last: marks it done
-            if result["status"] == "ok":
+            if result["status"] in RETRIED:
+                failed[case.case_id] = record
+            else:  # any other outcome is the case's result (kept on resume)
                 finished[case.case_id] = record
                 failed.pop(case.case_id, None)
-            else:
-                failed[case.case_id] = record
             write_results()
             counter["done"] += 1
             d = result.get("d_box")
-            disp = result.get("max_displacement_boundary_m" if study.displacement == "boundary"
-                              else "max_displacement_overall_m")
+            disp = displacement_m(result, study.displacement)
             what = (f"D_box {d:.4f}" if d is not None else "D_box -") + \
                    (f", max displacement {disp * 1e3:.3g} mm" if disp is not None else "")
-            if result["status"] != "ok":
+            status = result["status"]
+            if status == "failed_blocks":
+                what += (f" (blocks in equilibrium); blocks failed: {result.get('failed_blocks')} "
+                         f"({result.get('failed_mechanisms')})")
+            elif status == "not_converged":
+                what = f"{what}; NOT CONVERGED: {result['error']}"
+            elif status != "ok":
                 what = f"FAILED: {result['error']}"
             _log(f"[{counter['done']}/{len(pending)}] case {case.index} ({case.short_id}) "
                  f"{params_text(case.params)} r={case.realization}: {what} "
@@ -214,7 +226,8 @@ def run(args) -> int:
         try:
             executor = run_tasks(tasks, on_done, workers=workers, scheduler=scheduler,
                                  client=client)
-            status = "complete" if not failed else "failed cases"
+            stopped = [r for r in finished.values() if r.get("status") in SOLVER_STOPPED]
+            status = "complete" if not failed and not stopped else "failed cases"
         except KeyboardInterrupt:
             interrupted = True
         finally:
@@ -223,9 +236,13 @@ def run(args) -> int:
             t_end = time.perf_counter()
             from .study_report import write_report
 
+            records = [r for c in cases for r in [finished.get(c.case_id) or
+                                                  failed.get(c.case_id)] if r is not None]
             summary = {"cases": len(cases), "finished": len(finished), "failed": len(failed),
                        "skipped": len(cases) - len(pending), "ran": counter["done"],
-                       "executor": executor, "status": status}
+                       "executor": executor, "status": status,
+                       "outcomes": outcome_counts(records),
+                       "outcome_summary": outcome_summary(records, len(cases))}
             try:
                 write_report(out / "report.html", document, cases, finished, failed, summary,
                              args.config)
@@ -257,8 +274,19 @@ def run(args) -> int:
         print(f"{len(finished)}/{len(cases)} cases finished ({summary['skipped']} skipped, "
               f"{summary['ran']} run, {len(failed)} failed) with {executor} in "
               f"{t_end - t_run:.1f} s; {out_path / RESULTS_FILE}, {out_path / 'report.html'}")
+        print(summary["outcome_summary"])
+    stopped = [r for r in finished.values() if r.get("status") in SOLVER_STOPPED]
+    problems = []
     if failed:
-        raise RunError(f"{len(failed)} of {len(cases)} cases failed (their error is in "
-                       f"results.csv and cases/<id>/case.json); re-run the same command to retry "
-                       "them")
+        problems.append(f"{len(failed)} of {len(cases)} cases failed (their error is in "
+                        "results.csv and cases/<id>/case.json); re-run the same command to retry "
+                        "them")
+    if stopped:
+        kinds = ", ".join(f"{n} {k}" for k in SOLVER_STOPPED
+                          for n in [sum(r.get("status") == k for r in stopped)] if n)
+        problems.append(f"{len(stopped)} of {len(cases)} cases were stopped by the solver "
+                        f"({kinds}; the diagnostic is in results.csv); a re-run keeps them (the "
+                        "solver is deterministic): change their config")
+    if problems:
+        raise RunError("; ".join(problems))
     return 0

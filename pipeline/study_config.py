@@ -75,8 +75,10 @@ class StudyConfig(StrictModel):
         Field whose value colours the report's plots; None: ``blocks.two_sets.theta_deg`` when it
         varies, else the first varying field.
     displacement : {"boundary", "overall"}, default "boundary"
-        The report's maximum displacement: of the blocks on the excavation boundary (around the
-        opening, as Jiang et al.) or of any block, after the last stage. Both are in results.csv.
+        The report's maximum displacement (results.csv ``max_displacement_m``): of the blocks on
+        the excavation boundary (around the opening, as Jiang et al.) or of any block, after the
+        last stage, over the blocks that stay in equilibrium (failed blocks left out). Both are in
+        results.csv.
     """
 
     grid: dict[str, Any] = Field(default_factory=dict)

@@ -232,7 +232,7 @@ def test_roof_wedge_threshold(alpha, phi, factor):
         assert st.status == "failed_blocks"
         first = st.failed_blocks[0]
         assert (first["block"], first["mechanism"]) == (1, "slide")
-        assert first["displacement_m"] > 5 * result.info["rounding_m"]
+        assert first["displacement_m"] > result.info["rounding_m"]
         assert sorted(f["block"] for f in st.failed_blocks) == [0, 1, 2]
 
 
