@@ -7,11 +7,13 @@ measured at a step cap is set by the cap, not by the rock (issue 14). UDEC leave
 to the user (histories of velocity at chosen points: a velocity that keeps rising means failure;
 Itasca, UDEC manual, "Problem solving with UDEC"); here it is automatic:
 
-A block is **failing** when, at ``checks`` consecutive checks (one per chunk of steps), its speed
-|v| + |ω| r has not fallen (≥ ``_NOT_SLOWING`` × its value at the check before) and it has moved
-more than ``failure_displacement_m`` since the stage began. Blocks in equilibrium lose their speed
-quickly under local damping and move by elastic amounts (σ/k_n per joint: millimetres for the
-cavern samples), so neither test alone but both together single out blocks that are still going.
+A block is **failing** when it has moved more than ``failure_displacement_m`` since the stage
+began and its motion is not dying out: over the last ``checks`` checks (one per chunk of steps) it
+moved at least ``_KEEP_GOING`` times as far as over the ``checks`` checks before, and at least a
+tenth of the threshold. Blocks on their way to equilibrium move less and less under local damping
+(and by elastic amounts: σ/k_n per joint, millimetres for the cavern samples); a block that falls,
+slides or creeps in stick-slip keeps covering ground. Measuring distance over windows of checks,
+not the speed at one instant, keeps a chattering slide from resetting the count.
 
 Each failing block is classified by how it moved since the stage began:
 
@@ -35,7 +37,7 @@ import numpy as np
 
 __all__ = ["FailureWatch", "FailedBlock"]
 
-_NOT_SLOWING = 0.9   # speed at a check at least this fraction of the one before: not settling
+_KEEP_GOING = 0.5    # moved at least this fraction of the previous window's distance: not settling
 _FALL_SUPPORT = 0.05  # contacts carrying less than this fraction of the weight: free fall
 
 
@@ -79,22 +81,21 @@ class FailureWatch:
         self.sliver_area_m2 = sliver_area_m2
         self.start_pos = engine.pos.copy()
         self.start_rot = engine.rot.copy()
-        self.speed = np.zeros(engine.nb)
-        self.run = np.zeros(engine.nb, np.int64)
+        self.track = []  # displacement from the stage start at each check (last 2·checks + 1)
 
     def check(self) -> np.ndarray:
-        """Update the counters with the present state; the ids of blocks whose failure is
-        established (active, movable, not slowing for ``checks`` checks, moved far enough)."""
+        """Record the present displacements; the ids of blocks whose failure is established
+        (active, movable, moved far enough and not slowing down, see the module docstring)."""
         e = self.eng
-        speed = np.hypot(e.vel[:, 0], e.vel[:, 1]) + np.abs(e.omg) * e.radius
-        going = e.movable & e.active & (speed > 0) & (speed >= _NOT_SLOWING * self.speed)
-        self.run = np.where(going, self.run + 1, 0)
-        self.speed = speed
-        cand = np.flatnonzero(self.run >= self.checks)
-        if not len(cand):
-            return cand
-        moved = e.vertex_displacement(self.start_pos, self.start_rot)[cand]
-        return cand[moved > self.displacement_m]
+        self.track.append(e.vertex_displacement(self.start_pos, self.start_rot))
+        self.track = self.track[-(2 * self.checks + 1):]
+        if len(self.track) < 2 * self.checks + 1:
+            return np.zeros(0, np.int64)
+        now, mid, old = self.track[-1], self.track[-1 - self.checks], self.track[0]
+        recent = now - mid
+        going = (e.movable & e.active & (now > self.displacement_m)
+                 & (recent >= _KEEP_GOING * (mid - old)) & (recent > 0.1 * self.displacement_m))
+        return np.flatnonzero(going)
 
     def classify(self, ids: np.ndarray) -> list[FailedBlock]:
         """Mechanism, displacement and position of each block in ``ids`` (call before removing

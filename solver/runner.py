@@ -41,7 +41,7 @@ _STATIC_CHUNK = 500       # steps between records in static stages
 _DYNAMIC_RECORDS = 400    # records per dynamic stage (history rows) when history_every == 0
 _SLEEP_STEPS = 100        # steps a block stays calm (ratio < tolerance / 10, slow) before it sleeps
 _STEP_CUT_SLACK = 0.01  # the step is lowered when the safe step falls by more than this fraction
-_FAILURE_ROUNDINGS = 1.0  # default failure displacement, in rounding lengths d
+_FAILURE_ROUNDINGS = 0.25  # default failure displacement, in rounding lengths d
 _SLEEP_CREEP = 1e-3       # calm = moving less than this fraction of the rounding in _SLEEP_STEPS steps
 
 

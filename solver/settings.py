@@ -389,7 +389,7 @@ class Settings:
     it adds are measured in ``benchmarks/bench_solver.py``).
 
     Failing blocks (:mod:`rockmass.solver.failure`): in static stages a block that has moved more
-    than ``failure_displacement_m`` (None: the rounding d) and has not slowed down over
+    than ``failure_displacement_m`` (None: a quarter of the rounding d) and keeps moving over
     ``failure_checks`` consecutive checks (500 steps apart) is taken out and reported; failing
     blocks smaller than ``sliver_area_m2`` are reported as slivers, and blocks that small are left
     out of the displacement measures. ``energy_tolerance``: the energy ledger is checked after

@@ -77,7 +77,7 @@ def test_incline_cohesion_onset(factor, holds):
     weight = RHO * model.area_m2[1] * G
     c_crit = weight * (math.sin(_rad(psi)) - math.cos(_rad(psi)) * math.tan(_rad(phi))) / b
     joint = Coulomb(1e9, 1e9, phi, cohesion_pa=factor * c_crit)
-    stages = (Stage("settle", max_steps=3000), Stage("after", "dynamic", duration_s=0.1))
+    stages = (Stage("settle", max_steps=10_000), Stage("after", "dynamic", duration_s=0.1))
     r = run(model, _incline_settings(joint, stages,
                                      insitu=InSituStress(syy_pa=weight / (b * math.cos(_rad(psi))))))
     settle, after = r.stages
