@@ -47,6 +47,12 @@ def joint_table(models: list) -> np.ndarray:
     return table
 
 
+def _add_rows(rows: np.ndarray, index: np.ndarray, values: np.ndarray):
+    """rows[index[i]] += values[i] for repeated indices (np.add.at, by bincount: ~10x faster)."""
+    for j in range(rows.shape[1]):
+        rows[:, j] += np.bincount(index, weights=values[:, j], minlength=len(rows))
+
+
 def ring_neighbours(offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Indices of the next and the previous vertex of every vertex, each block a closed ring
     ``offsets[b]:offsets[b+1]``."""
@@ -345,7 +351,7 @@ class Engine:
         for coef, d in ((q[:, 5] * q[:, 6], n), (q[:, 5] * q[:, 7], t)):
             g = np.column_stack([d[:, 0], d[:, 1], r[:, 0] * d[:, 1] - r[:, 1] * d[:, 0]])
             g = np.abs(g) * scale[b]
-            np.add.at(rows, b, (coef * g.sum(1))[:, None] * g)  # row sums, as for K
+            _add_rows(rows, b, (coef * g.sum(1))[:, None] * g)  # row sums, as for K
         return float(rows.max())
 
     def _stiffness_bound(self, scale) -> float:
@@ -375,8 +381,8 @@ class Engine:
             ga = np.abs(ga) * scale[a]
             gb = np.abs(gb) * scale[b]
             s = ga.sum(1) + gb.sum(1)  # row i of |g gᵀ| sums to |g_i| Σ|g|
-            np.add.at(rows, a, (stiff * s)[:, None] * ga)
-            np.add.at(rows, b, (stiff * s)[:, None] * gb)
+            _add_rows(rows, a, (stiff * s)[:, None] * ga)
+            _add_rows(rows, b, (stiff * s)[:, None] * gb)
         return float(rows.max())
 
     # ---------------------------------------------------------------------- state summaries --
