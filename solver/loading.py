@@ -12,7 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from . import _kernels as K
-from .settings import BoundaryStress, InSituStress, QuietBoundary
+from .engine import FIXED
+from .settings import SIDES, BoundaryStress, InSituStress, QuietBoundary
 
 __all__ = ["stress_at", "apply_insitu", "apply_boundary_stress", "quiet_edge_table"]
 
@@ -134,7 +135,24 @@ def _covered_face_stress(engine, insitu: InSituStress, p: int, k: int) -> tuple[
 
 def apply_boundary_stress(engine, loads: tuple[BoundaryStress, ...], insitu: InSituStress | None):
     """Constant tractions −σ·n_out on the domain edges of the chosen sides (force and the moment
-    terms that rotate with the block, see :func:`rockmass.solver._kernels.advance`)."""
+    terms that rotate with the block, see :func:`rockmass.solver._kernels.advance`).
+
+    With an in-situ stress, the domain edges of every other side (no user load) whose block is
+    *held* normal to that side (a fix or a velocity input on x for ``left`` / ``right``, on y for
+    ``bottom`` / ``top``: a roller or a clamp) carry the in-situ traction too, as the same kind of
+    constant load. Reason: :func:`apply_insitu` loads only the contacts, and the traction missing on
+    such an edge is the reaction of the rock beyond the boundary. The support carries its force (a
+    fixed degree of freedom ignores forces) but not its moment, so a block on a roller, free to
+    rotate, would start with the moment of the missing traction unbalanced (up to 6.0e7 N·m/m at
+    step 1 on the bottom blocks of ``samples/solve_cavern.toml``, 6.7e-8 with the traction; issue
+    14 saw its first stage move blocks 0.17 mm). With the traction every block starts in force and
+    moment equilibrium (exact for the linear in-situ field: the lumping is consistent), and the
+    support's moment stays the in-situ one as the model deforms, as for any constant boundary
+    stress. Sides that are neither loaded nor held stay traction-free: a free surface is the
+    user's choice, and a load there would also push its free blocks (the verification column
+    starts out of balance on purpose). A face inside the model so short that rounded corners
+    cover it still leaves a small moment (:func:`_covered_face_stress`).
+    """
     engine.ext_f[:] = 0.0
     engine.ext_a[:] = 0.0
     engine.ext_b[:] = 0.0
@@ -143,28 +161,49 @@ def apply_boundary_stress(engine, loads: tuple[BoundaryStress, ...], insitu: InS
         on = np.flatnonzero(edges.on(load.sides))
         if not len(on):
             raise ValueError(f"boundary stress on {load.sides}: no block edge lies on these sides")
-        blocks = edges.block[on]
-        p0, p1, nrm = edges.p0[on], edges.p1[on], edges.normal[on]
-        length = np.hypot(*(p1 - p0).T)
         if load.from_insitu:
             if insitu is None:
                 raise ValueError("boundary stress from_insitu needs an in-situ stress")
-            uw, yr = _unit_weight(engine), _y_ref(engine, insitu)
-            s0 = stress_at(insitu, p0, uw, yr)
-            s1 = stress_at(insitu, p1, uw, yr)
+            _add_tractions(engine, on, insitu)
         else:
-            const = tuple(np.full(len(on), v) for v in (load.sxx_pa, load.syy_pa, load.sxy_pa))
-            s0 = s1 = const
-        trac = []
-        for sxx, syy, sxy in (s0, s1):
-            trac.append(-np.column_stack([sxx * nrm[:, 0] + sxy * nrm[:, 1],
-                                          sxy * nrm[:, 0] + syy * nrm[:, 1]]))
-        f0, f1 = _lumped(trac[0], trac[1], length[:, None])
-        for f, p in ((f0, p0), (f1, p1)):
-            r = p - engine.pos0[blocks]
-            np.add.at(engine.ext_f, blocks, f)
-            np.add.at(engine.ext_a, blocks, r[:, 0] * f[:, 1] - r[:, 1] * f[:, 0])
-            np.add.at(engine.ext_b, blocks, -(r[:, 0] * f[:, 0] + r[:, 1] * f[:, 1]))
+            _add_tractions(engine, on, (load.sxx_pa, load.syy_pa, load.sxy_pa))
+    if insitu is None:
+        return
+    loaded = {side for load in loads for side in load.sides}
+    free = [side for side in SIDES if side not in loaded]
+    if not free:
+        return
+    normal_dof = np.where(edges.side < SIDES.index("bottom"), 0, 1)  # left, right: x; else y
+    held = (engine.base_mode == FIXED) | (engine.dof_input >= 0)
+    on = np.flatnonzero(edges.on(free) & held[edges.block, normal_dof])
+    if len(on):
+        _add_tractions(engine, on, insitu)
+
+
+def _add_tractions(engine, on: np.ndarray, stress):
+    """Add the constant tractions −σ·n_out of ``stress`` (an :class:`InSituStress`, or constant
+    (σ_xx, σ_yy, σ_xy)) on the domain edges ``on`` to the blocks' external loads, lumped
+    consistently to the edge ends."""
+    edges = engine.edges
+    blocks = edges.block[on]
+    p0, p1, nrm = edges.p0[on], edges.p1[on], edges.normal[on]
+    length = np.hypot(*(p1 - p0).T)
+    if isinstance(stress, InSituStress):
+        uw, yr = _unit_weight(engine), _y_ref(engine, stress)
+        s0 = stress_at(stress, p0, uw, yr)
+        s1 = stress_at(stress, p1, uw, yr)
+    else:
+        s0 = s1 = tuple(np.full(len(on), float(v)) for v in stress)
+    trac = []
+    for sxx, syy, sxy in (s0, s1):
+        trac.append(-np.column_stack([sxx * nrm[:, 0] + sxy * nrm[:, 1],
+                                      sxy * nrm[:, 0] + syy * nrm[:, 1]]))
+    f0, f1 = _lumped(trac[0], trac[1], length[:, None])
+    for f, p in ((f0, p0), (f1, p1)):
+        r = p - engine.pos0[blocks]
+        np.add.at(engine.ext_f, blocks, f)
+        np.add.at(engine.ext_a, blocks, r[:, 0] * f[:, 1] - r[:, 1] * f[:, 0])
+        np.add.at(engine.ext_b, blocks, -(r[:, 0] * f[:, 0] + r[:, 1] * f[:, 1]))
 
 
 def quiet_edge_table(engine, quiet: QuietBoundary) -> np.ndarray:
