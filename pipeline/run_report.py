@@ -418,15 +418,32 @@ def _section_solver(run: _Run) -> str:
     r = run.json("solve", "result.json")
     rows = [[str(s.get("name", "")), str(s.get("kind", "")), str(s.get("status", "")), fmt(s.get("steps")),
              fmt(s.get("time_step_s")), fmt(s.get("simulated_time_s")), fmt(s.get("converged")),
-             fmt(s.get("unbalanced_ratio")), fmt(s.get("max_displacement_m")),
-             fmt(s.get("max_displacement_boundary_m")), fmt(s.get("slipping_contacts")),
-             fmt(s.get("detached_blocks"))] for s in r.get("stages") or []]
+             fmt(s.get("unbalanced_ratio")),
+             f"{fmt(s.get('worst_ratio'))} (block {fmt(s.get('worst_block'))})",
+             fmt(s.get("max_displacement_equilibrium_m")),
+             fmt(s.get("max_displacement_boundary_equilibrium_m")),
+             ", ".join(f"{k} {fmt(v)}" for k, v in (s.get("monitors") or {}).items()),
+             _failed_text(s.get("failed_blocks") or []), fmt(s.get("slipping_contacts"))]
+            for s in r.get("stages") or []]
     head = ["stage", "kind", "status", "steps", "dt (s)", "simulated time (s)", "converged",
-            "unbalanced ratio", "max displacement (m)", "max displacement, boundary (m)",
-            "slipping contacts", "detached blocks"]
+            "unbalanced ratio", "worst block ratio", "max displacement (m)",
+            "max displacement, boundary (m)", "boundary points (m)", "failed blocks",
+            "slipping contacts"]
     status = f"Run status: {r.get('status')}" + (f" — {r['diagnostic']}" if r.get("diagnostic") else "")
     status += f"; largest displacement {fmt(r.get('max_displacement_m'))} m."
     return f"<p>{html.escape(status)}</p>" + table(head, rows, "t-solver")
+
+
+def _failed_text(failed: list) -> str:
+    """'3: fall 1, slide 2 (12.4 m²)' for a stage's failed blocks, '0' for none."""
+    if not failed:
+        return "0"
+    kinds = {}
+    for f in failed:
+        kinds[f.get("mechanism")] = kinds.get(f.get("mechanism"), 0) + 1
+    area = sum(float(f.get("area_m2", 0.0)) for f in failed)
+    return (f"{len(failed)}: " + ", ".join(f"{k} {n}" for k, n in kinds.items())
+            + f" ({fmt(area)} m²)")
 
 
 def _section_energy(run: _Run) -> str:

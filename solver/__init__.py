@@ -14,6 +14,10 @@ Public names
 :class:`Engine`
     The mutable state and its operations, for tests and custom drivers (:mod:`rockmass.solver.engine`).
 
+Also: :mod:`rockmass.solver.failure` (blocks that keep moving in a static stage: detected,
+classified as fall / slide / rotation, taken out) and :mod:`rockmass.solver.monitoring` (points
+fixed on the excavation boundary: crown, walls, invert).
+
 The numba kernels (:mod:`rockmass.solver._kernels`) load on first use of :func:`run` or
 :class:`Engine`; importing this package does not compile anything.
 """

@@ -141,6 +141,7 @@ class Result:
     def to_json_dict(self) -> dict:
         return {"status": self.status, "diagnostic": self.diagnostic,
                 "stages": [asdict(s) for s in self.stages],
-                "max_displacement_m": float(np.max(np.hypot(*self.displacement_m.T), initial=0.0)),
+                "max_displacement_m": float(np.max(np.hypot(*self.displacement_m[self.active].T),
+                                                   initial=0.0)),
                 "block_energy_vs_volume": self.energy_table(),
                 "info": self.info}

@@ -344,7 +344,13 @@ def test_solver_and_energy_tables_equal_result_json(run_dir):
         assert _same(page.cell("t-solver", name, "dt (s)"), s["time_step_s"])
         assert _same(page.cell("t-solver", name, "converged"), s["converged"])
         assert _same(page.cell("t-solver", name, "unbalanced ratio"), s["unbalanced_ratio"])
-        assert _same(page.cell("t-solver", name, "max displacement (m)"), s["max_displacement_m"])
+        assert _same(page.cell("t-solver", name, "max displacement (m)"),
+                     s["max_displacement_equilibrium_m"])
+        assert page.cell("t-solver", name, "failed blocks") == str(len(s["failed_blocks"])) \
+            if not s["failed_blocks"] else page.cell("t-solver", name, "failed blocks").startswith(
+                f"{len(s['failed_blocks'])}: ")
+        assert page.cell("t-solver", name, "worst block ratio").endswith(
+            f"(block {s['worst_block']})")
         for term, value in s["energy"].items():
             assert _same(page.cell("t-energy", term.removesuffix("_j"), name), value), term
     top = r["monitors"]["top"]
