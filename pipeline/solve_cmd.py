@@ -12,7 +12,7 @@ the same file (built as ``rockmass blocks`` builds it). Writes under ``--out``:
 - ``blocks_NNNN.vtu`` per frame and ``blocks.pvd`` (ParaView time series): the polygons placed at
   each frame's positions and rotations, cell data ``displacement`` and ``velocity`` (3-vectors,
   z = 0, displacement from the model's original position), ``rotation_rad``, ``block_id``,
-  ``region``, ``active``. Frames at the same instant (the end of one stage and the start of the next,
+  ``region``, ``active``, ``failed`` (taken out because it kept moving). Frames at the same instant (the end of one stage and the start of the next,
   after its excavation) get times 1 ns apart in the ``.pvd`` so ParaView shows both; result.json
   has the exact times;
 - ``block_energy.csv``: per block volume, mass, peak velocity and peak kinetic energy (dynamic
@@ -193,7 +193,7 @@ def _frame_mesh(model, frame):
     disp = np.column_stack([frame.position_m - model.centroid_xy_m, np.zeros(model.n_blocks)])
     vel = np.column_stack([frame.velocity_m_s, np.zeros(model.n_blocks)])
     cells, data = [], {k: [] for k in ("displacement", "velocity", "rotation_rad", "block_id",
-                                       "region", "active")}
+                                       "region", "active", "failed")}
     for k in np.unique(sizes):  # meshio groups polygons by vertex count
         idx = np.flatnonzero(sizes == k)
         conn = offsets[idx][:, None] + np.arange(k)[None, :]
@@ -204,6 +204,7 @@ def _frame_mesh(model, frame):
         data["block_id"].append(idx.astype(np.int64))
         data["region"].append(np.asarray(model.region, np.int64)[idx])
         data["active"].append(np.asarray(frame.active, np.uint8)[idx])
+        data["failed"].append(np.asarray(frame.failed, np.uint8)[idx])
     return meshio.Mesh(points, cells, cell_data=data)
 
 

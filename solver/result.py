@@ -65,7 +65,8 @@ class StageResult:
 
 @dataclass
 class Frame:
-    """Block placement at one instant (for blocks_NNNN.vtu)."""
+    """Block placement at one instant (for blocks_NNNN.vtu); ``failed``: blocks taken out so far
+    because they kept moving (inactive too)."""
 
     stage: str
     step: int
@@ -74,6 +75,7 @@ class Frame:
     rotation_rad: np.ndarray
     velocity_m_s: np.ndarray
     active: np.ndarray
+    failed: np.ndarray
 
 
 @dataclass

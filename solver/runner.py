@@ -114,7 +114,7 @@ class _Recorder:
     def frame(self, stage: str, step: int):
         e = self.eng
         self.frames.append(Frame(stage, step, e.time_s, e.pos.copy(), e.rot.copy(), e.vel.copy(),
-                                 e.active.copy()))
+                                 e.active.copy(), e.failed.copy()))
 
     def track_peaks(self):
         e = self.eng

@@ -189,3 +189,25 @@ def test_moment_equilibrium_is_part_of_convergence():
     assert st.status == "converged" and st.steps > 10
     assert abs(result.rotation_rad[1]) == pytest.approx(theta, rel=0.01)  # measured 0.5 %
     assert st.worst_ratio < Stage("x").block_tolerance
+
+
+def test_failed_block_is_marked_in_the_frames_and_the_vtu():
+    """The frames say which blocks were taken out as failed (inactive too), and the VTU cell data
+    of ``rockmass solve`` carries it (``failed``), apart from excavated blocks."""
+    from rockmass.solve_cmd import _frame_mesh
+
+    settings = Settings(joints={"default": Coulomb(KN, KN, 40.0)}, material=Material(RHO),
+                        fixes=(Fix("blocks:0"), Fix("blocks:1,2,3,4", "xr")),
+                        insitu=InSituStress(syy_pa=15e6),
+                        boundary_stress=(BoundaryStress(("top",), from_insitu=True),),
+                        stages=(Stage("settle", max_steps=20_000, frames=2),))
+    model = _loaded_column_with_a_loose_block()
+    result = run(model, settings)
+    first, last = result.frames[0], result.frames[-1]
+    assert not first.failed.any() and last.failed.tolist() == [False] * 5 + [True]
+    mesh = _frame_mesh(model, last)
+    ids = np.concatenate(mesh.cell_data["block_id"])
+    failed = np.concatenate(mesh.cell_data["failed"])
+    active = np.concatenate(mesh.cell_data["active"])
+    assert failed[ids == 5].tolist() == [1] and not failed[ids != 5].any()
+    assert active[ids == 5].tolist() == [0]
