@@ -40,6 +40,7 @@ _CHECK_EVERY = 10         # static convergence test interval (steps)
 _STATIC_CHUNK = 500       # steps between records in static stages
 _DYNAMIC_RECORDS = 400    # records per dynamic stage (history rows) when history_every == 0
 _SLEEP_STEPS = 100        # steps a block stays calm (ratio < tolerance / 10, slow) before it sleeps
+_GUARD_EVERY = 200       # steps between the time-step and energy-ledger checks (and at a stage's end)
 _STEP_CUT_SLACK = 0.01  # the step is lowered when the safe step falls by more than this fraction
 _FAILURE_ROUNDINGS = 0.25  # default failure displacement, in rounding lengths d
 _SLEEP_CREEP = 1e-3       # calm = moving less than this fraction of the rounding in _SLEEP_STEPS steps
@@ -212,6 +213,12 @@ def _remove_failed(eng: Engine, watch: FailureWatch, ids: np.ndarray, dt: float)
     return failed, before - (eng.kinetic_energy() + eng.strain_energy())
 
 
+def _new_contact_w2(dt: float, safety: float) -> float:
+    """ω² above which a contact that forms stops the kernel (``RC_STIFF``): (2 safety / Δt)², the
+    ω_max the step was chosen for (safety 1 for a user's step: its true limit)."""
+    return (2.0 * safety / dt) ** 2
+
+
 def _auto_time_step(eng: Engine, settings: Settings, beta: float) -> tuple[float, float]:
     """(Δt, stable limit) for the present contacts: safety × the limit; without any contact the
     limit is infinite and Δt only sets the record interval (the caller's fallback)."""
@@ -285,6 +292,7 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
     failed, removed_j = [], 0.0
     safety = settings.time_step_safety
     step_cuts = 0
+    guarded = 0  # step of the last time-step and energy check
     while done < n_steps:
         todo = min(chunk - done % chunk, n_steps - done)
         t_half = eng.time_s - stage_t0 + (np.arange(todo) + 0.5) * dt
@@ -302,7 +310,7 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
                        beta, tol, stage.block_tolerance, _CHECK_EVERY, eng.wv, eng.fpair,
                        eng.bp_ptr, eng.bp_idx, eng.E, out, eng.asleep, eng.calm, sleep_ratio,
                        _SLEEP_STEPS, _SLEEP_CREEP * eng.rounding_m / (_SLEEP_STEPS * dt),
-                       (2.0 * (safety if stage.time_step_s is None else 1.0) / dt) ** 2)
+                       _new_contact_w2(dt, safety if stage.time_step_s is None else 1.0))
         steps = int(out[0])
         dt_used = dt
         if rc == K.RC_STIFF:  # a contact formed that this step cannot resolve: shorter step
@@ -333,7 +341,10 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
         # blocks lighter) than any at the chunk's start. Above the stable limit the chunk is done
         # again with the new step; within it (the safety factor's margin) the new step applies
         # from here on
-        if rc != K.RC_REBUILD or (done + steps) % chunk == 0:
+        guard = (rc in (K.RC_CONVERGED, K.RC_OVERLAP) or done + steps >= n_steps
+                 or done + steps - guarded >= _GUARD_EVERY)
+        if guard:
+            guarded = done + steps
             new_dt, new_limit = _auto_time_step(eng, settings, beta)
             redo = math.isfinite(new_limit) and dt > new_limit
             if redo and stage.time_step_s is not None:
@@ -370,6 +381,7 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
             eng.rebuild()
         if done % chunk == 0 or done == n_steps or rc == K.RC_CONVERGED:
             rec.record(stage.name, ratio)
+        if guard:
             energy = _energy_ledger(eng, dt, ke0, se0, se0_shadow, removed_j)
             err = ledger_error(energy)
             if err > settings.energy_tolerance:

@@ -123,23 +123,23 @@ def test_unresolved_contact_stops_the_stage(monkeypatch):
 
 
 def test_energy_ledger_stops_a_blow_up(monkeypatch):
-    """The ledger is checked as the run goes: a step above the stability limit (the solver's own
-    limit switched off, a user Δt 1.5× the true 2/ω of a block on a spring) makes the ledger fail
-    and the stage stop as ``unstable`` within a few hundred steps, its state finite."""
-    polys = [rect(0.0, -1.0, 2.0, 0.0), rect(0.5, 0.0, 1.5, 1.0)]
-    model = hand_model(polys, [(0, 1)])
-    kn = 1e9
-    omega = np.sqrt(kn * 1.0 / (RHO * 1.0))  # vertical mode (both half-slots in series: k_n l)
-    monkeypatch.setattr(runner_module.Engine, "stable_time_step", lambda self, beta=0.0: np.inf)
-    settings = Settings(joints={"default": Coulomb(kn, kn, 40.0)}, material=Material(RHO),
-                        fixes=(Fix("blocks:0"), Fix("blocks:1", "xr")),
-                        stages=(Stage("fall", "dynamic", duration_s=2000 * 3 / omega,
-                                      time_step_s=3.0 / omega),))
-    result = run(model, settings)
+    """The ledger is checked as the run goes (every 200 steps): with both step controls switched
+    off (the step kept at its start value, new contacts not checked — the solver before issue 14),
+    block 2 lands on a contact the step cannot resolve and is thrown; the ledger no longer closes
+    and the stage stops as ``unstable``, its state finite, instead of ending ok."""
+    first = {}
+
+    def frozen(eng, settings, beta):
+        if "dt" not in first:
+            first["dt"] = runner_module.Engine.stable_time_step(eng, beta)
+        return settings.time_step_safety * first["dt"], first["dt"]
+
+    monkeypatch.setattr(runner_module, "_auto_time_step", frozen)
+    monkeypatch.setattr(runner_module, "_new_contact_w2", lambda dt, safety: np.inf)
+    result = run(_heavy_block_and_a_light_one(),
+                 _landing_settings(stages=(Stage("settle", max_steps=40_000),)))
     st = result.stages[0]
-    assert st.status in ("unstable", "overlap")
     assert st.status == "unstable" and "energy ledger" in st.diagnostic, st.diagnostic
-    assert st.steps < 500
     assert np.isfinite(result.displacement_m).all()
 
 
