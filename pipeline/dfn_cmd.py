@@ -42,9 +42,18 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     return p
 
 
-def _check_flag(value, flag: str, low: int) -> None:
+def _check_flag(value, flag: str, low: int, high: int | None = None) -> None:
     if value is not None and value < low:
         raise InputError(f"{flag} must be >= {low}, got {value}")
+    if value is not None and high is not None and value > high:
+        raise InputError(f"{flag} must be <= {high} (as dfn.realizations), got {value}")
+
+
+def _realizations_cap() -> int:
+    """The upper bound of ``dfn.realizations`` (one rule for the config and the flag)."""
+    from .dfn_config import DFNConfig
+
+    return next(m.le for m in DFNConfig.model_fields["realizations"].metadata if hasattr(m, "le"))
 
 
 def realization_summary(network, specs, seed: int, index: int) -> dict:
@@ -134,7 +143,7 @@ def compute(args, document=None):
     from .progress import count_bar
 
     _check_flag(args.seed, "--seed", 0)
-    _check_flag(args.realizations, "--realizations", 1)
+    _check_flag(args.realizations, "--realizations", 1, _realizations_cap())
     _check_flag(args.first, "--first", 0)
     t0 = time.perf_counter()
     if document is None:

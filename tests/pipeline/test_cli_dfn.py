@@ -103,6 +103,16 @@ def test_bad_flag_exits_2(config, tmp_path, capsys):
     assert "--seed" in capsys.readouterr().err
 
 
+def test_realizations_flag_is_capped_like_the_config(config, tmp_path, capsys):
+    """--realizations 1000000000 was accepted (the config caps dfn.realizations at 10 000) and
+    generated until the memory ran out; now it stops at once with exit 2 naming the flag."""
+    out = tmp_path / "o"
+    assert main(["dfn", str(config), "--out", str(out), "--realizations", "1000000000"]) == 2
+    err = capsys.readouterr().err
+    assert "--realizations" in err and "10000" in err
+    assert not out.exists()
+
+
 def test_sample_config_of_seed_001_is_valid_and_generates(tmp_path):
     document = load_config(SAMPLE, model=DFNDocument)
     assert [s.orientation.dip_deg for s in document.dfn.sets] == [50.0, 80.0, 70.0]
