@@ -144,6 +144,14 @@ def compute(args, document=None) -> tuple[dict, object, dict]:
         raise InputError("--grid applies to traces; an image is counted on its own pixel grid")
     if kind == "image" and args.window is not None:
         raise InputError("--window applies to traces, not to an image")
+    if kind == "image":
+        from .fractal.rasterize import MAX_GRID
+
+        side = padded_side(*data.shape)
+        if side > MAX_GRID:  # the image is its own grid: say so, not "--grid" (nobody gave one)
+            raise InputError(f"{path}: the image is {data.shape[1]} x {data.shape[0]} pixels "
+                             f"(counted on its own grid, padded to {side}); at most {MAX_GRID} "
+                             "pixels a side can be box-counted — downsample it first")
     settings = _resolve_settings(args, padded_side(*data.shape) if kind == "image" else None,
                                  document)
     mask = _load_mask(args.mask, kind)

@@ -190,3 +190,13 @@ def test_console_script_exit_codes():
     usage = subprocess.run([sys.executable, "-m", "rockmass", "boxcount"], capture_output=True,
                            text=True)
     assert usage.returncode == 2
+
+
+def test_image_too_large_for_its_own_grid_names_the_image_not_grid(tmp_path, capsys):
+    """An image wider than the largest grid failed with "--grid must be <= 16384, got ..." though
+    no --grid was given; now the message names the file and its size (exit 2)."""
+    image = np.zeros((8, 16385), np.uint8)
+    image[4, :] = 255
+    path = _png(tmp_path / "wide.png", image)
+    err = _fails_with_2(["boxcount", str(path)], capsys, "wide.png", "16385 x 8 pixels")
+    assert "--grid" not in err
