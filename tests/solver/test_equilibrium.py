@@ -101,10 +101,8 @@ def test_time_step_follows_a_contact_that_forms_during_the_stage():
     assert abs(result.displacement_m[2, 0]) < 1e-4
 
 
-def test_unresolved_contact_stops_the_stage(monkeypatch):
-    """With the step kept at its start value (the solver before issue 14 never changed it), the
-    landing contact cannot be resolved: the stage stops as ``unstable`` with a diagnostic naming
-    the time step, instead of ending with block 2 thrown away and status ok."""
+def _freeze_time_step(monkeypatch):
+    """The runner keeps the step it chose at the stage's start (as the solver before issue 14)."""
     first = {}
 
     def frozen(eng, settings, beta):
@@ -113,6 +111,13 @@ def test_unresolved_contact_stops_the_stage(monkeypatch):
         return settings.time_step_safety * first["dt"], first["dt"]
 
     monkeypatch.setattr(runner_module, "_auto_time_step", frozen)
+
+
+def test_unresolved_contact_stops_the_stage(monkeypatch):
+    """With the step kept at its start value (the solver before issue 14 never changed it), the
+    landing contact cannot be resolved: the stage stops as ``unstable`` with a diagnostic naming
+    the time step, instead of ending with block 2 thrown away and status ok."""
+    _freeze_time_step(monkeypatch)
     result = run(_heavy_block_and_a_light_one(),
                  _landing_settings(stages=(Stage("settle", max_steps=40_000),)))
     st = result.stages[0]
@@ -127,14 +132,7 @@ def test_energy_ledger_stops_a_blow_up(monkeypatch):
     off (the step kept at its start value, new contacts not checked — the solver before issue 14),
     block 2 lands on a contact the step cannot resolve and is thrown; the ledger no longer closes
     and the stage stops as ``unstable``, its state finite, instead of ending ok."""
-    first = {}
-
-    def frozen(eng, settings, beta):
-        if "dt" not in first:
-            first["dt"] = runner_module.Engine.stable_time_step(eng, beta)
-        return settings.time_step_safety * first["dt"], first["dt"]
-
-    monkeypatch.setattr(runner_module, "_auto_time_step", frozen)
+    _freeze_time_step(monkeypatch)
     monkeypatch.setattr(runner_module, "_new_contact_w2", lambda dt, safety: np.inf)
     result = run(_heavy_block_and_a_light_one(),
                  _landing_settings(stages=(Stage("settle", max_steps=40_000),)))
