@@ -436,13 +436,12 @@ def _section_solver(run: _Run) -> str:
 
 def _failed_text(failed: list) -> str:
     """'3: fall 1, slide 2 (12.4 m²)' for a stage's failed blocks, '0' for none."""
+    from .solver.failure import mechanism_counts
+
     if not failed:
         return "0"
-    kinds = {}
-    for f in failed:
-        kinds[f.get("mechanism")] = kinds.get(f.get("mechanism"), 0) + 1
     area = sum(float(f.get("area_m2", 0.0)) for f in failed)
-    return (f"{len(failed)}: " + ", ".join(f"{k} {n}" for k, n in kinds.items())
+    return (f"{len(failed)}: " + ", ".join(f"{k} {n}" for k, n in mechanism_counts(failed).items())
             + f" ({fmt(area)} m²)")
 
 

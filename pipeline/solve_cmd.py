@@ -284,15 +284,16 @@ def build_outputs(model, settings, result, timings) -> dict:
 
 
 def _summary_line(result, doc) -> str:
+    from .solver.failure import mechanism_counts
+
     parts = [f"status {result.status}"]
     for s in result.stages:
         text = (f"{s.name} ({s.kind}): {s.status}, {s.steps} steps of {s.time_step_s:.3g} s, "
                 f"max displacement {s.max_displacement_equilibrium_m:.4g} m")
         if s.failed_blocks:
-            kinds = sorted({f["mechanism"] for f in s.failed_blocks})
             text += (f", {len(s.failed_blocks)} failed block(s) taken out ("
-                     + ", ".join(f"{k} {sum(f['mechanism'] == k for f in s.failed_blocks)}"
-                                 for k in kinds) + ")")
+                     + ", ".join(f"{k} {n}" for k, n in mechanism_counts(s.failed_blocks).items())
+                     + ")")
         if s.monitors:
             text += ", " + ", ".join(f"{k} {v * 1e3:.3g} mm" for k, v in s.monitors.items())
         parts.append(text)

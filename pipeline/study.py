@@ -52,6 +52,9 @@ import traceback
 from pathlib import Path
 from typing import Any, Callable
 
+from .solver.failure import MECHANISMS, mechanism_counts
+from .solver.result import FAILED_STATUSES
+
 __all__ = ["run_case", "joint_network_segments", "CSV_COLUMNS", "results_rows", "csv_text",
            "run_tasks", "init_worker", "load_finished", "case_cost", "case_outcome",
            "outcome_counts", "outcome_summary", "OUTCOMES", "IN_EQUILIBRIUM", "RETRIED",
@@ -79,9 +82,7 @@ IN_EQUILIBRIUM = ("ok", "failed_blocks")
 #: Outcomes a re-run of the study runs again; a case of any other outcome is kept (deterministic).
 RETRIED = ("error",)
 #: Solver statuses that stop a run: no displacement of it is valid; the study exits 1.
-SOLVER_STOPPED = ("overlap", "unstable")
-#: Failure mechanisms of the solver's failed blocks, in the order they are written.
-MECHANISMS = ("fall", "slide", "rotation")
+SOLVER_STOPPED = FAILED_STATUSES
 #: Version of case.json records; a record of another version runs again on resume (version 1,
 #: before outcomes, counted falls as displacements).
 RECORD_VERSION = 2
@@ -356,10 +357,7 @@ def _failed_blocks(stages) -> dict:
     counts) and the list (each with its stage)."""
     listed = [{"stage": s.name, **{k: _plain(k, v) for k, v in fb.items()}}
               for s in stages for fb in s.failed_blocks]
-    counts = {m: 0 for m in MECHANISMS}
-    for fb in listed:
-        counts[fb["mechanism"]] = counts.get(fb["mechanism"], 0) + 1
-    counts = {m: n for m, n in counts.items() if n}
+    counts = mechanism_counts(listed)
     return {"failed_blocks": len(listed),
             "failed_area_m2": float(sum(fb["area_m2"] for fb in listed)),
             "failed_mechanisms": " ".join(f"{m}:{n}" for m, n in counts.items()),

@@ -776,9 +776,10 @@ def advance(n_steps, loc, lgeo, off, pos, rot, vel, omg, inv_mass, mass, mode, d
     rebuild needed (a block moved > margin/2 since the last broad phase), overlap above the limit,
     a non-finite value, or a new contact too stiff for the step (``RC_STIFF``: a slot that formed
     in this step has ω² above ``w2_new`` on its own, :func:`_stiffest_new_slot`; the step is not
-    integrated and the caller redoes the chunk with a shorter Δt). ``out`` receives [steps done, unbalanced ratio, max overlap, pair of max
-    overlap, max velocity, worst block ratio, worst block, kinetic energy at the last check]; its
-    entry 7 is also read as the kinetic energy of the previous check (``inf`` at a stage's start).
+    integrated and the caller redoes the chunk with a shorter Δt). ``out`` receives [steps done,
+    unbalanced ratio, max overlap, pair of max overlap, max velocity, worst block ratio, worst
+    block, kinetic energy at the last check]; its entry 7 is also read as the kinetic energy of
+    the previous check (``inf`` at a stage's start).
 
     Equilibrium (static stages, tested every ``check_every`` steps) needs all three of: the model's
     ratio Σ_b|F_unb,b| / Σ_b F_app,b below ``tol_ratio``; every block's own ratio
@@ -856,10 +857,11 @@ def advance(n_steps, loc, lgeo, off, pos, rot, vel, omg, inv_mass, mass, mode, d
             if asleep[b] != 0:
                 fx = fc[0] + fg[0] + fe[0] + qf[b, 0]
                 fy = fc[1] + fg[1] + fe[1] + qf[b, 1]
-                own = math.sqrt(fx * fx + fy * fy)
+                force = math.sqrt(fx * fx + fy * fy)
+                own = force  # the block's own ratio weighs its moment too, as for awake blocks
                 if mode[b, 2] == 0:
                     own = max(own, abs(fc[2] + fe[2] + qf[b, 2]) / radius[b])
-                sum_unb += own
+                sum_unb += force
                 sum_app += app
                 if own <= 10.0 * sleep_ratio * app:
                     if own > worst * app:

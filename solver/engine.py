@@ -48,7 +48,8 @@ def joint_table(models: list) -> np.ndarray:
 
 
 def _add_rows(rows: np.ndarray, index: np.ndarray, values: np.ndarray):
-    """rows[index[i]] += values[i] for repeated indices (np.add.at, by bincount: ~10x faster)."""
+    """rows[index[i]] += values[i] for repeated indices: np.add.at by bincount (224k rows of 3
+    into 45k: 1.1 ms against 6.4 ms)."""
     for j in range(rows.shape[1]):
         rows[:, j] += np.bincount(index, weights=values[:, j], minlength=len(rows))
 

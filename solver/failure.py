@@ -35,7 +35,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["FailureWatch", "FailedBlock"]
+__all__ = ["FailureWatch", "FailedBlock", "MECHANISMS", "mechanism_counts"]
+
+#: The mechanisms a failed block is classified by, in the order reports list them.
+MECHANISMS = ("fall", "slide", "rotation")
 
 _KEEP_GOING = 0.5    # moved at least this fraction of the previous window's distance: not settling
 _FALL_SUPPORT = 0.05  # contacts carrying less than this fraction of the weight: free fall
@@ -98,10 +101,11 @@ class FailureWatch:
         return np.flatnonzero(going)
 
     def classify(self, ids: np.ndarray) -> list[FailedBlock]:
-        """Mechanism, displacement and position of each block in ``ids`` (call before removing
-        them: the contact forces of the last step are read)."""
+        """Mechanism, displacement and position of each block in ``ids`` (call right after the
+        :meth:`check` that named them, before removing them: its displacements and the contact
+        forces of the last step are read)."""
         e = self.eng
-        disp = e.vertex_displacement(self.start_pos, self.start_rot)
+        disp = self.track[-1]
         out = []
         for b in ids:
             b = int(b)
@@ -120,3 +124,10 @@ class FailureWatch:
                                    displacement_m=float(disp[b]), x_m=float(e.pos[b, 0]),
                                    y_m=float(e.pos[b, 1]), sliver=area < self.sliver_area_m2))
         return out
+
+
+def mechanism_counts(failed: list[dict]) -> dict[str, int]:
+    """Failed blocks per mechanism (:data:`MECHANISMS` order, mechanisms with none left out) from
+    :meth:`FailedBlock.to_dict` records."""
+    counts = {m: sum(f["mechanism"] == m for f in failed) for m in MECHANISMS}
+    return {m: n for m, n in counts.items() if n}

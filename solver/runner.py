@@ -202,7 +202,7 @@ def ledger_error(energy: dict) -> float:
     return abs(energy["residual_j"]) / turnover if turnover > 0 else 0.0
 
 
-def _remove_failed(eng: Engine, watch: FailureWatch, ids: np.ndarray, dt: float) -> tuple[list, float]:
+def _remove_failed(eng: Engine, watch: FailureWatch, ids: np.ndarray) -> tuple[list, float]:
     """Take failing blocks out of the model; their reports and the energy that left with them."""
     failed = watch.classify(ids)
     before = eng.kinetic_energy() + eng.strain_energy()
@@ -400,7 +400,7 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
         if watch is not None and done % chunk == 0:
             going = watch.check()
             if len(going):
-                gone, energy_out = _remove_failed(eng, watch, going, dt)
+                gone, energy_out = _remove_failed(eng, watch, going)
                 failed += gone
                 removed_j += energy_out
                 out[7] = math.inf
@@ -474,9 +474,12 @@ def run(model, settings: Settings, *,
     stages = []
     status, diagnostic = STATUS_OK, None
     dug: list[int] = []
+    points = []
     for i, stage in enumerate(settings.stages):
-        dug += [r for r in stage.excavate if r not in dug]
-        points = boundary_points(model, dug) if dug else []
+        new = [r for r in stage.excavate if r not in dug]
+        if new:  # the opening grew: its crown, walls and invert are found again
+            dug += new
+            points = boundary_points(model, dug)
         res = _run_stage(eng, stage, settings, rec, ref, progress, points)
         stages.append(res)
         if res.status in FAILED_STATUSES:
