@@ -53,12 +53,12 @@ from pathlib import Path
 from typing import Any, Callable
 
 from .solver.failure import MECHANISMS, mechanism_counts
-from .solver.result import FAILED_STATUSES
+from .solver.result import FAILED_STATUSES, STATUS_FAILED_BLOCKS, STATUS_OK
 
 __all__ = ["run_case", "joint_network_segments", "CSV_COLUMNS", "results_rows", "csv_text",
            "run_tasks", "init_worker", "load_finished", "case_cost", "case_outcome",
            "outcome_counts", "outcome_summary", "OUTCOMES", "IN_EQUILIBRIUM", "RETRIED",
-           "SOLVER_STOPPED", "MECHANISMS", "RECORD_VERSION", "displacement_m",
+           "displacement_m",
            "failed_mechanism_counts", "MONITOR_COLUMNS"]
 
 CASE_FILE = "case.json"
@@ -81,8 +81,6 @@ OUTCOMES = ("ok", "failed_blocks", "not_converged", "unstable", "overlap", "erro
 IN_EQUILIBRIUM = ("ok", "failed_blocks")
 #: Outcomes a re-run of the study runs again; a case of any other outcome is kept (deterministic).
 RETRIED = ("error",)
-#: Solver statuses that stop a run: no displacement of it is valid; the study exits 1.
-SOLVER_STOPPED = FAILED_STATUSES
 #: Version of case.json records; a record of another version runs again on resume (version 1,
 #: before outcomes, counted falls as displacements).
 RECORD_VERSION = 2
@@ -327,49 +325,36 @@ def case_outcome(result) -> tuple[str, str | None]:
     -------
     (str, str or None)
         The first that applies: ``overlap`` / ``unstable`` (the solver stopped the run; reason: its
-        diagnostic); ``not_converged`` (a stage ended at ``max_steps``, or a static stage with
-        ``converged`` False: the blocks left are not at rest; reason: the stage and its
-        diagnostic, else its step count, worst block and unbalanced ratio); ``failed_blocks`` (blocks failed and were taken out, every static
-        stage reached equilibrium without them); ``ok``.
+        diagnostic); ``not_converged`` (a static stage with ``converged`` False — it ran out of
+        ``max_steps``, with or without failed blocks: the blocks left are not at rest; reason: the
+        stage and the solver's diagnostic, which names the worst block); ``failed_blocks`` (blocks
+        failed and were taken out, every static stage reached equilibrium without them); ``ok``.
 
     Raises
     ------
     ValueError
         ``result.status`` is none of the solver's statuses (the case becomes an ``error``).
     """
-    if result.status in SOLVER_STOPPED:
+    if result.status in FAILED_STATUSES:  # the solver stopped the run: the study exits 1
         return result.status, f"solver stopped ({result.status}): {result.diagnostic}"
-    if result.status not in ("ok", "failed_blocks"):
+    if result.status not in (STATUS_OK, STATUS_FAILED_BLOCKS):
         raise ValueError(f"unknown solver status {result.status!r} (expected ok, failed_blocks, "
-                         f"{', '.join(SOLVER_STOPPED)})")
-    for s in result.stages:
-        if s.status == "max_steps" or s.converged is False:
-            return "not_converged", f"stage {s.name!r}: " + (
-                s.diagnostic or f"no equilibrium after {s.steps} steps ({s.status}); worst block "
-                                f"{s.worst_block}, unbalanced ratio {s.worst_ratio:.3g}")
-    if result.status == "failed_blocks" or any(s.failed_blocks for s in result.stages):
-        return "failed_blocks", None
-    return "ok", None
+                         f"{', '.join(FAILED_STATUSES)})")
+    for s in result.stages:  # the solver says why (its diagnostic names the worst block)
+        if s.converged is False:
+            return "not_converged", f"stage {s.name!r}: {s.diagnostic}"
+    return result.status, None
 
 
 def _failed_blocks(stages) -> dict:
     """The failed blocks of every stage: count, total area, mechanisms (``"fall:2 slide:1"`` and
     counts) and the list (each with its stage)."""
-    listed = [{"stage": s.name, **{k: _plain(k, v) for k, v in fb.items()}}
-              for s in stages for fb in s.failed_blocks]
+    listed = [{"stage": s.name, **fb} for s in stages for fb in s.failed_blocks]
     counts = mechanism_counts(listed)
     return {"failed_blocks": len(listed),
             "failed_area_m2": float(sum(fb["area_m2"] for fb in listed)),
             "failed_mechanisms": " ".join(f"{m}:{n}" for m, n in counts.items()),
             "failed_mechanism_counts": counts, "failed_block_list": listed}
-
-
-def _plain(key: str, value):
-    """A failed block's field as JSON data: text and flags as they are, ``block`` an int, numbers
-    floats."""
-    if isinstance(value, (str, bool)) or value is None:
-        return value
-    return int(value) if key == "block" else float(value)
 
 
 def _solve(document, config_path, model) -> dict:
@@ -402,8 +387,7 @@ def _solve(document, config_path, model) -> dict:
                "diagnostic": s.diagnostic}
               for s in result.stages]
     static = [s for s in result.stages if s.kind == "static"] or [last]
-    converged = result.status in IN_EQUILIBRIUM and all(s.converged is not False
-                                                        for s in result.stages)
+    converged = outcome in IN_EQUILIBRIUM
     out = {"max_displacement_boundary_m": float(last.max_displacement_boundary_equilibrium_m),
            "max_displacement_overall_m": float(last.max_displacement_equilibrium_m),
            **{col: (float(last.monitors[name]) if name in last.monitors else None)
@@ -557,8 +541,7 @@ def failed_mechanism_counts(records) -> dict[str, int]:
         if rec.get("status") == "failed_blocks":
             for m, n in (rec.get("failed_mechanism_counts") or {}).items():
                 counts[m] = counts.get(m, 0) + int(n)
-    return {m: counts[m] for m in [*MECHANISMS, *sorted(set(counts) - set(MECHANISMS))]
-            if counts.get(m)}
+    return {m: counts[m] for m in MECHANISMS if counts.get(m)}
 
 
 def outcome_summary(records, n_cases: int) -> str:

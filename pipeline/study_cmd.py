@@ -138,7 +138,8 @@ def run(args) -> int:
     from .atomic import atomic_write_json, atomic_write_text
     from .manifest import build_manifest
     from .outputs import output_folder, print_json
-    from .study import (CASE_FILE, RESULTS_FILE, RETRIED, SOLVER_STOPPED, case_cost, csv_text,
+    from .solver.result import FAILED_STATUSES
+    from .study import (CASE_FILE, RESULTS_FILE, RETRIED, case_cost, csv_text,
                         displacement_m, load_finished, outcome_counts, outcome_summary,
                         results_rows, run_tasks)
     from .study_config import expand_cases, input_records, load_study, params_text
@@ -226,7 +227,7 @@ def run(args) -> int:
         try:
             executor = run_tasks(tasks, on_done, workers=workers, scheduler=scheduler,
                                  client=client)
-            stopped = [r for r in finished.values() if r.get("status") in SOLVER_STOPPED]
+            stopped = [r for r in finished.values() if r.get("status") in FAILED_STATUSES]
             status = "complete" if not failed and not stopped else "failed cases"
         except KeyboardInterrupt:
             interrupted = True
@@ -275,15 +276,14 @@ def run(args) -> int:
               f"{summary['ran']} run, {len(failed)} failed) with {executor} in "
               f"{t_end - t_run:.1f} s; {out_path / RESULTS_FILE}, {out_path / 'report.html'}")
         print(summary["outcome_summary"])
-    stopped = [r for r in finished.values() if r.get("status") in SOLVER_STOPPED]
     problems = []
     if failed:
         problems.append(f"{len(failed)} of {len(cases)} cases failed (their error is in "
                         "results.csv and cases/<id>/case.json); re-run the same command to retry "
                         "them")
     if stopped:
-        kinds = ", ".join(f"{n} {k}" for k in SOLVER_STOPPED
-                          for n in [sum(r.get("status") == k for r in stopped)] if n)
+        kinds = ", ".join(f"{summary['outcomes'][k]} {k}" for k in FAILED_STATUSES
+                          if summary["outcomes"].get(k))
         problems.append(f"{len(stopped)} of {len(cases)} cases were stopped by the solver "
                         f"({kinds}; the diagnostic is in results.csv); a re-run keeps them (the "
                         "solver is deterministic): change their config")

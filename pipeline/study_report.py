@@ -123,7 +123,7 @@ def report_data(study, cases, records: dict) -> dict:
     -------
     dict
         ``outcomes`` (cases per outcome), ``summary`` (:func:`rockmass.study.outcome_summary`),
-        ``failed_mechanisms`` (blocks per mechanism over the failed_blocks cases), ``groups``: per
+        ``groups``: per
         parameter combination ``params``, ``n`` (cases with a record), ``outcomes``, and over its
         ``ok`` cases only ``n_ok``, ``d_box``, ``d_box_r2``, ``p21_per_m``, ``n_blocks``,
         ``displacement_m`` (each ``{"mean", "sd", "n"}``, sample sd); ``failed_block_cases``
@@ -131,11 +131,11 @@ def report_data(study, cases, records: dict) -> dict:
         failed_blocks, failed_area_m2, failed_mechanisms) and ``not_in_equilibrium`` (case,
         params, realization, status, reason).
     """
-    from .study import displacement_m, failed_mechanism_counts, outcome_counts, outcome_summary
+    from .study import displacement_m, outcome_counts, outcome_summary
 
     recs = [records[c.case_id] for c in cases if c.case_id in records]
     out = {"outcomes": outcome_counts(recs), "summary": outcome_summary(recs, len(cases)),
-           "failed_mechanisms": failed_mechanism_counts(recs), "groups": [],
+           "groups": [],
            "failed_block_cases": [], "not_in_equilibrium": []}
     for members in groups(cases, records).values():
         c0 = members[0][0]

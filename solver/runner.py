@@ -427,7 +427,7 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
     else:
         converged_rest = status == "converged"
     if status == "max_steps":
-        diagnostic = (f"no equilibrium within {done} steps: model ratio {ratio:.3g} (tolerance "
+        diagnostic = (f"no equilibrium within max_steps = {done} steps: model ratio {ratio:.3g} (tolerance "
                       f"{stage.tolerance}), worst block {worst_block} at {worst_ratio:.3g} (block "
                       f"tolerance {stage.block_tolerance})")
     return StageResult(

@@ -38,8 +38,7 @@ FALL_M = 13.6  # a keyblock falling under gravity at the step cap (issue 14: 0.4
 def _stage(name, *, status="converged", kind="static", converged=True, steps=120,
            equilibrium_m=0.0, boundary_equilibrium_m=0.0, any_block_m=None, failed=(),
            monitors=None, worst_ratio=1e-6, worst_block=4, diagnostic=None):
-    """A StageResult with the solver's new fields (set after construction when the dataclass
-    does not have them yet). ``any_block_m``: the displacement over every block, falls included
+    """A StageResult as the solver returns it. ``any_block_m``: the displacement over every block, falls included
     (default: the equilibrium one)."""
     from rockmass.solver.result import StageResult
 
@@ -57,17 +56,7 @@ def _stage(name, *, status="converged", kind="static", converged=True, steps=120
         max_displacement_boundary_equilibrium_m=boundary_equilibrium_m,
         monitors=dict(monitors or {}), worst_block=worst_block, worst_ratio=worst_ratio,
         failed_blocks=[dict(f) for f in failed])
-    fields = {f.name: f for f in dataclasses.fields(StageResult)}
-    given = {k: v for k, v in values.items() if k in fields}
-    for f in fields.values():  # any other field the solver adds: not read by the study
-        if f.name not in given and f.default is dataclasses.MISSING \
-                and f.default_factory is dataclasses.MISSING:
-            given[f.name] = None
-    stage = StageResult(**given)
-    for k, v in values.items():
-        if k not in fields:
-            setattr(stage, k, v)
-    return stage
+    return StageResult(**values)
 
 
 def _result(stages, status="ok", diagnostic=None):
@@ -112,7 +101,11 @@ def _not_converged():
     return _result([_stage("equilibrium"),
                     _stage("tunnel", status="max_steps", converged=False, steps=260,
                            equilibrium_m=0.9, boundary_equilibrium_m=0.9, worst_ratio=0.3,
-                           worst_block=23, monitors=_monitors(0.9))])
+                           worst_block=23, monitors=_monitors(0.9),
+                           # the runner's words for a stage that ran out of steps
+                           diagnostic="no equilibrium within max_steps = 260 steps: model "
+                                      "ratio 0.03 (tolerance 1e-05), worst block 23 at 0.3 "
+                                      "(block tolerance 0.001)")])
 
 
 # (max_steps of the tunnel stage, realization) -> what the fake solver returns
@@ -186,7 +179,9 @@ def _run(study_file, out, *extra):
     (_failed_blocks(1e-3, 2e-3), "failed_blocks"),
     (_not_converged(), "not_converged"),
     # blocks failed and then the rest did not settle: the model is not in equilibrium
-    (_result([_stage("tunnel", status="max_steps", converged=False, failed=[FALL])],
+    (_result([_stage("tunnel", status="failed_blocks", converged=False, failed=[FALL],
+                     diagnostic="1 block(s) kept moving and were taken out: 7 (fall, 0.5 m²); "
+                                "the rest did not reach equilibrium within max_steps")],
              status="failed_blocks"), "not_converged"),
     # the run was stopped: whatever the stages say
     (_result([_stage("tunnel", status="overlap", converged=False)], status="overlap",
