@@ -67,11 +67,11 @@ def main(quick: bool = False) -> None:
         check_s = time.perf_counter() - t0 if inv else None
         q = model.quality
         rows.append({"target_blocks": n, "blocks": model.n_blocks, "first_s": first, "warm_s": warm,
-                     "check_s": check_s, "convex_splits": len(q["convex_splits"]),
-                     "slivers_merged": len(q["slivers_merged"]),
-                     "edges_snapped": q["edges_snapped"]["count"],
-                     "short_edges_left": q["tiny_edges"]["count"],
-                     "area_balance": q["area_balance"]["relative_error"],
+                     "check_s": check_s, "convex_splits": len(q.convex_splits),
+                     "slivers_merged": len(q.slivers_merged),
+                     "edges_snapped": q.edges_snapped["count"],
+                     "short_edges_left": q.tiny_edges["count"],
+                     "area_balance": q.area_balance["relative_error"],
                      "invariants_ok": None if inv is None else str(inv["ok"])})
     title = ("block generation: two persistent sets (30°, 120°) + circular tunnel r = L/10 "
              "in an L x L square; target <= 2 s at 1e4 blocks, <= 30 s at 1e5")
@@ -94,15 +94,15 @@ def main(quick: bool = False) -> None:
             t0 = time.perf_counter()
             inv = check_model(model) if model.n_blocks <= 30_000 else None
             check_s = time.perf_counter() - t0 if inv else None
-            c = model.quality["cracks"]
+            c = model.quality.cracks
             crack_rows.append({
                 "joint_blocks": n, "pattern": pattern, "blocks": model.n_blocks,
                 "first_s": first, "warm_s": warm, "check_s": check_s,
                 "subdivided": c["n_subdivided"], "crack_contacts": c["n_crack_contacts"],
                 "mean_area_per_target": c["crack_block_area_m2"]["mean"] / c["target_area_m2"],
                 "removed_or_merged": c.get("seeds_removed", c.get("pieces_merged")),
-                "edges_snapped": model.quality["edges_snapped"]["count"],
-                "area_balance": model.quality["area_balance"]["relative_error"],
+                "edges_snapped": model.quality.edges_snapped["count"],
+                "area_balance": model.quality.area_balance["relative_error"],
                 "invariants_ok": None if inv is None else str(inv["ok"])})
     crack_title = ("potential cracks: the same model, every rock block subdivided (size s/√10, "
                    "about 10 sub-blocks per joint block); seeds removed (voronoi) or pieces "

@@ -2,7 +2,7 @@
 
     python benchmarks/bench_dfn_validate.py
 
-Three Fisher sets (the orientations of seed 001, κ = 20), power-law radii r 1-20 m with α = 2.5,
+Three Fisher sets (the orientations of Kiran & Juneja 2022, κ = 20), power-law radii r 1-20 m with α = 2.5,
 P32 = 1 m²/m³ each, in cubes of side 20, 40 and 80 m. Field geometry: three orthogonal scanlines
 through the centre (2 m from the faces of the cube) and three orthogonal square faces through the
 centre with windows of 0.75 side. Each size is run for two seeds. Per run: generation, virtual

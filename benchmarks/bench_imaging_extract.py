@@ -33,7 +33,7 @@ COLUMNS = [("level", "s"), ("setting", "s"), ("MP", ".1f"), ("F1", ".3f"), ("dP2
 
 def run_case(difficulty, seed, shape_px=(1000, 1500), m_per_px=0.008, params=None, joint_width=3.0):
     from rockmass.imaging.extract import ExtractParams, extract
-    from rockmass.imaging.metrics import trace_accuracy
+    from rockmass.accuracy import trace_accuracy
     from rockmass.imaging.synthetic import synthetic_face
 
     face = synthetic_face(difficulty, seed=seed, shape_px=shape_px, m_per_px=m_per_px)

@@ -17,7 +17,7 @@ Table 2 — time step. A block sliding down a 30° incline (φ = 20°): error of
 time-step safety factors 0.1–0.9 of the Gershgorin limit.
 
 Table 3 — sleeping blocks. A tunnel excavated in a large jointed domain, static relaxation with
-and without sleeping (REFERENCE.md §6): wall time, steps, speed-up, and the largest difference in
+and without sleeping (docs/design.md §6): wall time, steps, speed-up, and the largest difference in
 block displacement it adds.
 
 Table 4 — static-only path. The same model stepped as a static stage and as a dynamic stage with

@@ -5,7 +5,7 @@
 1. Poisson (Boolean) segment networks of about 10^2, 10^3 and 10^4 traces in a square window: two
    sets of segments of one length L, centres a Poisson process of density λ (per set λ_k), axial
    angles θ = μ_k + ½ VM(0, κ_k) (von Mises on 2θ). Expectations for a stationary network
-   (REFERENCE.md §3; Mauldon et al. 2001; Santaló 1976 for the crossing density):
+   (docs/fractures.md §§5, 8; Mauldon et al. 2001; Santaló 1976 for the crossing density):
 
    - P21 = λ L, P20 (end-counting rule, m / 2A) = λ;
    - Mauldon on the inscribed circle: P21 = λ L, P20 = λ, mean trace length = L; the same pooled

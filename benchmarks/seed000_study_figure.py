@@ -6,7 +6,7 @@ Reads the results of ``rockmass study samples/study_seed000.toml`` (or ``study_c
 alpha) and prints, per (theta, alpha, spacing), the cases by outcome, D_box and the maximum
 displacement of the blocks in equilibrium (mean and range over the realizations whose outcome is
 ``ok`` or ``failed_blocks``), the failed blocks and the boundary points; then the trend checks of
-seed 000 §4.2: the slope of displacement against D_box per theta (Fig. 7: rising for theta < 90°,
+Jiang et al. §4.2 (docs/sources.md §1): the slope of displacement against D_box per theta (Fig. 7: rising for theta < 90°,
 flat for 90°) and the displacement against theta per alpha (Fig. 8: a peak at theta = 60° for
 alpha = 0° and 60°). ``--png`` draws both: left, displacement against D_box per alpha (colour:
 theta; dots: ok, crosses: blocks failed); right, mean displacement and failed blocks against theta.

@@ -27,7 +27,8 @@ import numpy as np
 
 from .model import CONTACT_KINDS, BlockModel
 
-__all__ = ["to_json_dict", "from_json_dict", "write_json", "read_json", "write_vtu", "FORMAT"]
+__all__ = ["to_json_dict", "from_json_dict", "write_json", "read_json", "write_vtu", "polygon_cells",
+           "FORMAT"]
 
 FORMAT = "rockmass.blocks"
 VERSION = 1
@@ -48,7 +49,7 @@ def to_json_dict(model: BlockModel) -> dict:
     return {"format": FORMAT, "version": VERSION, "region_names": list(model.region_names),
             "set_names": list(model.set_names), "contact_kinds": list(CONTACT_KINDS),
             "domain_xy_m": model.domain_xy_m.tolist(), "blocks": blocks, "contacts": contacts,
-            "quality": model.quality}
+            "quality": {} if model.quality is None else model.quality.to_dict()}
 
 
 def from_json_dict(doc: dict, name: str = "blocks.json") -> BlockModel:
@@ -79,8 +80,8 @@ def dumps(model: BlockModel) -> str:
 
 
 def write_json(model: BlockModel, path) -> Path:
-    """Write ``blocks.json`` atomically (:mod:`rockmass.dfn._atomic`)."""
-    from rockmass.dfn._atomic import atomic_open
+    """Write ``blocks.json`` atomically (:mod:`rockmass.dfn.atomic`)."""
+    from rockmass.dfn.atomic import atomic_open
 
     path = Path(path)
     with atomic_open(path, "w") as f:
@@ -107,27 +108,54 @@ def _block_sets(model: BlockModel) -> np.ndarray:
     return best_set
 
 
+def polygon_cells(offsets) -> tuple[list[tuple[str, np.ndarray]], list[np.ndarray]]:
+    """meshio cell blocks of ragged polygons: one block per vertex count, as meshio groups them.
+
+    Parameters
+    ----------
+    offsets : (n_blocks + 1,) array_like of int
+        Block ``i`` owns vertices ``offsets[i]:offsets[i + 1]`` (:class:`BlockModel` layout).
+
+    Returns
+    -------
+    cells : list of (str, (n_k, k) int64)
+        ``("triangle" | "quad" | "polygon", connectivity)`` per vertex count ``k``, increasing; the
+        connectivity indexes the model's vertex array.
+    groups : list of (n_k,) int64
+        The block ids of each cell block, in its order: cell data of block ``i`` goes at its
+        position in ``groups`` (``[values[idx] for idx in groups]``).
+
+    Examples
+    --------
+    >>> cells, groups = polygon_cells([0, 3, 7, 10])
+    >>> [(kind, conn.tolist()) for kind, conn in cells], [g.tolist() for g in groups]
+    ([('triangle', [[0, 1, 2], [7, 8, 9]]), ('quad', [[3, 4, 5, 6]])], [[0, 2], [1]])
+    """
+    offsets = np.asarray(offsets, np.int64)
+    sizes = np.diff(offsets)
+    cells, groups = [], []
+    for k in np.unique(sizes):
+        idx = np.flatnonzero(sizes == k)
+        cells.append(("polygon" if k > 4 else {3: "triangle", 4: "quad"}[int(k)],
+                      offsets[idx][:, None] + np.arange(k)[None, :]))
+        groups.append(idx)
+    return cells, groups
+
+
 def write_vtu(model: BlockModel, path) -> Path:
     """Write ``blocks.vtu`` atomically: one polygon per block with cell data ``block_id``,
     ``region`` and ``set`` (the joint set of the block's longest joint contact, -1 if it has none;
     the set of each contact is in ``blocks.json``)."""
     import meshio
 
-    from rockmass.dfn._atomic import atomic_path
+    from rockmass.dfn.atomic import atomic_path
 
     points = np.column_stack([model.xy_m, np.zeros(len(model.xy_m))])
     block_set = _block_sets(model)
-    sizes = np.diff(model.offsets)
-    cells, block_id, region, sets = [], [], [], []
-    for k in np.unique(sizes):  # meshio groups polygons by vertex count
-        idx = np.flatnonzero(sizes == k)
-        conn = model.offsets[idx][:, None] + np.arange(k)[None, :]
-        cells.append(("polygon" if k > 4 else {3: "triangle", 4: "quad"}[int(k)], conn))
-        block_id.append(idx)
-        region.append(model.region[idx])
-        sets.append(block_set[idx])
+    cells, groups = polygon_cells(model.offsets)
     meshio_mesh = meshio.Mesh(points, cells, cell_data={
-        "block_id": block_id, "region": region, "set": sets})
+        "block_id": groups, "region": [model.region[idx] for idx in groups],
+        "set": [block_set[idx] for idx in groups]})
     with atomic_path(Path(path)) as tmp:
         meshio.write(tmp, meshio_mesh, file_format="vtu")
     return Path(path)

@@ -1,7 +1,8 @@
 """Build a :class:`~rockmass.blockgen.BlockModel`: cut a domain by joint sets or traces, mark the
 excavation stages, merge slivers, make every block convex, and find the contacts.
 
-Steps (each change is listed in ``model.quality``, nothing is moved silently):
+Steps (each change is listed in ``model.quality``, a
+:class:`~rockmass.blockgen.quality.BlockQuality`; nothing is moved silently):
 
 1. **Sources.** The domain outline, each excavation outline, the joints of every set (clipped to the
    domain) and the traces (clipped to the domain).
@@ -22,16 +23,17 @@ Steps (each change is listed in ``model.quality``, nothing is moved silently):
 7. **Potential cracks** (optional, ``cracks``): the chosen convex rock blocks are subdivided into
    convex sub-blocks (Voronoi or triangular, :mod:`rockmass.blockgen.cracks`) whose internal edges
    are glued contacts with source ``-3`` (:data:`~rockmass.blockgen.model.SOURCE_CRACK`); counts
-   in ``quality["cracks"]``.
+   in ``quality.cracks``.
 8. **Short edges** (``snap_edges``): a block edge shorter than the minimum edge ``2d`` collapses
    onto one node in all the blocks that use it, if they stay convex and every region keeps its area
-   (:mod:`rockmass.blockgen.snapping`); each collapse is listed in ``quality["edges_snapped"]``.
+   (:mod:`rockmass.blockgen.snapping`); each collapse is listed in ``quality.edges_snapped``.
 9. **Contacts**: block edges matched by coordinates; consecutive edges of one pair and label are
    summed into one contact.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -40,11 +42,13 @@ import shapely
 from .convex import convex_cuts, is_reflex, reflex_vertices
 from .cracks import Cracks, crack_segments, select_parents
 from .excavations import Excavation, _as_ring
-from .joints import JointSet, set_segments
+from .joints import JointSet, joint_set_segments, seed_sequence
 from .model import (CONTACT_KINDS, KIND_DOMAIN, KIND_EXCAVATION, KIND_GLUED, KIND_JOINT, KIND_TRACE,
                     SOURCE_CONVEX_CUT, SOURCE_CRACK, BlockModel)
-from .network import (Sources, dangling_extensions, label_segments, node, polygonize_segments,
-                      ring_segments, segment_keys, snap_to_grid, collapse_short, unique_rows)
+from .network import (LabelPriority, Sources, collapse_short, dangling_extensions, label_priority,
+                      label_segments, node, polygonize_segments, ring_segments, segment_keys,
+                      snap_to_grid, unique_rows)
+from .quality import BlockQuality
 from .snapping import snap_short_edges
 from .tolerances import CRACK_EDGE_FRACTION, model_tolerances
 
@@ -241,12 +245,9 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
     for k, exc in enumerate(excavations, start=1):
         sources.add(ring_segments(exc.xy_m), KIND_EXCAVATION, k)
         all_segs.append(ring_segments(exc.xy_m))
-    root = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
-    children = root.spawn(len(joint_sets)) if joint_sets else []
+    root = seed_sequence(seed)
     joint_parts, set_names = [], []
-    for i, js in enumerate(joint_sets):
-        rng = np.random.default_rng(children[i])
-        raw = set_segments(js, domain_xy, rng, i)
+    for i, (js, raw) in enumerate(zip(joint_sets, joint_set_segments(joint_sets, domain_xy, root))):
         segs, _ = _clip_segments(snap_to_grid(raw, grid), np.zeros(len(raw), np.int64), domain)
         if not len(segs):
             raise ValueError(f"joint_sets[{i}]: the set produces no joints in the domain "
@@ -298,7 +299,7 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
         ext_kind = np.full(len(ext), KIND_GLUED) if dangling == "glued" else kind[parent]
         for k in np.unique(ext_kind):
             sel = ext_kind == k
-            sources.add(ext[sel], int(k), src[parent[sel]], priority=3)
+            sources.add(ext[sel], int(k), src[parent[sel]], priority=LabelPriority.EXTENSION)
         report["dangling"]["n_extended"] = int(len(ext))
         report["dangling"]["extended_length_m"] = float(np.hypot(*(ext[:, 1] - ext[:, 0]).T).sum())
         noded = renode(np.concatenate([noded, ext]))
@@ -357,7 +358,7 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
             noded, kind, src, faces, region, tol.min_edge_m, tol.grid_m, tol.reflex_sin,
             tol.reflex_m)
         for (k, s_), idx in _groups(kind[moved], src[moved]):
-            sources.add(noded[moved][idx], k, s_, priority=_label_priority(k, s_))
+            sources.add(noded[moved][idx], k, s_, priority=label_priority(k, s_))
         report["edges_snapped"] = {
             "rule": "block edges shorter than min_edge_m collapse onto one node in every block "
                     "that uses it, when all those blocks stay convex and the area of each region "
@@ -370,7 +371,7 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
     model = _assemble(faces, region, noded, kind, src, tol, report, domain_xy, excavations,
                       set_names, domain, n_traces_in)
     if cracks is not None:
-        _crack_summary(model, cracks)
+        model = _with_crack_summary(model)
     return model
 
 
@@ -382,15 +383,6 @@ def _groups(kind, src):
     labels, inv, _ = unique_rows(table)
     inv = inv.ravel()
     return [((int(k), int(s)), np.flatnonzero(inv == i)) for i, (k, s) in enumerate(labels)]
-
-
-def _label_priority(kind, source):
-    """The label priority of :mod:`rockmass.blockgen.network` for a (kind, source) pair."""
-    if kind in (KIND_DOMAIN, KIND_EXCAVATION):
-        return kind == KIND_EXCAVATION and 1 or 0
-    if kind == KIND_GLUED:
-        return {SOURCE_CONVEX_CUT: 4, SOURCE_CRACK: 5}.get(source, 3)
-    return 2
 
 
 def _add_cracks(noded, faces, region, cracks, seq, tol, report, sources, excavations, collapse):
@@ -406,7 +398,7 @@ def _add_cracks(noded, faces, region, cracks, seq, tol, report, sources, excavat
         return noded, faces, region
     segs = snap_to_grid(segs, tol.grid_m)
     segs = segs[np.any(segs[:, 0] != segs[:, 1], axis=1)]
-    sources.add(segs, KIND_GLUED, SOURCE_CRACK, priority=5)
+    sources.add(segs, KIND_GLUED, SOURCE_CRACK, priority=LabelPriority.CRACK)
     return _insert_segments(noded, faces, region, parents, segs, tol, excavations, collapse)
 
 
@@ -421,20 +413,22 @@ def _insert_segments(noded, faces, region, changed, segs, tol, excavations, coll
     return noded, faces, region
 
 
-def _crack_summary(model, cracks):
-    """Counts of the finished model in ``quality["cracks"]``: crack contacts, their total length,
-    and the area of the blocks bounded by at least one crack (against the target ``size_m²``)."""
+def _with_crack_summary(model):
+    """The model with the counts of its cracks added to ``quality.cracks``: crack contacts, their
+    total length, and the area of the blocks bounded by at least one crack (against the target
+    ``size_m²``)."""
     is_crack = (model.contact_kind == KIND_GLUED) & (model.contact_source == SOURCE_CRACK)
     blocks = np.unique(model.contact_blocks[is_crack].ravel())
     blocks = blocks[blocks >= 0]
     area = model.area_m2[blocks]
-    summary = model.quality["cracks"]
+    summary = dict(model.quality.cracks)
     summary["n_crack_contacts"] = int(is_crack.sum())
     summary["crack_length_m"] = float(model.contact_length_m[is_crack].sum())
     summary["n_crack_blocks"] = int(len(blocks))
     if len(blocks):
         summary["crack_block_area_m2"] = {"mean": float(area.mean()), "median": float(np.median(area)),
                                           "min": float(area.min()), "max": float(area.max())}
+    return dataclasses.replace(model, quality=dataclasses.replace(model.quality, cracks=summary))
 
 
 def _merge_slivers(noded, faces, region, tol, report, excavations):
@@ -550,7 +544,8 @@ def _make_convex(noded, faces, region, concave, tol, report, sources, excavation
     if not cuts:
         return noded, faces, region
     cuts = np.array(cuts)
-    sources.add(cuts, KIND_GLUED, SOURCE_CONVEX_CUT, priority=4)
+    sources.add(cuts, KIND_GLUED, SOURCE_CONVEX_CUT,
+                priority=LabelPriority.CONVEX_CUT)
     return _insert_segments(noded, faces, region, concave, cuts, tol, excavations, collapse)
 
 
@@ -634,4 +629,5 @@ def _assemble(faces, region, noded, kind, src, tol, report, domain_xy, excavatio
                       region_names=["rock"] + [e.name for e in excavations],
                       contact_blocks=contact_blocks, contact_length_m=clen,
                       contact_kind=contact_kind, contact_source=contact_source,
-                      set_names=set_names, domain_xy_m=domain_xy, quality=report)
+                      set_names=set_names, domain_xy_m=domain_xy,
+                      quality=BlockQuality.from_dict(report))

@@ -1,8 +1,8 @@
-"""Potential cracks (expanded DEM, seed 000 §3.1): subdivide intact blocks into glued convex sub-blocks.
+"""Potential cracks (expanded DEM, Jiang et al. §3.1; docs/blocks.md §4): subdivide intact blocks into glued convex sub-blocks.
 
-In the expanded DEM of Jiang et al. (seed 000) the intact rock between joints is itself made of
+In the expanded DEM of Jiang et al. (docs/sources.md §1) the intact rock between joints is itself made of
 smaller blocks bonded by *potential cracks*: glued contacts with the strength of intact rock (c, φ,
-T) that fail by Mohr–Coulomb or tension and from then on behave as joints (REFERENCE.md §5). This
+T) that fail by Mohr–Coulomb or tension and from then on behave as joints (docs/blocks.md §4). This
 module draws those cracks inside the already convex blocks of a model; the builder adds them to its
 cut network as ``glued`` contacts with ``contact_source == SOURCE_CRACK`` (``-3``).
 

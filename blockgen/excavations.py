@@ -18,6 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..dfn.polygon import signed_area
+
 __all__ = ["Excavation", "circle", "horseshoe", "arched_cavern", "rectangle", "polygon_excavation",
            "DEFAULT_CIRCLE_SIDES", "circle_perimeter_m"]
 
@@ -65,13 +67,6 @@ def _as_ring(xy, name: str) -> np.ndarray:
         xy = xy[::-1].copy()
     xy.setflags(write=False)
     return xy
-
-
-def signed_area(xy: np.ndarray) -> float:
-    """Shoelace area of an open ring ((k, 2); > 0 counter-clockwise), about its first vertex (no
-    cancellation of large coordinates)."""
-    x, y = xy[:, 0] - xy[0, 0], xy[:, 1] - xy[0, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
 
 
 def _positive(value, name):

@@ -12,29 +12,44 @@ random phase along the line (UDEC ``jset`` trace/gap); without it joints are per
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import typing
+from typing import Annotated, Literal, Optional
 
 import numpy as np
+from pydantic import Field, Strict, ValidationInfo, field_validator
 
-__all__ = ["JointSet", "SPACING_DISTRIBUTIONS", "set_segments"]
+from ..dfn.specs import Float, spec
 
-SPACING_DISTRIBUTIONS = ("constant", "exponential", "lognormal")
+__all__ = ["JointSet", "SPACING_DISTRIBUTIONS", "set_segments", "joint_set_segments",
+           "seed_sequence"]
+
+SpacingDistribution = Literal["constant", "exponential", "lognormal"]
+SPACING_DISTRIBUTIONS = typing.get_args(SpacingDistribution)
 
 
-@dataclass(frozen=True)
+_Length = Annotated[Float, Field(gt=0, le=1e6)]
+_Coord = Annotated[Float, Field(ge=-1e7, le=1e7)]
+
+
+@spec
 class JointSet:
     """One joint set.
+
+    A frozen pydantic dataclass: the annotations below declare each parameter's type, range and
+    description once, for Python callers and for the ``[[blocks.sets]]`` TOML tables
+    (:mod:`rockmass.blocks_config` uses this class as the table type). A bad value raises
+    ``pydantic.ValidationError`` (a ``ValueError``) naming the field.
 
     Parameters
     ----------
     angle_deg : float
-        Angle of the joints in the section, degrees counter-clockwise from +x; any finite value
+        Angle of the joints in the section, degrees counter-clockwise from +x, -360 to 360
         (taken modulo 180).
     spacing_m : float
         Mean spacing measured normal to the joints, > 0.
     spacing_distribution : {"constant", "exponential", "lognormal"}, default "constant"
     spacing_std_m : float, default 0
-        Standard deviation of the lognormal spacing, >= 0.
+        Standard deviation of the lognormal spacing, >= 0 (> 0 for a lognormal spacing).
     trace_length_m, gap_length_m : float, optional
         Joint length and rock-bridge length along each line (both > 0); None: persistent joints.
     origin_xy_m : (float, float), optional
@@ -43,51 +58,40 @@ class JointSet:
         Label used in reports (default ``"set <index>"``).
     """
 
-    angle_deg: float
-    spacing_m: float
-    spacing_distribution: str = "constant"
-    spacing_std_m: float = 0.0
-    trace_length_m: float | None = None
-    gap_length_m: float | None = None
-    origin_xy_m: tuple[float, float] | None = None
-    name: str | None = None
+    angle_deg: Annotated[Float, Field(
+        ge=-360, le=360, description="angle of the joints, counter-clockwise from +x")]
+    spacing_m: Annotated[_Length, Field(description="mean spacing normal to the joints")]
+    spacing_distribution: Annotated[SpacingDistribution, Field(
+        description="law of the spacings (mean spacing_m)")] = "constant"
+    spacing_std_m: Annotated[Float, Field(
+        ge=0, le=1e6, description="standard deviation of a lognormal spacing")] = 0.0
+    trace_length_m: Annotated[Optional[_Length], Field(
+        description="joint length along a line (with gap_length_m); none: persistent")] = None
+    gap_length_m: Annotated[Optional[_Length], Field(
+        description="rock-bridge length between joints of a line (with trace_length_m)")] = None
+    origin_xy_m: Annotated[Optional[tuple[_Coord, _Coord]], Field(
+        description="a point the set passes through; none: a random offset")] = None
+    name: Annotated[Optional[str], Strict(), Field(
+        min_length=1, max_length=64, description="label in reports; none: \"set <index>\"")] = None
 
-    def __post_init__(self):
-        _finite(self.angle_deg, "angle_deg")
-        if not (_finite(self.spacing_m, "spacing_m") > 0):
-            raise ValueError(f"spacing_m must be > 0 (joint spacing in metres), got {self.spacing_m!r}")
-        if self.spacing_distribution not in SPACING_DISTRIBUTIONS:
-            raise ValueError(f"spacing_distribution must be one of {SPACING_DISTRIBUTIONS}, "
-                             f"got {self.spacing_distribution!r}")
-        if not (_finite(self.spacing_std_m, "spacing_std_m") >= 0):
-            raise ValueError(f"spacing_std_m must be >= 0, got {self.spacing_std_m!r}")
-        if self.spacing_distribution == "lognormal" and self.spacing_std_m <= 0:
-            raise ValueError("spacing_std_m must be > 0 for a lognormal spacing")
-        if (self.trace_length_m is None) != (self.gap_length_m is None):
-            raise ValueError("trace_length_m and gap_length_m must be given together (or neither)")
-        for field in ("trace_length_m", "gap_length_m"):
-            value = getattr(self, field)
-            if value is not None and not (_finite(value, field) > 0):
-                raise ValueError(f"{field} must be > 0, got {value!r}")
-        if self.origin_xy_m is not None:
-            if len(self.origin_xy_m) != 2:
-                raise ValueError(f"origin_xy_m must be (x, y), got {self.origin_xy_m!r}")
-            for v in self.origin_xy_m:
-                _finite(v, "origin_xy_m")
+    @field_validator("spacing_std_m")
+    @classmethod
+    def _lognormal_has_spread(cls, value: float, info: ValidationInfo) -> float:
+        if info.data.get("spacing_distribution") == "lognormal" and value <= 0:
+            raise ValueError("must be > 0 for a lognormal spacing")
+        return value
+
+    @field_validator("gap_length_m")
+    @classmethod
+    def _persistence_pair(cls, value: float | None, info: ValidationInfo) -> float | None:
+        if "trace_length_m" in info.data and (info.data["trace_length_m"] is None) != (value is None):
+            raise ValueError("trace_length_m and gap_length_m go together (persistence); give "
+                             "both or neither")
+        return value
 
     @property
     def persistent(self) -> bool:
         return self.trace_length_m is None
-
-
-def _finite(value, name) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a number, got {value!r}") from exc
-    if not math.isfinite(value):
-        raise ValueError(f"{name} must be finite, got {value!r}")
-    return value
 
 
 def _spacings(js: JointSet, n: int, rng: np.random.Generator) -> np.ndarray:
@@ -155,3 +159,50 @@ def set_segments(js: JointSet, domain_xy_m: np.ndarray, rng: np.random.Generator
     a = offsets[:, None] * nrm + starts[:, None] * d
     b = offsets[:, None] * nrm + ends[:, None] * d
     return np.stack([a, b], axis=1)
+
+
+def seed_sequence(seed) -> np.random.SeedSequence:
+    """The root :class:`numpy.random.SeedSequence` of a block model: ``seed`` itself when it is one,
+    else ``SeedSequence(seed)``."""
+    return seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
+
+
+def joint_set_segments(joint_sets, domain_xy_m, seed=0) -> list[np.ndarray]:
+    """The joints of every set, drawn exactly as :func:`rockmass.blockgen.build` draws them.
+
+    The seeding rule lives here only: set ``i`` draws from the generator of child ``i`` of
+    ``SeedSequence(seed)`` (``SeedSequence(seed).spawn(len(joint_sets))[i]``); the builder's
+    potential cracks take child ``len(joint_sets)``. A caller that needs the joints of a model
+    (the box count of a study) calls this with the model's sets, domain and seed.
+
+    Parameters
+    ----------
+    joint_sets : sequence of JointSet
+        The sets, in the order given to ``build``.
+    domain_xy_m : (k, 2) array_like of float
+        Domain outline in metres, as given to ``build`` (a closing vertex is ignored).
+    seed : int or numpy.random.SeedSequence, default 0
+        The model's root seed; a SeedSequence spawns its next ``len(joint_sets)`` children.
+
+    Returns
+    -------
+    list of (n_i, 2, 2) float64
+        Per set, its joint segments clipped to the domain's bounding box extended by one spacing
+        (:func:`set_segments`); the builder then snaps them to its grid and clips them to the
+        domain polygon.
+
+    Examples
+    --------
+    >>> sets = [JointSet(0.0, 1.0), JointSet(90.0, 2.0)]
+    >>> a = joint_set_segments(sets, [(0, 0), (4, 0), (4, 4), (0, 4)], seed=3)
+    >>> b = joint_set_segments(sets, [(0, 0), (4, 0), (4, 4), (0, 4)], seed=3)
+    >>> [len(s) for s in a], all(np.array_equal(x, y) for x, y in zip(a, b))
+    ([4, 2], True)
+    """
+    from .excavations import _as_ring
+
+    domain_xy = _as_ring(domain_xy_m, "domain_xy_m")
+    joint_sets = list(joint_sets)
+    children = seed_sequence(seed).spawn(len(joint_sets)) if joint_sets else []
+    return [set_segments(js, domain_xy, np.random.default_rng(child), i)
+            for i, (js, child) in enumerate(zip(joint_sets, children))]

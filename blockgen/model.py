@@ -12,9 +12,12 @@ extended for ``glued`` (``-2`` = :data:`SOURCE_CONVEX_CUT` for a convex-decompos
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from .quality import BlockQuality
 
 __all__ = ["BlockModel", "CONTACT_KINDS", "KIND_JOINT", "KIND_TRACE", "KIND_GLUED",
            "KIND_EXCAVATION", "KIND_DOMAIN", "SOURCE_CONVEX_CUT", "SOURCE_CRACK",
@@ -91,9 +94,11 @@ class BlockModel:
         Names of the joint sets (``contact_source`` of ``joint`` contacts indexes it).
     domain_xy_m : (k, 2) float64
         The domain outline.
-    quality : dict
-        The quality report (JSON-ready): counts, areas, aspect ratios, smallest edge, every merge
-        and convex split, the area balance and the tolerances used.
+    quality : BlockQuality or None
+        The quality report (:class:`~rockmass.blockgen.quality.BlockQuality`): counts, areas,
+        aspect ratios, smallest edge, every merge and convex split, the area balance and the
+        tolerances used; ``quality.to_dict()`` is its JSON form. A mapping given here is read with
+        ``BlockQuality.from_dict`` (an empty one is None). None for a model not made by the builder.
     area_m2, centroid_xy_m, second_moment_m4
         Derived per block (see :func:`polygon_properties`).
     """
@@ -108,7 +113,7 @@ class BlockModel:
     contact_source: np.ndarray
     set_names: tuple
     domain_xy_m: np.ndarray
-    quality: dict = field(default_factory=dict)
+    quality: BlockQuality | None = None
     area_m2: np.ndarray = field(init=False)
     centroid_xy_m: np.ndarray = field(init=False)
     second_moment_m4: np.ndarray = field(init=False)
@@ -121,6 +126,9 @@ class BlockModel:
             object.__setattr__(self, name, _frozen(getattr(self, name), dtype))
         object.__setattr__(self, "region_names", tuple(self.region_names))
         object.__setattr__(self, "set_names", tuple(self.set_names))
+        if isinstance(self.quality, Mapping):
+            object.__setattr__(self, "quality",
+                               BlockQuality.from_dict(self.quality) if self.quality else None)
         if self.xy_m.ndim != 2 or self.xy_m.shape[1] != 2:
             raise ValueError(f"xy_m must have shape (n_vertices, 2), got {self.xy_m.shape}")
         if self.offsets[0] != 0 or self.offsets[-1] != len(self.xy_m) or (np.diff(self.offsets) < 3).any():

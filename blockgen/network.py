@@ -3,22 +3,50 @@
 Every block edge comes from one noded network of 2-point segments, so two adjacent blocks share
 exactly the same edge vertices and contacts can be matched by coordinates. Labels travel from the
 source lines to the noded segments by proximity (``label_m``, :mod:`rockmass.blockgen.tolerances`),
-with a priority when sources overlap: domain boundary, then excavation outline, then joints and
-traces, then extensions of dangling ends, then convex-decomposition cuts.
+with a priority when sources overlap (:class:`LabelPriority`): domain boundary, then excavation
+outline, then joints and traces, then extensions of dangling ends, then convex-decomposition cuts,
+then potential cracks.
 """
 
 from __future__ import annotations
 
+import enum
+
 import numpy as np
 import shapely
 
-from .model import KIND_DOMAIN, KIND_EXCAVATION
+from .model import KIND_DOMAIN, KIND_EXCAVATION, KIND_GLUED, SOURCE_CONVEX_CUT, SOURCE_CRACK
 
-__all__ = ["Sources", "unique_rows", "snap_to_grid", "node", "collapse_short", "label_segments", "dangling_extensions", "polygonize_segments",
+__all__ = ["Sources", "LabelPriority", "label_priority", "unique_rows", "snap_to_grid", "node",
+           "collapse_short", "label_segments", "dangling_extensions", "polygonize_segments",
            "segment_keys"]
 
-# priority of a kind when two sources cover the same edge (lower wins)
-_PRIORITY = {KIND_DOMAIN: 0, KIND_EXCAVATION: 1}
+
+class LabelPriority(enum.IntEnum):
+    """Which source labels an edge that several sources cover: the lowest value wins.
+
+    Plain ints where arrays hold them (:class:`Sources` stores ``int64``).
+    """
+
+    DOMAIN = 0  #: the domain outline
+    EXCAVATION = 1  #: an excavation stage's outline
+    LINE = 2  #: a joint or a trace
+    EXTENSION = 3  #: the extension of a dangling end (glued, or joint with ``dangling="joint"``)
+    CONVEX_CUT = 4  #: a cut of the convex decomposition (source ``SOURCE_CONVEX_CUT``)
+    CRACK = 5  #: a potential crack of the sub-block subdivision (source ``SOURCE_CRACK``)
+
+
+def label_priority(kind: int, source: int) -> LabelPriority:
+    """The priority of a label (``kind``, ``source``): outlines first, then joints and traces; a
+    glued edge by its source (convex cut, crack, else the extension of a dangling end)."""
+    if kind == KIND_DOMAIN:
+        return LabelPriority.DOMAIN
+    if kind == KIND_EXCAVATION:
+        return LabelPriority.EXCAVATION
+    if kind == KIND_GLUED:
+        return {SOURCE_CONVEX_CUT: LabelPriority.CONVEX_CUT,
+                SOURCE_CRACK: LabelPriority.CRACK}.get(source, LabelPriority.EXTENSION)
+    return LabelPriority.LINE
 
 
 class Sources:
@@ -28,7 +56,9 @@ class Sources:
         self.piece_m = piece_m
         self._segs, self._kind, self._src, self._prio = [], [], [], []
 
-    def add(self, segments: np.ndarray, kind: int, source, priority: int | None = None):
+    def add(self, segments: np.ndarray, kind: int, source, priority: LabelPriority | None = None):
+        """Add ``segments`` labelled (``kind``, ``source``); ``priority`` default: by kind (an
+        outline's, else :attr:`LabelPriority.LINE`)."""
         segments = np.asarray(segments, float).reshape(-1, 2, 2)
         if not len(segments):
             return
@@ -41,7 +71,10 @@ class Sources:
         t0, t1 = j / k[rep], (j + 1) / k[rep]
         a, b = segments[rep, 0], segments[rep, 1]
         pieces = np.stack([a + (b - a) * t0[:, None], a + (b - a) * t1[:, None]], axis=1)
-        prio = _PRIORITY.get(kind, 2) if priority is None else priority
+        if priority is None:
+            priority = (label_priority(kind, -1) if kind in (KIND_DOMAIN, KIND_EXCAVATION)
+                        else LabelPriority.LINE)
+        prio = int(priority)
         self._segs.append(pieces)
         self._kind.append(np.full(len(pieces), kind, np.int64))
         self._src.append(src[rep])

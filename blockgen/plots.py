@@ -22,7 +22,7 @@ def plot_blocks(model: BlockModel, path, title: str | None = None, dpi: int = 15
     import matplotlib.pyplot as plt
     from matplotlib.collections import PolyCollection
 
-    from rockmass.dfn._atomic import atomic_path
+    from rockmass.dfn.atomic import atomic_path
 
     from .blockio import _block_sets
 

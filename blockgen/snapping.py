@@ -1,4 +1,4 @@
-"""Collapse block edges shorter than the solver's minimum edge ``2d`` (REFERENCE.md §5).
+"""Collapse block edges shorter than the solver's minimum edge ``2d`` (docs/blocks.md §6).
 
 A DEM with corner rounding ``d`` cannot hold an edge shorter than ``2d``: both rounded corners would
 overlap. Such edges come from joints or cracks meeting close to another line. They are collapsed
@@ -24,7 +24,7 @@ Rule for one edge ``(u, v)`` of length < ``min_edge_m`` (shortest first):
    repeat until nothing changes. The blocks are rebuilt locally from their new rings (no new
    polygonisation); the builder then re-checks convexity.
 
-Every collapse is reported (``quality["edges_snapped"]``): the edge length, both old nodes, the new
+Every collapse is reported (``quality.edges_snapped``): the edge length, both old nodes, the new
 point, the blocks involved and the kinds of the lines that moved. Lines keep their labels: a joint
 edge that moved is still that joint's edge.
 """
@@ -33,8 +33,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..dfn.polygon import signed_area
 from .convex import reflex_vertices
-from .excavations import signed_area
 from .model import KIND_DOMAIN, KIND_EXCAVATION
 from .network import unique_rows
 

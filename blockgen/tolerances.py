@@ -3,7 +3,7 @@
 Block geometry is computed in float64 by GEOS (through shapely) and numpy. Absolute tolerances would
 be wrong for a 1 m shake-table model and a 500 m cavern at once, so every length tolerance here is a
 fraction of the model size ``L`` (the diagonal of the domain's bounding box) or of the solver's
-corner rounding ``d`` (REFERENCE.md §5: ``d`` ≈ 1 % of a typical edge, minimum edge ``2d``).
+corner rounding ``d`` (docs/blocks.md §6: ``d`` ≈ 1 % of a typical edge, minimum edge ``2d``).
 
 ============================  ==========================  ==========================================
 name                          value                       why
@@ -38,7 +38,7 @@ name                          value                       why
                                                           edges shorter than 1000 grid cells —
                                                           while sitting < 2 grid cells off the line.
 ``rounding_m``                ``0.01 ·`` median edge      the solver's corner rounding ``d``
-                              (or given)                  (REFERENCE.md §5, UDEC's default ratio).
+                              (or given)                  (docs/blocks.md §6, UDEC's default ratio).
                                                           With potential cracks of size ``s`` the
                                                           typical edge is at most ``0.5 · s`` (the
                                                           median edge of a Voronoi subdivision of
@@ -66,7 +66,7 @@ from dataclasses import asdict, dataclass
 __all__ = ["Tolerances", "model_tolerances", "ROUNDING_FRACTION", "SNAP_FRACTION", "GRID_FRACTION", "LABEL_FRACTION",
            "REFLEX_SIN", "AREA_BALANCE_RTOL", "CRACK_EDGE_FRACTION", "REFLEX_GRID_CELLS"]
 
-#: d / typical edge (REFERENCE.md §5).
+#: d / typical edge (docs/blocks.md §6).
 ROUNDING_FRACTION = 0.01
 #: snap distance / model size.
 SNAP_FRACTION = 1e-9

@@ -9,6 +9,9 @@ Public names (each module's docstring gives the formulas and sources)
     GeoJSON or CSV by suffix (:mod:`rockmass.dfn.traceio`).
 :func:`read_geojson`, :func:`write_geojson`, :func:`read_csv`, :func:`write_csv`
     The explicit readers and writers (:mod:`rockmass.dfn.geojson_io`, :mod:`rockmass.dfn.csv_io`).
+:func:`signed_area`, :func:`polygon_area`
+    The shoelace area of a polygon ring (:mod:`rockmass.dfn.polygon`), the one polygon-area formula
+    of every stage that may import dfn (docs/fractures.md §1.3).
 Trace-map statistics
     2D joint sets (:mod:`~rockmass.dfn.sets2d`), P20 / P21 / scanline spacing
     (:mod:`~rockmass.dfn.intensity`), Mauldon circular windows (:mod:`~rockmass.dfn.mauldon`),
@@ -35,7 +38,7 @@ Fitting from field data and the closed loop
 ``rockmass.dfn`` depends on numpy and shapely only: it never imports the pipeline package
 (``rockmass`` top-level modules) nor numba, matplotlib, OpenCV or scikit-image at import time.
 The public names load on first use (PEP 562), so importing the package, or its standard-library-only
-module :mod:`rockmass.dfn._atomic` (the atomic file writes that every rockmass writer shares), does
+module :mod:`rockmass.dfn.atomic` (the atomic file writes that every rockmass writer shares), does
 not load numpy or shapely either.
 """
 
@@ -49,6 +52,7 @@ if TYPE_CHECKING:
     from .geojson_io import read_geojson, write_geojson
     from .traceio import read_traces, write_traces
     from .tracemap import TraceMap
+    from .polygon import polygon_area, signed_area
     from .sets2d import trace_angles_deg, fit_sets_2d, fit_axial_mixture, JointSets2D
     from .intensity import sampling_window, SamplingWindow, clipped_lengths_m, trace_intensity, TraceIntensity, scanline_survey, ScanlineSurvey
     from .mauldon import mauldon_from_counts, mauldon_circle, MauldonEstimate, circle_window, CircleWindow
@@ -147,6 +151,8 @@ _SOURCES = {
     "p32_from_p30": "sizes",
     "radius_exponent_from_trace": "sizes",
     "trace_exponent_from_radius": "sizes",
+    "polygon_area": "polygon",
+    "signed_area": "polygon",
     "DiskNetwork": "network",
     "disk_basis": "network",
     "as_box": "network",

@@ -44,7 +44,7 @@ from typing import IO
 
 import numpy as np
 
-from ._atomic import atomic_open
+from .atomic import atomic_open
 from .tracemap import TraceMap, _describe_traces, _plural, _require_trace_map, _resolve_frame
 
 __all__ = ["read_csv", "write_csv"]

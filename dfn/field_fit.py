@@ -5,7 +5,8 @@ known orientation (:class:`FaceSurvey`). :func:`fit_field` does, in order:
 
 1. **Orientation.** The poles of every scanline together are clustered into joint sets by a mixture of
    bipolar Fisher laws (:func:`~rockmass.dfn.sets3d.fit_sets_3d`, number of sets by BIC or given);
-   each set's mean pole comes from its orientation tensor and κ = (N − 1)/(N − R) (REFERENCE.md §3),
+   each set's mean pole comes from its orientation tensor and κ = (N − 1)/(N − R)
+   (docs/fractures.md §3.1, eq. (3.5); Fisher et al. 1987),
    with sd(κ) ≈ κ / √(N − 1) (2κ(N − R) is χ² with 2(N − 1) degrees of freedom, [Fis53]_) and the
    α95 confidence cone. Scanline sampling favours planes normal to the line (Terzaghi); with κ of
    10 or more and lines not sub-parallel to a set this biases the mean by less than the α95 cone,

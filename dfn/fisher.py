@@ -13,7 +13,7 @@ and φ, the azimuth about μ, is uniform. Poles are axial (n and -n are the same
 works with the orientation tensor (:func:`fit_fisher`).
 
 Functions take and return degrees and ``(..., 3) float64`` unit vectors in x = East, y = North,
-z = Up (DESIGN.md §3). Random draws use a caller-owned :class:`numpy.random.Generator`.
+z = Up (docs/fractures.md §1.1). Random draws use a caller-owned :class:`numpy.random.Generator`.
 
 References
 ----------
@@ -102,7 +102,7 @@ def sample_fisher(rng: np.random.Generator, mean_pole: ArrayLike, kappa: float, 
     Parameters
     ----------
     rng : numpy.random.Generator
-        Source of randomness (give each fracture set its own ``SeedSequence`` child, DESIGN.md §3).
+        Source of randomness (give each fracture set its own ``SeedSequence`` child, docs/fractures.md §11.2).
         Exactly two uniforms per vector are drawn, in the order (q for all vectors, u for all).
     mean_pole : (3,) array_like
         Mean direction μ, any non-zero length (normalised here); either hemisphere.
@@ -119,8 +119,8 @@ def sample_fisher(rng: np.random.Generator, mean_pole: ArrayLike, kappa: float, 
 
     Notes
     -----
-    With q and u uniform on [0, 1) ([Woo94]_, in a form stable for all κ; q = 1 - u' of
-    REFERENCE.md §4)::
+    With q and u uniform on [0, 1) ([Woo94]_, in a form stable for all κ; docs/fractures.md §3.1,
+    eq. (3.3))::
 
         1 - cos θ = -log1p(q · expm1(-2κ)) / κ     (= -ln(1 - q + q e^(-2κ)) / κ)
         φ = 2π u,   sin θ = sqrt((1 - cos θ)(1 + cos θ))

@@ -6,8 +6,8 @@ A fracture set is a :class:`FractureSetSpec`: an orientation model (:class:`Fish
 line, or :class:`IntensityP21` on a plane, converted to P32 with the set's C13 / C23,
 :mod:`rockmass.dfn.stereology`).
 
-Algorithm (REFERENCE.md §4)
----------------------------
+Algorithm (docs/fractures.md §11.1)
+-----------------------------------
 For each set: draw radii first, then normals, then centres uniform in the domain box padded by the
 largest radius r_max on every side (so the edges of the domain are not under-filled), in batches of
 about the expected count; accumulate the *clipped* one-sided area of each disk in the domain
@@ -19,12 +19,13 @@ For a distribution without an upper truncation (lognormal, exponential) the padd
 with survival probability 1e-9 (:data:`TAIL_PROBABILITY`); larger disks (one in 10⁹) are drawn but
 centred no further out than that.
 
-Seeding (DESIGN.md §3)
-----------------------
+Seeding (docs/fractures.md §11.2, eqs. (11.2)-(11.3))
+-----------------------------------------------------
 Realization i of root seed s uses ``SeedSequence(s, spawn_key=(i,))`` — the child that
 ``SeedSequence(s).spawn(i + 1)[i]`` would be — and set j within it ``SeedSequence(s, spawn_key=(i, j))``.
 Each is built directly from (s, i, j), so realization i is identical alone, in a batch, in any
-order and on any worker. All draws are numpy; kernels run after.
+order and on any worker. All draws are numpy; kernels run after. :func:`realization_seed` is the one
+place this rule is written; every seeded draw of a realization in rockmass goes through it.
 """
 
 from __future__ import annotations
@@ -311,6 +312,34 @@ def _check_index(value: object, name: str) -> int:
 def realization_seed(seed: int, realization: int, set_index: int | None = None) -> np.random.SeedSequence:
     """The SeedSequence of a realization (spawn key (i,)) or of one of its sets (spawn key (i, j)).
 
+    This is rockmass's single seeding rule (docs/fractures.md §11.2, eqs. (11.2)-(11.3)):
+    realization ``i`` of root seed ``s`` is ``SeedSequence(s, spawn_key=(i,))``, the child
+    ``SeedSequence(s).spawn(i + 1)[i]`` would be, and set ``j`` within it is
+    ``SeedSequence(s, spawn_key=(i, j))``. Each is built from (s, i, j) alone, so a realization is
+    the same whether it is generated alone, in a batch, in any order or on any worker.
+
+    Parameters
+    ----------
+    seed : int
+        Root seed s >= 0.
+    realization : int
+        Realization index i >= 0.
+    set_index : int, optional
+        Fracture set index j >= 0 within the realization. Default None: the realization's own
+        sequence.
+
+    Returns
+    -------
+    numpy.random.SeedSequence
+        Pass it to :func:`numpy.random.default_rng`. A caller that needs an integer seed for
+        realization i (a config field, a worker argument) derives it from this sequence's
+        ``generate_state``, so the integer follows the same rule.
+
+    Raises
+    ------
+    ValueError, TypeError
+        A negative or non-integer ``seed``, ``realization`` or ``set_index`` (the message names it).
+
     Examples
     --------
     >>> a = realization_seed(1, 3).generate_state(2)
@@ -352,7 +381,7 @@ def _fill_set(rng: np.random.Generator, spec: FractureSetSpec, box: np.ndarray, 
         if drawn + n > 2 * limit + 64:
             raise ValueError(f"{label}: more than {drawn} fractures drawn without reaching the P32 "
                              f"target; raise max_fractures (now {limit}) or lower the intensity")
-        radius = spec.size.sample(rng, n)          # sizes first (REFERENCE.md §4)
+        radius = spec.size.sample(rng, n)          # sizes first (docs/fractures.md §11.1)
         normal = spec.orientation.sample(rng, n)
         centre = lo + rng.random((n, 3)) * (hi - lo)
         area = clipped_disk_areas(centre, normal, radius, box)
@@ -408,7 +437,7 @@ def generate(sets: Sequence[FractureSetSpec], domain_m: ArrayLike, *, seed: int,
     sets = _check_sets(sets)
     box = as_box(domain_m)
     limit = _check_index(max_fractures, "max_fractures")
-    seed_seq = realization_seed(seed, realization)
+    realization_seed(seed, realization)  # validates both
     volume = float(np.prod(box[1] - box[0]))
     plans = []
     needed_total = 0.0
@@ -426,7 +455,7 @@ def generate(sets: Sequence[FractureSetSpec], domain_m: ArrayLike, *, seed: int,
                          f"max_fractures = {limit}")
     columns = []
     for j, (label, spec, expected) in enumerate(plans):
-        rng = np.random.default_rng(np.random.SeedSequence(seed_seq.entropy, spawn_key=(*seed_seq.spawn_key, j)))
+        rng = np.random.default_rng(realization_seed(seed, realization, j))
         centre, normal, radius = _fill_set(rng, spec, box, spec.p32 * volume, expected, limit, label)
         columns.append((centre, normal, radius, np.full(radius.size, j, dtype=np.int64)))
     centre, normal, radius, set_id = (np.concatenate(c) for c in zip(*columns))

@@ -52,7 +52,7 @@ from typing import Any
 import numpy as np
 import shapely
 
-from ._atomic import atomic_open
+from .atomic import atomic_open
 from .tracemap import _MAX_LISTED, TraceMap, _as_window, _describe_traces, _require_trace_map, _resolve_frame
 
 __all__ = ["read_geojson", "write_geojson"]

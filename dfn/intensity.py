@@ -5,7 +5,7 @@ the explicit window, else the map's, else the traces' bounding box) and the wind
 how densely a face is jointed:
 
 =================  ==========  ======================================================================
-measure            unit        definition (REFERENCE.md §3)
+measure            unit        definition (docs/fractures.md §5)
 =================  ==========  ======================================================================
 P20                1/m²        traces per window area (counting rule ``p20_rule``, see below)
 P21                m/m²        trace length per window area, each trace clipped to the window
@@ -320,7 +320,7 @@ def trace_intensity(
     -----
     .. math:: P_{20} = \frac{m}{2A}, \qquad P_{21} = \frac{1}{A}\sum_i |T_i \cap W|
 
-    with m the trace ends strictly inside the window W of area A (REFERENCE.md §3; Mauldon et al.
+    with m the trace ends strictly inside the window W of area A (docs/fractures.md §5, eq. (5.2); Mauldon et al.
     2001 for the end-counting estimator; Dershowitz & Herda 1992 for the P_ij notation).
 
     References

@@ -96,7 +96,7 @@ def mauldon_from_counts(n_intersections: int, n_endpoints: int, radius_m: float)
     .. math:: P_{21} = \frac{n}{4r}, \quad P_{20} = \frac{m}{2\pi r^2}, \quad
               \mu_L = \frac{\pi r}{2}\frac{n}{m}
 
-    (Mauldon et al. 2001, eqs. 14, 11 and 13; REFERENCE.md §3).
+    (Mauldon et al. 2001, eqs. 14, 11 and 13; docs/fractures.md §8, eqs. (8.1)-(8.3)).
 
     References
     ----------

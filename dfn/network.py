@@ -1,11 +1,11 @@
 """Three-dimensional disk fracture networks: the :class:`DiskNetwork` type and its intensities.
 
-A network is a structure of arrays (DESIGN.md §2) in the world frame x = East, y = North, z = Up,
+A network is a structure of arrays (one numpy array per field) in the world frame x = East, y = North, z = Up,
 metres: ``centre_m (n, 3)``, unit ``normal (n, 3)`` (upper normals, n_z >= 0), ``radius_m (n,)`` and
 ``set_id (n,) int64``, plus the domain box ``domain_m`` = ``[[xmin, ymin, zmin], [xmax, ymax, zmax]]``
 that the network was generated for.
 
-Intensities (REFERENCE.md §4) are one-sided: P32 = Σ (area of each disk inside the box) / V, and
+Intensities (docs/fractures.md §5, §11.1) are one-sided: P32 = Σ (area of each disk inside the box) / V, and
 P30 = (number of disk centres inside the box) / V.
 
 Clipped area

@@ -11,7 +11,7 @@ VTU
 ---
 Each disk becomes a regular polygon of ``n_vertices`` vertices inscribed in it (meshio ``polygon``
 cells, VTK_POLYGON), with integer cell data ``set`` and ``id`` (the row in the network). Files are
-written atomically (:mod:`rockmass.dfn._atomic`).
+written atomically (:mod:`rockmass.dfn.atomic`).
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ import os
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._atomic import atomic_open, atomic_path
+from .atomic import atomic_open, atomic_path
 from .network import DiskNetwork, _require_network, disk_basis
 
 __all__ = ["CSV_COLUMNS", "read_fractures_csv", "write_fractures_csv", "write_fractures_vtu", "disk_polygons"]

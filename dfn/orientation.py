@@ -1,7 +1,7 @@
 """Orientations of planes and lines: dip / dip direction, strike / dip, trend / plunge and unit vectors.
 
 Every function is vectorised (numpy broadcasting over the leading axes) and takes and returns
-degrees; vectors are ``(..., 3) float64`` in the world frame of DESIGN.md §3, x = East, y = North,
+degrees; vectors are ``(..., 3) float64`` in the world frame of docs/fractures.md §1.1, x = East, y = North,
 z = Up.
 
 Conventions
@@ -12,7 +12,7 @@ Plane, dip / dip direction
 Upper normal
     ``normal_from_dip``: n = (sin δ sin α, sin δ cos α, cos δ), the unit normal with n_z >= 0; its
     horizontal part points down the dip.
-Pole (the project convention, DESIGN.md §3)
+Pole (the project convention, docs/fractures.md §1.1, eq. (1.1))
     ``pole_from_dip``: p = -n, the lower-hemisphere normal (p_z <= 0), trend α + 180°,
     plunge 90° - δ.
 Strike / dip (right-hand rule)
@@ -170,7 +170,7 @@ def normal_from_dip(dip_deg: ArrayLike, dip_direction_deg: ArrayLike) -> np.ndar
 
 
 def pole_from_dip(dip_deg: ArrayLike, dip_direction_deg: ArrayLike) -> np.ndarray:
-    """Lower-hemisphere unit pole of planes given by dip / dip direction (DESIGN.md §3).
+    """Lower-hemisphere unit pole of planes given by dip / dip direction (docs/fractures.md §1.1, eq. (1.1)).
 
     Parameters are those of :func:`normal_from_dip`.
 

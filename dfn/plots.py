@@ -20,6 +20,25 @@ def _figure(size):
     return Figure(figsize=size, layout="constrained")
 
 
+def _segment_colours(trace_map, set_ids, unassigned: str) -> list[str]:
+    """One matplotlib colour per straight segment of ``trace_map``: its set's cycle colour ``C<set>``,
+    the grey ``unassigned`` for set -1, all ``C0`` when ``set_ids`` is None."""
+    owner = trace_map.segment_trace_index()
+    if set_ids is None:
+        return ["C0"] * owner.size
+    per_segment = np.asarray(set_ids)[owner]
+    return [unassigned if s < 0 else f"C{int(s) % 10}" for s in per_segment]
+
+
+def _set_legend(ax, set_ids) -> None:
+    """A legend entry per assigned set, in the colours of :func:`_segment_colours` (none without sets)."""
+    if set_ids is None:
+        return
+    for s in sorted(set(int(v) for v in np.asarray(set_ids) if v >= 0)):
+        ax.plot([], [], color=f"C{s % 10}", label=f"set {s}")
+    ax.legend(fontsize=8, loc="upper right")
+
+
 def rose_petals(angles_deg, weights, bin_deg: float = 10.0):
     """Bin edges (deg, 0–360) and equal-area petal radii of axial angles.
 
@@ -98,19 +117,11 @@ def plot_trace_map(trace_map, path, *, set_ids=None, title: str | None = None,
     ax = fig.add_subplot()
     seg = trace_map.segments()
     lines = seg.reshape(-1, 2, 2)
-    if set_ids is None:
-        colours = ["C0"] * len(lines)
-    else:
-        per_segment = np.asarray(set_ids)[trace_map.segment_trace_index()]
-        colours = ["0.6" if s < 0 else f"C{int(s) % 10}" for s in per_segment]
-    ax.add_collection(LineCollection(lines, colors=colours, linewidths=1.0))
+    ax.add_collection(LineCollection(lines, colors=_segment_colours(trace_map, set_ids, "0.6"), linewidths=1.0))
     if trace_map.window_xy_m is not None:
         ring = np.vstack([trace_map.window_xy_m, trace_map.window_xy_m[:1]])
         ax.plot(ring[:, 0], ring[:, 1], color="k", lw=1.0)
-    if set_ids is not None:
-        for s in sorted(set(int(v) for v in np.asarray(set_ids) if v >= 0)):
-            ax.plot([], [], color=f"C{s % 10}", label=f"set {s}")
-        ax.legend(fontsize=8, loc="upper right")
+    _set_legend(ax, set_ids)
     ax.autoscale()
     ax.set_aspect("equal")
     ax.set_xlabel(f"u ({unit})")

@@ -97,7 +97,7 @@ def sample_line(network: DiskNetwork, start: ArrayLike, end: ArrayLike) -> LineS
     -------
     LineSample
         Hits sorted by distance from ``start``. P10 of a Poisson network is P32 / C13 in expectation
-        (REFERENCE.md §4), and for a stationary network hit counts are Poisson.
+        (docs/fractures.md §12.3, eq. (7.1); Wang 2005), and for a stationary network hit counts are Poisson.
 
     Examples
     --------
@@ -243,7 +243,8 @@ def sample_plane(network: DiskNetwork, point: ArrayLike, normal: ArrayLike, wind
     TraceMap
         One straight trace per disk cut (a non-convex window may split a trace into several), frame
         ``"plane"``, attributes ``set`` (set id) and ``disk`` (row in ``network``), window the given
-        polygon. P21 = P32 / C23 and mean trace length π E[r²]/(2 E[r]) in expectation (REFERENCE.md §4;
+        polygon. P21 = P32 / C23 and mean trace length π E[r²]/(2 E[r]) in expectation
+        (docs/fractures.md §10.2, eqs. (7.2), (10.6); Wang 2005, Zhang et al. 2002;
         the mean length holds for untruncated traces).
 
     Examples

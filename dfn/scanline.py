@@ -1,7 +1,7 @@
 """Scanline surveys: joints hit along a straight line, with the line's orientation and length.
 
 A :class:`Scanline` holds, per intersection, the distance along the line (metres from its start),
-the orientation of the joint plane (dip / dip direction, DESIGN.md §3) and optionally the trace
+the orientation of the joint plane (dip / dip direction, docs/fractures.md §1.1) and optionally the trace
 length and a termination code; and, for the line, its trend, plunge (positive downward) and length,
 and optionally its start point in the world frame (x East, y North, z Up).
 

@@ -2,9 +2,9 @@
 
 - P10 = intersections per metre of line. The Terzaghi-weighted P10 = Σ w_i / L with
   w_i = 1 / max(|cos δ_i|, sin γ) (:func:`~rockmass.dfn.terzaghi_weights`, cap γ) estimates the
-  intensity of planes normal to the line, i.e. P32 of the set ([Ter65]_, REFERENCE.md §3).
+  intensity of planes normal to the line, i.e. P32 of the set ([Ter65]_; docs/fractures.md §6, eqs. (6.1)-(6.2)).
 - Spacings (distances between consecutive hits of the same set along the line; all hits for the
-  whole line) of a Poisson network are exponential with mean 1/P10 (REFERENCE.md §4). Both the
+  whole line) of a Poisson network are exponential with mean 1/P10 (docs/fractures.md §2, eq. (2.2)). Both the
   exponential and the lognormal law are fitted by maximum likelihood and compared with the
   Kolmogorov–Smirnov statistic and AIC.
 - RQD: [PH76]_ for a Poisson line of frequency λ and threshold t,
@@ -288,7 +288,7 @@ def scanline_statistics(scanline: Scanline, membership: ArrayLike | None = None,
     Notes
     -----
     A warning is added for each set whose mean plane is within γ of the line (the line is nearly
-    parallel to the set: few hits, and capped weights that bias its P10 low, REFERENCE.md §3).
+    parallel to the set: few hits, and capped weights that bias its P10 low, docs/fractures.md §6; Terzaghi 1965).
 
     Examples
     --------

@@ -1,4 +1,4 @@
-"""A 2D section of a Poisson disk network generated directly on the plane (REFERENCE.md §4).
+"""A 2D section of a Poisson disk network generated directly on the plane (docs/fractures.md §12.4).
 
 Only disks that cut the plane matter. For a Poisson network with P30 centres per m³ and radius
 density f(r), the disks whose centres lie within r of the plane have, per unit area of the plane,

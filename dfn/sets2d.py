@@ -1,14 +1,16 @@
 """Joint sets from trace angles on a face: a length-weighted mixture of von Mises laws on doubled angles.
 
-A trace angle on a face is axial: θ and θ + 180° are the same trace (DESIGN.md §3: 0-180°,
+A trace angle on a face is axial: θ and θ + 180° are the same trace (docs/fractures.md §1.4: 0-180°,
 counter-clockwise from +u). Doubling the angle, x = 2θ, maps axial data one-to-one onto the full
-circle, where the von Mises law is the natural model of one set (REFERENCE.md §3; Mardia & Jupp 2000,
-§9.3). This module
+circle, where the von Mises law is the natural model of one set (docs/fractures.md §3.2,
+eq. (3.8); Mardia & Jupp 2000, §9.3). This module
 
 - gives each trace one angle (:func:`trace_angles_deg`),
 - fits a mixture of k von Mises laws on the doubled angles by expectation-maximisation, weighting each
   trace by its length, and picks k by BIC over 1..5 or takes it as given
-  (:func:`fit_axial_mixture` on plain arrays, :func:`fit_sets_2d` on a trace map),
+  (:func:`fit_axial_mixture` on plain arrays, :func:`fit_sets_2d` on a trace map); the EM machinery
+  is shared with :mod:`rockmass.dfn.sets3d` (:mod:`rockmass.dfn._mixture_em`, docs/fractures.md §4),
+  and this module supplies only the von Mises law on doubled angles,
 - reports per set the mean angle, circular spread, concentration κ, weight, trace count and the hard
   membership of every trace (:class:`JointSets2D`).
 
@@ -26,7 +28,8 @@ from typing import Any
 import numpy as np
 from scipy.special import i0e, i1e
 
-from .intensity import _choice, _integer_at_least, _real_at_least
+from ._mixture_em import Components, candidate_set_counts, check_options, fit_mixture, kappa_from_rbar, posteriors
+from .intensity import _choice, _real_at_least
 from .tracemap import TraceMap, _require_trace_map
 
 __all__ = ["JointSets2D", "fit_axial_mixture", "fit_sets_2d", "trace_angles_deg"]
@@ -40,8 +43,6 @@ RESOLUTION_DEG = 0.5
 
 ANGLE_METHODS = ("segments", "chord")
 
-_MAX_ITER = 300  # EM steps at most (over-fitted sets crawl; their BIC only needs a few digits)
-_SHORT_ITER = 30  # EM steps of each initialisation before the best is run on
 _TOL = 1e-6  # convergence: log-likelihood gain per unit weight in one step
 _LOG_2PI = math.log(2.0 * math.pi)
 
@@ -282,7 +283,8 @@ def fit_axial_mixture(
     :math:`\bar R_k = |\sum_i w_i r_{ik} e^{i x_i}| / \sum_i w_i r_{ik}` and
     :math:`\kappa_k = A_1^{-1}(\bar R_k)`, :math:`A_1 = I_1/I_0`, solved by Newton's method from
     Banerjee's approximation :math:`\bar R (2 - \bar R^2)/(1 - \bar R^2)`. The log-likelihood of the
-    axial angles (radians) adds :math:`n \ln 2` to that of the doubled ones.
+    axial angles (radians) adds :math:`n \ln 2` to that of the doubled ones (docs/fractures.md §4,
+    eqs. (4.1)-(4.6)).
 
     Initialisation is k-means++ on the circle (distance :math:`1 - \cos(x - c)`, seeds drawn with
     probability proportional to weight × distance; Arthur & Vassilvitskii 2007) followed by a few
@@ -315,9 +317,7 @@ def fit_axial_mixture(
         _real_at_least(resolution_deg, "resolution_deg", "angular resolution in degrees", above_zero=True)
     )
     kappa_max = 1.0 / (4.0 * resolution * resolution)
-    max_sets = _integer_at_least(max_sets, "max_sets", 1, "largest number of sets tried")
-    n_init = _integer_at_least(n_init, "n_init", 1, "initialisations per number of sets")
-    seed = _integer_at_least(seed, "seed", 0, "root seed of the initialisations")
+    max_sets, n_init, seed = check_options(max_sets, n_init, seed)
     directed = np.isfinite(angles)
     fitted = directed & (w > 0.0)
     n_fit = int(np.count_nonzero(fitted))
@@ -329,26 +329,11 @@ def fit_axial_mixture(
     n_eff = float(w[fitted].sum() ** 2 / np.sum(w[fitted] ** 2))
     wf = w[fitted] * (n_eff / w[fitted].sum())
     n_distinct = np.unique(np.round(x, 12)).size
-    if n_sets is not None:
-        k_given = _integer_at_least(n_sets, "n_sets", 1, "number of joint sets")
-        if k_given > n_distinct:
-            raise ValueError(
-                f"n_sets={k_given} but only {n_distinct} distinct trace angle(s) can be fitted; "
-                "give fewer sets or leave n_sets=None to choose by BIC"
-            )
-        candidates = [k_given]
-    else:
-        candidates = list(range(1, min(max_sets, n_distinct) + 1))
-    data = _Angles(x, wf)
-    fits = {k: _best_fit(data, k, kappa_max, seed, n_init) for k in candidates}
-    bic = {k: (None if f is None else -2.0 * f[3] + (3 * k - 1) * math.log(n_eff)) for k, f in fits.items()}
-    feasible = [k for k in candidates if bic[k] is not None]
-    if not feasible:
-        raise ValueError(f"could not fit n_sets={candidates[0]} sets: a set emptied during EM; give fewer sets")
-    k = min(feasible, key=lambda kk: (bic[kk], kk))
-    mu, kappa, pi, loglik, rbar, converged, _ = fits[k]
-    return _result(angles, directed, mu, kappa, pi, loglik + n_eff * math.log(2.0), rbar, converged, bic,
-                   "given" if n_sets is not None else "bic", kappa_max)
+    candidates = candidate_set_counts(n_sets, max_sets, n_distinct, "distinct trace angle(s) can be fitted")
+    data = _Angles(x, wf, kappa_max)
+    fit, bic, _ = fit_mixture(data, x.size, candidates, seed, n_init, lambda k: 3 * k - 1, n_eff)
+    return _result(angles, directed, fit.components, fit.log_likelihood + n_eff * math.log(2.0),
+                   fit.converged, bic, "given" if n_sets is not None else "bic", kappa_max)
 
 
 def _as_angles(value: Any) -> np.ndarray:
@@ -377,7 +362,7 @@ def _as_weights(value: Any, n: int) -> np.ndarray:
     return array.astype(np.float64)
 
 
-# -- EM -----------------------------------------------------------------------------------------
+# -- the von Mises law on doubled angles ------------------------------------------------------
 
 
 def _a1(kappa: np.ndarray) -> np.ndarray:
@@ -385,34 +370,53 @@ def _a1(kappa: np.ndarray) -> np.ndarray:
     return i1e(kappa) / i0e(kappa)
 
 
+def _a1_slope(kappa: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """A1'(κ) = 1 - A1/κ - A1², from I0' = I1 and I1' = I0 - I1/κ; its limit at κ = 0 is 1/2."""
+    small = kappa < 1e-8
+    return np.where(small, 0.5, 1.0 - a / np.where(small, 1.0, kappa) - a * a)
+
+
 def _a1_inverse(rbar: np.ndarray, kappa_max: float) -> np.ndarray:
     """κ with A1(κ) = R̄, in [0, kappa_max]: Banerjee et al. (2005, §4) start, then Newton steps.
 
     Limits: R̄ -> 0 gives κ ≈ 2R̄ (A1(κ) ≈ κ/2); R̄ >= A1(kappa_max) gives kappa_max (no 1 - R̄² → 0).
     """
-    r = np.clip(np.asarray(rbar, dtype=np.float64), 0.0, 1.0)
-    capped = r >= _a1(np.float64(kappa_max))
-    r_open = np.where(capped, 0.5, r)
-    kappa = r_open * (2.0 - r_open**2) / (1.0 - r_open**2)
-    for _ in range(30):
-        a = _a1(kappa)
-        small = kappa < 1e-8
-        # A1'(κ) = 1 - A1/κ - A1², from I0' = I1 and I1' = I0 - I1/κ; its limit at κ = 0 is 1/2
-        slope = np.where(small, 0.5, 1.0 - a / np.where(small, 1.0, kappa) - a * a)
-        step = (a - r_open) / slope
-        kappa = np.clip(kappa - step, 0.0, kappa_max)
-        if np.all(np.abs(step) <= 1e-12 * np.maximum(kappa, 1.0)):
-            break
-    return np.where(capped, kappa_max, kappa)
+    return kappa_from_rbar(rbar, kappa_max, 2, _a1, _a1_slope)
 
 
 class _Angles:
-    """Doubled angles x, their weights, and the sines and cosines every EM step reuses."""
+    """Doubled angles x with their weights: the von Mises mixture model that the shared EM fits.
 
-    def __init__(self, x: np.ndarray, w: np.ndarray) -> None:
+    Holds the sines and cosines every EM step reuses.
+    """
+
+    def __init__(self, x: np.ndarray, w: np.ndarray, kappa_max: float = np.inf) -> None:
         self.x, self.w = x, w
+        self.weights = w
+        self.kappa_max = kappa_max
+        self.tolerance = _TOL * w.sum()
         self.cos, self.sin = np.cos(x), np.sin(x)
         self.cos_half, self.sin_half = np.cos(0.5 * x), np.sin(0.5 * x)
+
+    def log_densities(self, components: Components) -> np.ndarray:
+        return _log_densities(self, components.mean, components.kappa, components.weight)
+
+    def m_step(self, post: np.ndarray, previous: Components | None = None) -> Components | None:
+        """Weighted M-step (the previous components are not needed on the circle)."""
+        mass = self.w[:, None] * post
+        n_k = mass.sum(axis=0)
+        if np.any(n_k <= 1e-9 * self.w.sum()):
+            return None  # a set emptied
+        # sums written out, not BLAS products: a threaded OpenBLAS ddot / gemv on 10^4 numbers waits
+        # for its threads, up to ~10 ms per call on a busy machine against ~10 µs here
+        c = (self.cos[:, None] * mass).sum(axis=0)
+        s = (self.sin[:, None] * mass).sum(axis=0)
+        mu = np.arctan2(s, c) % (2.0 * np.pi)
+        rbar = np.minimum(np.hypot(c, s) / n_k, 1.0)
+        return Components(mu, _a1_inverse(rbar, self.kappa_max), n_k / n_k.sum(), rbar)
+
+    def initial_labels(self, k: int, rng: np.random.Generator) -> np.ndarray | None:
+        return _kmeans_pp(self.x, self.w, k, rng)
 
 
 def _log_densities(data: _Angles, mu: np.ndarray, kappa: np.ndarray, pi: np.ndarray) -> np.ndarray:
@@ -425,51 +429,6 @@ def _log_densities(data: _Angles, mu: np.ndarray, kappa: np.ndarray, pi: np.ndar
     """
     half = np.outer(data.sin_half, np.cos(0.5 * mu)) - np.outer(data.cos_half, np.sin(0.5 * mu))
     return (np.log(pi) - _LOG_2PI - np.log(i0e(kappa))) - 2.0 * kappa * half * half
-
-
-def _log_normaliser(log_p: np.ndarray) -> np.ndarray:
-    """Row-wise log-sum-exp, shifted by the row maximum."""
-    top = log_p.max(axis=1)
-    return top + np.log(np.exp(log_p - top[:, None]).sum(axis=1))
-
-
-def _m_step(data: _Angles, post: np.ndarray, kappa_max: float) -> tuple | None:
-    mass = data.w[:, None] * post
-    n_k = mass.sum(axis=0)
-    if np.any(n_k <= 1e-9 * data.w.sum()):
-        return None  # a set emptied
-    # sums written out, not BLAS products: a threaded OpenBLAS ddot / gemv on 10^4 numbers waits
-    # for its threads, up to ~10 ms per call on a busy machine against ~10 µs here
-    c = (data.cos[:, None] * mass).sum(axis=0)
-    s = (data.sin[:, None] * mass).sum(axis=0)
-    mu = np.arctan2(s, c) % (2.0 * np.pi)
-    rbar = np.minimum(np.hypot(c, s) / n_k, 1.0)
-    return mu, _a1_inverse(rbar, kappa_max), n_k / n_k.sum(), rbar
-
-
-def _em(data: _Angles, post: np.ndarray, kappa_max: float, max_iter: int) -> tuple | None:
-    """EM from initial posteriors.
-
-    Returns (mu, kappa, pi, loglik, rbar, converged, posterior), or None when a set empties. Converged:
-    the weighted log-likelihood rose by at most ``_TOL`` per unit weight in one step.
-    """
-    previous = -np.inf
-    converged = False
-    tolerance = _TOL * data.w.sum()
-    for _ in range(max_iter):
-        params = _m_step(data, post, kappa_max)
-        if params is None:
-            return None
-        mu, kappa, pi, rbar = params
-        log_p = _log_densities(data, mu, kappa, pi)
-        log_norm = _log_normaliser(log_p)
-        loglik = float((data.w * log_norm).sum())
-        post = np.exp(log_p - log_norm[:, None])
-        if loglik - previous <= tolerance:
-            converged = True
-            break
-        previous = loglik
-    return mu, kappa, pi, loglik, rbar, converged, post
 
 
 def _kmeans_pp(x: np.ndarray, w: np.ndarray, k: int, rng: np.random.Generator) -> np.ndarray | None:
@@ -492,27 +451,9 @@ def _kmeans_pp(x: np.ndarray, w: np.ndarray, k: int, rng: np.random.Generator) -
     return labels
 
 
-def _best_fit(data: _Angles, k: int, kappa_max: float, seed: int, n_init: int) -> tuple | None:
-    """The best of ``n_init`` short EM runs from k-means++ starts, then run on to convergence."""
-    if k == 1:
-        return _em(data, np.ones((data.x.size, 1)), kappa_max, _MAX_ITER)
-    best = None
-    for restart in range(n_init):
-        rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(k, restart)))
-        labels = _kmeans_pp(data.x, data.w, k, rng)
-        if labels is None:
-            continue
-        fit = _em(data, np.eye(k)[labels], kappa_max, _SHORT_ITER)
-        if fit is not None and (best is None or fit[3] > best[3]):
-            best = fit
-    if best is None or best[5]:
-        return best
-    return _em(data, best[6], kappa_max, _MAX_ITER)
-
-
-def _result(
-    angles, directed, mu, kappa, pi, loglik, rbar, converged, bic, selected_by, kappa_max
-) -> JointSets2D:
+def _result(angles, directed, components: Components, loglik, converged, bic, selected_by,
+            kappa_max) -> JointSets2D:
+    mu, kappa, pi, rbar = components.mean, components.kappa, components.weight, components.rbar
     mean = np.degrees(mu) / 2.0
     mean[mean >= 180.0] = 0.0  # mu rounded up to 2 pi
     order = np.argsort(mean, kind="stable")
@@ -521,7 +462,7 @@ def _result(
     posterior = np.zeros((angles.size, k))
     x = np.radians(2.0 * angles[directed]) % (2.0 * np.pi)
     log_p = _log_densities(_Angles(x, np.ones(x.size)), mu, kappa, pi)
-    posterior[directed] = np.exp(log_p - _log_normaliser(log_p)[:, None])
+    posterior[directed] = posteriors(log_p)
     membership = np.full(angles.size, -1, dtype=np.int64)
     membership[directed] = np.argmax(posterior[directed], axis=1)
     with np.errstate(divide="ignore"):  # R̄ = 0 (no preferred direction) gives an infinite spread

@@ -1,6 +1,6 @@
 r"""Joint sets from poles: a mixture of axial (bipolar) Fisher laws fitted by EM; k by BIC.
 
-A pole and its opposite are the same plane (REFERENCE.md §3), so each set is modelled by the
+A pole and its opposite are the same plane (docs/fractures.md §1.1), so each set is modelled by the
 symmetric ("bipolar") Fisher density on the sphere
 
 .. math:: f(x; \mu, \kappa) = \tfrac12 [F(x; \mu, \kappa) + F(-x; \mu, \kappa)]
@@ -9,9 +9,11 @@ symmetric ("bipolar") Fisher density on the sphere
 which is the same for x and -x, so a sub-vertical set whose poles fall on both sides of the
 stereonet is one set. This module is the 3D counterpart of :mod:`rockmass.dfn.sets2d` (von Mises on
 doubled angles): k-means++ starts with the axial distance 1 - |cos|, EM, k by BIC over 1..5 or given,
-reproducible from a seed. Each set's reported statistics (mean pole from the orientation tensor, κ,
-confidence and variability cones) come from :func:`rockmass.dfn.fit_fisher` on its members, so they
-are the same numbers as fitting that set alone.
+reproducible from a seed; the EM machinery the two modules share is :mod:`rockmass.dfn._mixture_em`
+(docs/fractures.md §4), and this module supplies only the bipolar Fisher law (eq. (3.9)). Each
+set's reported statistics (mean pole from the orientation tensor, κ, confidence and variability
+cones) come from :func:`rockmass.dfn.fit_fisher` on its members, so they are the same numbers as
+fitting that set alone.
 
 Numerical safety: with c = μ·x, the log density is evaluated as
 
@@ -30,17 +32,14 @@ from typing import Any
 import numpy as np
 
 from .fisher import FisherFit, _normaliser, fit_fisher
-from .intensity import _integer_at_least
+from ._mixture_em import Components, candidate_set_counts, check_options, fit_mixture, kappa_from_rbar, posteriors
 from .orientation import _as_scalar, _as_vectors, dip_from_normal, to_lower_hemisphere
-from .sets2d import _log_normaliser
 
 __all__ = ["JointSets3D", "fit_sets_3d"]
 
 #: Largest number of sets tried when ``n_sets`` is not given.
 MAX_SETS = 5
 
-_MAX_ITER = 300  # EM steps at most
-_SHORT_ITER = 30  # EM steps of each initialisation before the best is run on
 _TOL = 1e-7  # convergence: log-likelihood gain per pole in one step
 _LOG_2PI = math.log(2.0 * math.pi)
 
@@ -150,7 +149,8 @@ def fit_sets_3d(
     :math:`\mu_k = r_k/|r_k|`, :math:`\bar R_k = |r_k| / \sum_i p_{ik}` and
     :math:`\kappa_k = A_3^{-1}(\bar R_k)` with :math:`A_3(\kappa) = \coth\kappa - 1/\kappa`
     (Banerjee et al. 2005 start :math:`\bar R(3 - \bar R^2)/(1 - \bar R^2)`, then Newton steps).
-    Free parameters per set: 2 (direction) + 1 (κ) + 1 (weight), less one weight: 4k - 1.
+    Free parameters per set: 2 (direction) + 1 (κ) + 1 (weight), less one weight: 4k - 1
+    (docs/fractures.md §4, eqs. (4.1)-(4.5)).
 
     References
     ----------
@@ -174,31 +174,16 @@ def fit_sets_3d(
     resolution = _as_scalar(resolution_deg, "resolution_deg", low=0.0, low_open=True, high=90.0,
                             what="reading resolution of an orientation in degrees")
     kappa_max = 1.0 / (2.0 * math.sin(math.radians(resolution) / 2.0) ** 2)
-    max_sets = _integer_at_least(max_sets, "max_sets", 1, "largest number of sets tried")
-    n_init = _integer_at_least(n_init, "n_init", 1, "initialisations per number of sets")
-    seed = _integer_at_least(seed, "seed", 0, "root seed of the initialisations")
+    max_sets, n_init, seed = check_options(max_sets, n_init, seed)
     n = unit.shape[0]
     n_distinct = np.unique(np.round(unit, 9), axis=0).shape[0]
-    if n_sets is not None:
-        k_given = _integer_at_least(n_sets, "n_sets", 1, "number of joint sets")
-        if k_given > n_distinct:
-            raise ValueError(f"n_sets={k_given} but only {n_distinct} distinct pole(s) were given; give fewer "
-                             "sets or leave n_sets=None to choose by BIC")
-        candidates = [k_given]
-    else:
-        candidates = list(range(1, min(max_sets, n_distinct) + 1))
-    fits = {k: _best_fit(unit, k, kappa_max, seed, n_init) for k in candidates}
-    bic = {k: (None if f is None else -2.0 * f[3] + (4 * k - 1) * math.log(n)) for k, f in fits.items()}
-    feasible = [k for k in candidates if bic[k] is not None]
-    if not feasible:
-        raise ValueError(f"could not fit n_sets={candidates[0]} sets: a set emptied during EM; give fewer sets")
-    k = min(feasible, key=lambda kk: (bic[kk], kk))
-    mu, kappa, pi, loglik, converged, _ = fits[k]
-    return _result(unit, mu, kappa, pi, loglik, converged, bic, "given" if n_sets is not None else "bic",
-                   resolution)
+    candidates = candidate_set_counts(n_sets, max_sets, n_distinct, "distinct pole(s) were given")
+    fit, bic, _ = fit_mixture(_Poles(unit, kappa_max), n, candidates, seed, n_init, lambda k: 4 * k - 1, n)
+    return _result(unit, fit.components, fit.log_likelihood, fit.converged, bic,
+                   "given" if n_sets is not None else "bic", resolution)
 
 
-# -- EM -----------------------------------------------------------------------------------------
+# -- the bipolar Fisher law on poles -----------------------------------------------------------
 
 
 def _a3(kappa: np.ndarray) -> np.ndarray:
@@ -209,76 +194,62 @@ def _a3(kappa: np.ndarray) -> np.ndarray:
     return np.where(small, kappa / 3.0, value)
 
 
+def _a3_slope(kappa: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """A3'(κ) = 1/κ² - 1/sinh²κ, written with e^(-2κ) (no overflow); 1/3 as κ -> 0."""
+    small = kappa < 1e-4
+    safe = np.where(small, 1.0, kappa)
+    return np.where(small, 1.0 / 3.0, 1.0 / safe**2 - 4.0 * np.exp(-2.0 * safe) / np.expm1(-2.0 * safe) ** 2)
+
+
 def _a3_inverse(rbar: np.ndarray, kappa_max: float) -> np.ndarray:
-    """κ with A3(κ) = R̄ in [0, kappa_max]: Banerjee's start, then Newton (A3' = 1/κ² - 1/sinh²κ)."""
-    r = np.clip(np.asarray(rbar, dtype=np.float64), 0.0, 1.0)
-    capped = r >= _a3(np.float64(kappa_max))
-    r_open = np.where(capped, 0.5, r)
-    kappa = r_open * (3.0 - r_open**2) / (1.0 - r_open**2)
-    for _ in range(30):
-        small = kappa < 1e-4
-        safe = np.where(small, 1.0, kappa)
-        slope = np.where(small, 1.0 / 3.0, 1.0 / safe**2 - 4.0 * np.exp(-2.0 * safe) / np.expm1(-2.0 * safe) ** 2)
-        step = (_a3(kappa) - r_open) / np.maximum(slope, 1e-300)
-        kappa = np.clip(kappa - step, 0.0, kappa_max)
-        if np.all(np.abs(step) <= 1e-12 * np.maximum(kappa, 1.0)):
-            break
-    return np.where(capped, kappa_max, kappa)
+    """κ with A3(κ) = R̄ in [0, kappa_max]: Banerjee's start, then Newton steps."""
+    return kappa_from_rbar(rbar, kappa_max, 3, _a3, _a3_slope)
 
 
-def _log_densities(x: np.ndarray, mu: np.ndarray, kappa: np.ndarray, pi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(n, k) log π_k + log f(x_i; μ_k, κ_k) (bipolar Fisher, per steradian) and c = x·μ."""
-    c = x @ mu.T
-    a = np.abs(c)
+def _log_densities(x: np.ndarray, mu: np.ndarray, kappa: np.ndarray, pi: np.ndarray) -> np.ndarray:
+    """(n, k) log π_k + log f(x_i; μ_k, κ_k) (bipolar Fisher, per steradian)."""
+    a = np.abs(x @ mu.T)
     log_f = (np.log(_normaliser(kappa)) - _LOG_2PI - kappa * (1.0 - a)
              + np.log1p(np.exp(-2.0 * kappa * a)) - math.log(2.0))
-    return np.log(pi) + log_f, c
+    return np.log(pi) + log_f
 
 
-def _m_step(x: np.ndarray, post: np.ndarray, mu: np.ndarray | None, kappa: np.ndarray | None,
-            kappa_max: float) -> tuple | None:
-    n_k = post.sum(axis=0)
-    if np.any(n_k <= 1e-9 * x.shape[0]):
-        return None
-    if mu is None:  # first step from hard labels: the orientation tensor's axis gives the direction
-        new_mu = np.empty((post.shape[1], 3))
-        for j in range(post.shape[1]):
-            tensor = (x * post[:, j:j + 1]).T @ x
-            new_mu[j] = np.linalg.eigh(tensor)[1][:, -1]
-        sign = np.sign(x @ new_mu.T)
-        sign[sign == 0] = 1.0
-    else:
-        sign = np.tanh(kappa * (x @ mu.T))
-        new_mu = None
-    resultant = (post * sign).T @ x  # (k, 3)
-    length = np.linalg.norm(resultant, axis=1)
-    if np.any(length <= 0.0):
-        return None
-    new_mu = resultant / length[:, None]
-    rbar = np.minimum(length / n_k, 1.0)
-    return new_mu, _a3_inverse(rbar, kappa_max), n_k / n_k.sum()
+class _Poles:
+    """Unit poles on the lower hemisphere: the bipolar Fisher mixture model that the shared EM fits."""
 
+    def __init__(self, x: np.ndarray, kappa_max: float) -> None:
+        self.x = x
+        self.kappa_max = kappa_max
+        self.weights = np.ones(x.shape[0])
+        self.tolerance = _TOL * x.shape[0]
 
-def _em(x: np.ndarray, post: np.ndarray, kappa_max: float, max_iter: int) -> tuple | None:
-    """EM from initial posteriors: (mu, kappa, pi, loglik, converged, posterior) or None."""
-    previous = -np.inf
-    converged = False
-    mu = kappa = None
-    loglik = -np.inf
-    for _ in range(max_iter):
-        params = _m_step(x, post, mu, kappa, kappa_max)
-        if params is None:
+    def log_densities(self, components: Components) -> np.ndarray:
+        return _log_densities(self.x, components.mean, components.kappa, components.weight)
+
+    def m_step(self, post: np.ndarray, previous: Components | None) -> Components | None:
+        """M-step with the latent sign of each pole (see :func:`fit_sets_3d`, Notes)."""
+        x = self.x
+        n_k = post.sum(axis=0)
+        if np.any(n_k <= 1e-9 * x.shape[0]):
             return None
-        mu, kappa, pi = params
-        log_p, _ = _log_densities(x, mu, kappa, pi)
-        log_norm = _log_normaliser(log_p)
-        loglik = float(log_norm.sum())
-        post = np.exp(log_p - log_norm[:, None])
-        if loglik - previous <= _TOL * x.shape[0]:
-            converged = True
-            break
-        previous = loglik
-    return mu, kappa, pi, loglik, converged, post
+        if previous is None:  # first step from hard labels: the orientation tensor's axis gives the direction
+            axes = np.empty((post.shape[1], 3))
+            for j in range(post.shape[1]):
+                tensor = (x * post[:, j:j + 1]).T @ x
+                axes[j] = np.linalg.eigh(tensor)[1][:, -1]
+            sign = np.sign(x @ axes.T)
+            sign[sign == 0] = 1.0
+        else:
+            sign = np.tanh(previous.kappa * (x @ previous.mean.T))
+        resultant = (post * sign).T @ x  # (k, 3)
+        length = np.linalg.norm(resultant, axis=1)
+        if np.any(length <= 0.0):
+            return None
+        rbar = np.minimum(length / n_k, 1.0)
+        return Components(resultant / length[:, None], _a3_inverse(rbar, self.kappa_max), n_k / n_k.sum(), rbar)
+
+    def initial_labels(self, k: int, rng: np.random.Generator) -> np.ndarray | None:
+        return _kmeans_pp(self.x, k, rng)
 
 
 def _kmeans_pp(x: np.ndarray, k: int, rng: np.random.Generator) -> np.ndarray | None:
@@ -305,32 +276,12 @@ def _kmeans_pp(x: np.ndarray, k: int, rng: np.random.Generator) -> np.ndarray | 
     return labels
 
 
-def _best_fit(x: np.ndarray, k: int, kappa_max: float, seed: int, n_init: int) -> tuple | None:
-    if k == 1:
-        return _em(x, np.ones((x.shape[0], 1)), kappa_max, _MAX_ITER)
-    best = None
-    for restart in range(n_init):
-        rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(k, restart)))
-        labels = _kmeans_pp(x, k, rng)
-        if labels is None:
-            continue
-        fit = _em(x, np.eye(k)[labels], kappa_max, _SHORT_ITER)
-        if fit is not None and (best is None or fit[3] > best[3]):
-            best = fit
-    if best is None or best[4]:
-        return best
-    post = best[5]
-    run_on = _em(x, post, kappa_max, _MAX_ITER)
-    return best if run_on is None else run_on
-
-
-def _result(x, mu, kappa, pi, loglik, converged, bic, selected_by, resolution) -> JointSets3D:
-    mu = to_lower_hemisphere(mu)
+def _result(x, components: Components, loglik, converged, bic, selected_by, resolution) -> JointSets3D:
+    mu, kappa, pi = to_lower_hemisphere(components.mean), components.kappa, components.weight
     order = np.lexsort((dip_from_normal(mu)[0], dip_from_normal(mu)[1]))
     mu, kappa, pi = mu[order], kappa[order], pi[order]
     k = mu.shape[0]
-    log_p, _ = _log_densities(x, mu, kappa, pi)
-    posterior = np.exp(log_p - _log_normaliser(log_p)[:, None])
+    posterior = posteriors(_log_densities(x, mu, kappa, pi))
     membership = np.argmax(posterior, axis=1).astype(np.int64)
     count = np.bincount(membership, minlength=k).astype(np.int64)
     fits: list[FisherFit | None] = []

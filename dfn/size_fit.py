@@ -28,8 +28,8 @@ The Poisson rate has been maximised out (λ̂ = N / (A + μB)). B is estimated f
 directions with Horvitz-Thompson weights 1/(A + μ b(θ_i)), because long traces and traces across
 the window's long side are over-represented.
 
-Traces of disks (REFERENCE.md §4)
----------------------------------
+Traces of disks (docs/fractures.md §10.2-§10.3)
+-----------------------------------------------
 A disk of radius r cut by a plane at a uniformly distributed offset leaves a chord l = 2√(r² − s²),
 s ~ U(0, r); the disks cut have radii size-biased by r, independent of orientation. So the trace
 lengths of disks with radius density g are
@@ -318,7 +318,7 @@ def trace_length_functions(size, lengths_m: ArrayLike) -> tuple[np.ndarray, np.n
 
 
 def mean_trace_length_m(size) -> float:
-    """μ = π E[r²] / (2 E[r]) (REFERENCE.md §4)."""
+    """μ = π E[r²] / (2 E[r]) (docs/fractures.md §10.2, eq. (10.6); Zhang et al. 2002)."""
     return float(np.pi * size.moment(2.0) / (2.0 * size.mean()))
 
 

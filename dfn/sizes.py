@@ -12,7 +12,8 @@ Each distribution is a small frozen dataclass with the same methods::
 uniform per radius (inverse transform), so a sample is a deterministic function of the generator's
 stream.
 
-Relations for disks cut by a plane or a line (REFERENCE.md §4): P32 = P30 · π E[r²]; traces per
+Relations for disks cut by a plane or a line (docs/fractures.md §10.2, eqs. (10.4)-(10.7);
+[Zha02]_, [Pig97]_): P32 = P30 · π E[r²]; traces per
 area P20 = P30 · 2 E[r] · E[sin ψ] = P30 · 2 E[r] / C23; mean trace length π E[r²] / (2 E[r])
 (size-biased, independent of orientation); power-law density exponents of trace lengths and radii
 a₂ = a₃ - 1.
@@ -167,8 +168,8 @@ class PowerLawSize(_Size):
 
     Notes
     -----
-    With Λ = ln(r_max/r_min) and exprel(x) = (e^x - 1)/x (exprel(0) = 1), the REFERENCE.md §4
-    formulas are written so that no α or k makes a 0/0:
+    With Λ = ln(r_max/r_min) and exprel(x) = (e^x - 1)/x (exprel(0) = 1), the formulas of
+    docs/fractures.md §10.1, eqs. (10.1)-(10.3), are written so that no α or k makes a 0/0:
 
     - pdf f(r) = α r_min^α r^-(α+1) / (1 - (r_min/r_max)^α) = (r_min/r)^α / (r Λ exprel(-αΛ));
     - cdf F(r) = (1 - (r_min/r)^α)/(1 - (r_min/r_max)^α) = ℓ exprel(-αℓ) / (Λ exprel(-αΛ)),

@@ -7,9 +7,9 @@ scanline of direction t and a sampling plane of normal m see ([Wan05]_)::
     P21(m) = P32 · E[sqrt(1 - (n·m)²)] = P32 / C23(m)
 
 whatever the fractures' sizes, shapes and positions. Isotropic orientations give C13 = 2 and
-C23 = 4/π exactly; Fisher sets are integrated numerically here (REFERENCE.md §4 check values).
+C23 = 4/π exactly; Fisher sets are integrated numerically here (docs/fractures.md §7.2 lists check values).
 
-Functions take and return degrees and unit vectors in x = East, y = North, z = Up (DESIGN.md §3).
+Functions take and return degrees and unit vectors in x = East, y = North, z = Up (docs/fractures.md §1.1).
 
 References
 ----------
@@ -135,7 +135,7 @@ def c13_from_angle(angle_deg: ArrayLike, kappa: ArrayLike) -> np.ndarray:
     (after integrating the azimuth in closed form, a Bessel function I0), by Gauss-Legendre
     quadrature; relative accuracy better than 1e-9 for 1e-6 <= κ <= 1e8. Closed forms used as test
     oracles: β = 0: E|cos ψ| = (κ ∫|x| e^(κx) dx)/(2 sinh κ); β = 90°: E|cos ψ| = (2/π) E[sin θ]
-    = 2 i1e(κ)/(1 - e^(-2κ)). Check values ([Wan05]_, REFERENCE.md §4): κ = 10: 0° → 1.111,
+    = 2 i1e(κ)/(1 - e^(-2κ)). Check values ([Wan05]_, docs/fractures.md §7.2): κ = 10: 0° → 1.111,
     30° → 1.283, 60° → 2.145, 90° → 4.123.
 
     Examples
@@ -167,7 +167,7 @@ def c23_from_angle(angle_deg: ArrayLike, kappa: ArrayLike) -> np.ndarray:
     -----
     Same quadrature as :func:`c13_from_angle` with sin ψ (ψ the angle between a fracture normal and
     the plane's normal) in place of |cos ψ|. Closed form at β = 0 (test oracle):
-    E[sin θ] = π i1e(κ)/(1 - e^(-2κ)). Check values ([Wan05]_, REFERENCE.md §4): κ = 10:
+    E[sin θ] = π i1e(κ)/(1 - e^(-2κ)). Check values ([Wan05]_, docs/fractures.md §7.2): κ = 10:
     0° → 2.625, 30° → 1.776, 60° → 1.191, 90° → 1.051.
 
     Examples
@@ -323,7 +323,7 @@ def terzaghi_weights(poles: ArrayLike, line_direction: ArrayLike, min_angle_deg:
     -----
     The weight diverges as δ → 90° (planes sub-parallel to the line are rarely hit). The cap trades
     that variance for a bias: it undercounts the sub-parallel planes and biases P32 low (up to about
-    24 % with a 15° cap, REFERENCE.md §3). Several scanline orientations with :func:`solve_p32`, or a
+    24 % with a 15° cap, docs/fractures.md §6). Several scanline orientations with :func:`solve_p32`, or a
     model C13 from the fitted orientation distribution, avoid the bias.
 
     Examples
@@ -463,7 +463,8 @@ def solve_p32(mean_poles: ArrayLike, kappas: ArrayLike, *,
 
     Notes
     -----
-    Model (REFERENCE.md §4, [Wan05]_): P10_k = Σ_s P32_s / C13_s(t_k), P21_j = Σ_s P32_s / C23_s(m_j),
+    Model (docs/fractures.md §7.3, eq. (7.4); [Wan05]_):
+    P10_k = Σ_s P32_s / C13_s(t_k), P21_j = Σ_s P32_s / C23_s(m_j),
     i.e. d = A x with x = P32 per set. Each row is divided by its σ and
     min ||W(A x - d)||, x >= 0 is solved by NNLS ([LH95]_, :func:`scipy.optimize.nnls`).
 

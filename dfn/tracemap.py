@@ -16,7 +16,7 @@ The traces are one structure of arrays in the ragged ("GeoArrow") layout that
     window_xy_m (k, 2) float64 or None    open exterior ring of the sampling window polygon
 
 For a face photograph the frame is u to the right, v up, origin at the image's bottom-left
-(DESIGN.md §3); for a GIS file it is easting / northing in the file's CRS.
+(docs/fractures.md §1.2, docs/imaging.md §1); for a GIS file it is easting / northing in the file's CRS.
 """
 
 from __future__ import annotations
@@ -29,6 +29,8 @@ from typing import Any
 
 import numpy as np
 import shapely
+
+from .polygon import signed_area
 
 __all__ = ["TraceMap"]
 
@@ -169,9 +171,7 @@ def _as_window(window: Any) -> np.ndarray | None:
     bad = np.flatnonzero(~np.isfinite(ring).all(axis=1))
     if bad.size:
         raise ValueError(f"window_xy_m has non-finite coordinates at vertices {bad[:_MAX_LISTED].tolist()}")
-    x, y = ring[:, 0], ring[:, 1]
-    twice_area = np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))  # shoelace formula
-    if twice_area == 0.0:
+    if signed_area(ring) == 0.0:
         raise ValueError("window_xy_m encloses zero area; give the exterior ring of the sampling window")
     return ring
 

@@ -207,7 +207,7 @@ def closed_loop(specs: Sequence[FractureSetSpec], domain_m: ArrayLike, *, scanli
         Sampling planes with their convex windows (plane frame of
         :func:`~rockmass.dfn.sampling.plane_frame`).
     seed, realization : int
-        Seeding of the generated network (DESIGN.md §3).
+        Seeding of the generated network (docs/fractures.md §11.2).
     size_family : str, optional
         Family to fit; default the family of the first set's size law.
     r_max_m : float, optional
@@ -310,7 +310,9 @@ def compare_with_field(network: DiskNetwork, field_fit: FieldFit, scanlines: Seq
 
 def section_check(network: DiskNetwork, specs: Sequence[FractureSetSpec], point: ArrayLike, normal: ArrayLike,
                   window_uv_m: ArrayLike) -> dict:
-    """Traces of a realization on a plane: measured P21 against Σ_s P32_s / C23_s (REFERENCE.md §4).
+    """Traces of a realization on a plane: measured P21 against Σ_s P32_s / C23_s.
+
+    The expected value is eq. (7.4) of docs/fractures.md §7.3 (Wang 2005).
 
     Parameters
     ----------

@@ -2,7 +2,7 @@
 
 Two methods, one result type:
 
-- ``method="raster"`` (Jiang et al., seed 000 §4.1): the traces are drawn into an N x N grid
+- ``method="raster"`` (Jiang et al. §4.1; docs/fractal.md §1, §2.1): the traces are drawn into an N x N grid
   (default 360) with 1-pixel lines (:mod:`rockmass.fractal.rasterize`), and occupied boxes are
   counted for box sizes that divide N (all 24 divisors for 360, so no box is partial). A binary
   image is counted on its own pixel grid.
@@ -11,7 +11,7 @@ Two methods, one result type:
 
 D is the slope of log N(delta) against log(1/delta) over the fit range (default: boxes up to a
 quarter of the side), reported with R^2, the standard error and 95 % interval of the slope, the local
-slopes, and the spread of D over shifted box grids (REFERENCE.md §1: report the spread; never take the
+slopes, and the spread of D over shifted box grids (docs/fractal.md §2.3: report the spread; never take the
 minimum over offsets, which inflates D when large boxes are few). Shifted grids are applied
 cyclically — the frame is treated as a torus, the partial boxes at one edge joining those at the
 other — so every grid has the same (N/s)^2 whole boxes. A plain shift would add a ring of partial
@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .fit import LineFit, fit_loglog, fit_range_mask, local_slopes
-from .framing import Frame, as_ring, as_segments, clip_segments_to_ring, frame_for
+from .framing import Frame, as_ring, as_segments, clip_segments_to_ring, frame_for, _ring_area
 from .image import divisors, prepare_binary_image
 from .rasterize import (check_grid, check_line_rule, rasterize_polygon,
                         rasterize_segments_in_frame)
@@ -537,11 +537,6 @@ def _intersect_rings(rings):
     if face.geom_type != "Polygon":
         raise ValueError("mask: the mask and window overlap in several pieces; give one polygon")
     return as_ring(face, name="mask")
-
-
-def _ring_area(ring) -> float:
-    x, y = ring[:, 0], ring[:, 1]
-    return float(0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
 
 
 def _result(fit: LineFit, method, grid, sizes, sizes_m, counts, fit_counts, face, in_fit,

@@ -6,7 +6,7 @@ The error model is reported in three parts, because no single number is honest o
   n - 2 degrees of freedom). Counts at nested box sizes are not independent, so this is a *lower
   bound* on the uncertainty;
 - the local slopes between consecutive sizes, so a crossover (two regimes) is visible rather than
-  averaged into one number (REFERENCE.md §1);
+  averaged into one number (docs/fractal.md §4, eq. (4.4));
 - the spread of D over shifted box grids (see :mod:`rockmass.fractal.boxcount`), which measures the
   discretisation error of the count itself.
 """
@@ -71,7 +71,8 @@ def fit_loglog(sizes, counts) -> LineFit:
     Notes
     -----
     With x = log(1/delta), y = log N: D = Sxy / Sxx, s^2 = SSres / (n - 2), SE(D) = s / sqrt(Sxx),
-    R^2 = 1 - SSres / SStot (Jiang et al., seed 000, eq. 3, for the definition of D).
+    R^2 = 1 - SSres / SStot (docs/fractal.md §4, eqs. (4.1)-(4.3)); D itself is defined by Jiang
+    et al.'s eq. 3 (docs/fractal.md §1, eq. (1.1)).
 
     Examples
     --------
@@ -132,7 +133,7 @@ def fit_range_mask(sizes_px, fit_range_px, grid: int) -> np.ndarray:
     """Which sizes fall in the fit range ``[min, max]`` (inclusive, grid pixels).
 
     ``fit_range_px=None`` is the default range: from the smallest size up to a quarter of the side
-    (REFERENCE.md §1: larger boxes are too few to count). Raises ``ValueError`` naming the range when
+    (docs/fractal.md §4: larger boxes are too few to count). Raises ``ValueError`` naming the range when
     fewer than 3 sizes fall in it.
     """
     sizes_px = np.asarray(sizes_px, dtype=np.float64)

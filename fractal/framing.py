@@ -1,6 +1,6 @@
 """The square frame a trace network is counted in, and the conversion of traces into it.
 
-Box counting needs a square: Jiang et al. (seed 000, §4.1) draw each network into a 360 x 360 cell
+Box counting needs a square: Jiang et al. (§4.1; docs/fractal.md §1) draw each network into a 360 x 360 cell
 square. The frame is either the network's bounding square or a square built on a window given by the
 user; a non-square window, and an optional face polygon, become a *face mask* so that boxes outside
 the face are not counted (see :mod:`rockmass.fractal.boxcount`).
@@ -71,6 +71,18 @@ def as_segments(data, name: str = "traces") -> np.ndarray:
     return np.ascontiguousarray(seg)
 
 
+def _ring_area(ring) -> float:
+    """Area of the polygon with the open ring ``(k, 2)`` (m² for a ring in metres).
+
+    fractal imports no other rockmass stage, so it cannot call rockmass.dfn.polygon_area; shapely
+    (already the clipping engine of this module) measures the ring instead of a second copy of the
+    shoelace formula (docs/fractal.md §3).
+    """
+    import shapely
+
+    return float(shapely.area(shapely.polygons(np.asarray(ring, dtype=np.float64))))
+
+
 def as_ring(polygon, name: str = "mask") -> np.ndarray:
     """The exterior ring ``(k, 2) float64`` of a polygon given as coordinates or a shapely Polygon.
 
@@ -91,9 +103,7 @@ def as_ring(polygon, name: str = "mask") -> np.ndarray:
         ring = ring[:-1]
     if ring.shape[0] < 3:
         raise ValueError(f"{name}: a polygon needs at least 3 vertices, got {ring.shape[0]}")
-    x, y = ring[:, 0], ring[:, 1]
-    area = 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
-    if not area > 0.0:
+    if not _ring_area(ring) > 0.0:
         raise ValueError(f"{name}: polygon has zero area")
     return np.ascontiguousarray(ring)
 

@@ -5,7 +5,7 @@ Rules
 - Any non-zero pixel is a trace pixel. An image with more than two grey levels, or with two levels
   neither of which is 0, is not binary: it needs a ``threshold`` (pixels strictly above it are
   traces); ``invert=True`` first turns dark lines on a light background into light lines.
-- Lines must be 1 pixel wide (REFERENCE.md §1: 3-px lines raise D from 1.37 to 1.54). With
+- Lines must be 1 pixel wide (docs/fractal.md §2.1: 3-px lines raise D from 1.37 to 1.54). With
   ``skeletonize="auto"`` an image is thinned (scikit-image's ``skeletonize``, Zhang & Suen 1984) when
   (a) more than ``THICK_FRACTION`` of its trace pixels lie in a fully occupied 2 x 2 block (a 1-pixel
   line, 4- or 8-connected, has none except where two lines cross), (b) its mean line width,

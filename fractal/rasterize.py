@@ -10,7 +10,7 @@ cross — raster and exact vector counting agree at zero offset.
 
 ``line_rule="bresenham"``: the 8-connected Bresenham line between the pixels holding the endpoints,
 as most drawing programs make it. It misses pixels a steep line only clips, and gives lower D on the
-same network (REFERENCE.md §1: about 1.34 against 1.37 for supercover); it is offered to reproduce
+same network (docs/fractal.md §2.1: about 1.34 against 1.37 for supercover); it is offered to reproduce
 pictures drawn that way, not as the default.
 
 Images are returned with row 0 at the *top* of the frame (v up is row index down), as a PNG shows it.
@@ -74,7 +74,7 @@ def rasterize_traces(traces, grid: int = 360, *, window=None,
     traces : (n, 4) array_like or TraceMap
         Segments ``x0, y0, x1, y1`` in metres, or any object with a ``segments()`` method.
     grid : int, default 360
-        Side N of the image in pixels (360 as in Jiang et al., seed 000 §4.1).
+        Side N of the image in pixels (360 as in Jiang et al. §4.1; docs/fractal.md §1).
     window : (xmin, ymin, xmax, ymax), optional
         Frame on the square of side max(width, height) anchored at (xmin, ymin) instead of the
         network's bounding square; segments are clipped to that square.

@@ -2,7 +2,7 @@
 
 Each pixel fractal is exact only on its own base grid (side b**level) with base-matched box sizes
 (powers of b), where the box count is exactly N = m**k and D = log m / log b to machine precision
-(REFERENCE.md §1). Drawn into a 360 grid (:func:`embed`) they come out 0.04–0.17 low: that is the
+(docs/fractal.md §7, eq. (7.1)). Drawn into a 360 grid (:func:`embed`) they come out 0.04–0.17 low: that is the
 raster method's error, which the benchmark shows. The triadic Koch curve is a polyline and is never
 raster-exact.
 

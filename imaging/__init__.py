@@ -1,6 +1,6 @@
 """Face photographs to joint traces (polylines in metres on the face frame).
 
-- :func:`extract` — the chain of REFERENCE.md §2: illumination flattening, multi-scale ridge filter
+- :func:`extract` — the chain of docs/imaging.md §2-§7: illumination flattening, multi-scale ridge filter
   for dark lines, hysteresis threshold, cleanup, skeleton graph, spur pruning, X-node repair, gap
   bridging, linking of pieces that continue one another (:mod:`~rockmass.imaging.link`),
   simplified polylines in metres; every setting in :class:`ExtractParams`.

@@ -1,6 +1,6 @@
 """Numba kernel behind :func:`rockmass.imaging.skeleton_graph.build_graph`: walk skeleton branches.
 
-Kept apart from its wrapper (STYLE.md: kernels take plain arrays, write into caller-allocated
+Kept apart from its wrapper (the project's kernel rule: kernels take plain arrays, write into caller-allocated
 outputs and return the counts written; the wrapper validates and slices).
 """
 
@@ -11,6 +11,23 @@ import numpy as np
 
 _DR = np.array([-1, -1, -1, 0, 0, 1, 1, 1], dtype=np.int64)
 _DC = np.array([-1, 0, 1, -1, 1, -1, 0, 1], dtype=np.int64)
+
+
+@numba.njit(cache=True)
+def _push(out_rc, n_v, r, c):
+    """Append pixel (r, c) as vertex ``n_v`` of ``out_rc``; return the new vertex count."""
+    out_rc[n_v, 0] = r
+    out_rc[n_v, 1] = c
+    return n_v + 1
+
+
+@numba.njit(cache=True)
+def _close(out_offsets, out_src, out_dst, n_b, n_v, src, dst):
+    """End branch ``n_b`` (nodes ``src`` -> ``dst``) at vertex count ``n_v``; return the new branch count."""
+    out_src[n_b] = src
+    out_dst[n_b] = dst
+    out_offsets[n_b + 1] = n_v
+    return n_b + 1
 
 
 @numba.njit(cache=True)
@@ -45,29 +62,19 @@ def _walk_branches(skel, node_id, visited, out_rc, out_offsets, out_src, out_dst
                 if b >= 0:
                     # node pixel next to a node pixel of another node: a one-step branch, once
                     if b != a and (r1 * w + c1) > (r * w + c):
-                        out_rc[n_v, 0] = r
-                        out_rc[n_v, 1] = c
-                        out_rc[n_v + 1, 0] = r1
-                        out_rc[n_v + 1, 1] = c1
-                        n_v += 2
-                        out_src[n_b] = a
-                        out_dst[n_b] = b
-                        n_b += 1
-                        out_offsets[n_b] = n_v
+                        n_v = _push(out_rc, n_v, r, c)
+                        n_v = _push(out_rc, n_v, r1, c1)
+                        n_b = _close(out_offsets, out_src, out_dst, n_b, n_v, a, b)
                     continue
                 if visited[r1, c1]:
                     continue
-                out_rc[n_v, 0] = r
-                out_rc[n_v, 1] = c
-                n_v += 1
+                n_v = _push(out_rc, n_v, r, c)
                 pr, pc = r, c
                 cr, cc = r1, c1
                 end = -1
                 while True:
                     visited[cr, cc] = 1
-                    out_rc[n_v, 0] = cr
-                    out_rc[n_v, 1] = cc
-                    n_v += 1
+                    n_v = _push(out_rc, n_v, cr, cc)
                     nr, nc = -1, -1
                     for j in range(8):
                         qr = cr + _DR[j]
@@ -86,22 +93,15 @@ def _walk_branches(skel, node_id, visited, out_rc, out_offsets, out_src, out_dst
                     if nr < 0:
                         break
                     if node_id[nr, nc] >= 0:
-                        out_rc[n_v, 0] = nr
-                        out_rc[n_v, 1] = nc
-                        n_v += 1
+                        n_v = _push(out_rc, n_v, nr, nc)
                         end = node_id[nr, nc]
                         break
                     pr, pc = cr, cc
                     cr, cc = nr, nc
                 if end < 0:
                     end = a  # an interior chain that returns to its start cluster
-                    out_rc[n_v, 0] = r
-                    out_rc[n_v, 1] = c
-                    n_v += 1
-                out_src[n_b] = a
-                out_dst[n_b] = end
-                n_b += 1
-                out_offsets[n_b] = n_v
+                    n_v = _push(out_rc, n_v, r, c)
+                n_b = _close(out_offsets, out_src, out_dst, n_b, n_v, a, end)
     # closed loops with no node at all
     for r in range(1, h - 1):
         for c in range(1, w - 1):
@@ -112,9 +112,7 @@ def _walk_branches(skel, node_id, visited, out_rc, out_offsets, out_src, out_dst
             cr, cc = r, c
             while True:
                 visited[cr, cc] = 1
-                out_rc[n_v, 0] = cr
-                out_rc[n_v, 1] = cc
-                n_v += 1
+                n_v = _push(out_rc, n_v, cr, cc)
                 nr, nc = -1, -1
                 for j in range(8):
                     qr = cr + _DR[j]
@@ -127,11 +125,6 @@ def _walk_branches(skel, node_id, visited, out_rc, out_offsets, out_src, out_dst
                     break
                 pr, pc = cr, cc
                 cr, cc = nr, nc
-            out_rc[n_v, 0] = sr
-            out_rc[n_v, 1] = sc
-            n_v += 1
-            out_src[n_b] = -1
-            out_dst[n_b] = -1
-            n_b += 1
-            out_offsets[n_b] = n_v
+            n_v = _push(out_rc, n_v, sr, sc)
+            n_b = _close(out_offsets, out_src, out_dst, n_b, n_v, -1, -1)
     return n_b, n_v

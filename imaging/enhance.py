@@ -1,6 +1,6 @@
 """Photographs in, flat grey images out: reading, grey conversion and illumination flattening.
 
-The first step of the extraction chain (REFERENCE.md §2). A face photograph is read with Pillow
+The first step of the extraction chain (docs/imaging.md §2). A face photograph is read with Pillow
 (EXIF orientation honoured), converted to one float32 grey channel, and its illumination — a
 gradient across the face, vignetting, soft shadows — divided out, so that a joint is as dark
 relative to its surroundings in a shadow as in the light.

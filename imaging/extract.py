@@ -1,6 +1,6 @@
 """Photo -> traces: the whole extraction chain behind one function, :func:`extract`.
 
-Chain (REFERENCE.md §2), each step in its own module:
+Chain (docs/imaging.md §2-§7), each step in its own module:
 
 ===================  ================================================  ===========================
 step                 what                                              module

@@ -2,8 +2,8 @@
 
 Image coordinates are ``rc_px``: (row, column), row 0 at the top, integer values at pixel centres
 (OpenCV and scikit-image agree on this). The face frame is ``uv_m``: u to the right, v up, in metres,
-origin at the image's bottom-left *corner* (DESIGN.md §3). With ``m_per_px`` metres per pixel and an
-image ``height_px`` rows high:
+origin at the image's bottom-left *corner* (docs/imaging.md §1, eq. (1.1)). With ``m_per_px``
+metres per pixel and an image ``height_px`` rows high:
 
     u = (col + 0.5) * m_per_px
     v = (height_px - row - 0.5) * m_per_px

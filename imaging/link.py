@@ -200,7 +200,7 @@ def extend_to_border(polylines_rc_px, shape_px, *, max_distance_px: float, max_a
     r"""Extend trace ends that stop just short of the image border out to it.
 
     Ridge filters lose response within a filter width of the border, and a skeleton shortens each
-    line end by about half the line width (REFERENCE.md §2), so a trace that leaves the image ends a
+    line end by about half the line width (docs/imaging.md §7), so a trace that leaves the image ends a
     few pixels inside it: it would count as an isolated (I) end instead of a window-edge (E) end, and
     its clipped length would be short.
 

@@ -1,11 +1,15 @@
 """Accuracy of extracted traces against ground truth, at the level users care about.
 
-REFERENCE.md §2: buffered trace F1 (k ≈ 3 px), relative errors of P21 and P20 over the window, the
+docs/imaging.md §8: buffered trace F1 (k ≈ 3 px), relative errors of P21 and P20 over the window, the
 error of each joint set's mean orientation, the error of the box-counting dimension, and node-count
 errors (I, Y, X nodes).
 
 Joint sets come from :mod:`rockmass.dfn.sets2d` (the set fitting every trace map gets), with the
 number of sets fixed to the truth's, so the set orientations compared are those a user sees.
+
+The box-counting dimensions are numbers the caller measures and passes in (imaging does not import
+:mod:`rockmass.fractal`: it depends on dfn only); :func:`rockmass.accuracy.trace_accuracy` measures
+them with :func:`rockmass.fractal.box_count` and calls :func:`trace_accuracy`.
 """
 
 from __future__ import annotations
@@ -34,7 +38,8 @@ class Accuracy:
     set_angle_errors_deg : tuple of float
         Axial difference per set, 0–90°.
     d_box_true, d_box_extracted, d_box_error : float
-        Box-counting dimensions and extracted − true.
+        Box-counting dimensions as given to :func:`trace_accuracy`, and extracted − true; NaN
+        when not given.
     nodes_true, nodes_extracted : dict
         Counts of I, Y, X and E (window-edge) nodes.
     node_count_error : float
@@ -251,7 +256,9 @@ def _window_area(truth, extracted) -> float:
 
 
 def trace_accuracy(extracted, truth, *, m_per_px: float, buffer_px: float = 3.0,
-                   n_sets: int | None = None, snap_px: float = 3.0, shape_px=None) -> Accuracy:
+                   n_sets: int | None = None, snap_px: float = 3.0, shape_px=None,
+                   d_box_true: float | None = None,
+                   d_box_extracted: float | None = None) -> Accuracy:
     """Accuracy of extracted traces against ground truth.
 
     Parameters
@@ -269,6 +276,9 @@ def trace_accuracy(extracted, truth, *, m_per_px: float, buffer_px: float = 3.0,
         Snap distance for node counts (see :func:`count_nodes`).
     shape_px : (rows, cols), optional
         Image shape (see :func:`buffered_match`).
+    d_box_true, d_box_extracted : float, optional
+        Box-counting dimensions of the two maps, measured by the caller on the same grid and
+        window (:func:`rockmass.accuracy.trace_accuracy` does); default None: not measured (NaN).
 
     Returns
     -------
@@ -277,13 +287,10 @@ def trace_accuracy(extracted, truth, *, m_per_px: float, buffer_px: float = 3.0,
     Notes
     -----
     P21 = Σ length / window area and P20 = number of traces / window area, both maps over the
-    truth's window; D_box from :func:`rockmass.fractal.box_count` (raster, 360 grid, the window as
-    mask) on both maps. Extracted sets are matched to true ones by the assignment that minimises
+    truth's window. Extracted sets are matched to true ones by the assignment that minimises
     the summed axial angle differences (Hungarian method).
     """
     from scipy.optimize import linear_sum_assignment
-
-    from ..fractal import box_count
 
     scale = check_scale(m_per_px)
     precision, recall, f1 = buffered_match(extracted, truth, m_per_px=scale, buffer_px=buffer_px,
@@ -307,8 +314,8 @@ def trace_accuracy(extracted, truth, *, m_per_px: float, buffer_px: float = 3.0,
         true_listed = tuple(float(true_sets[r]) for r in rows)
     else:
         matched, errors, true_listed = (), (), tuple(float(a) for a in true_sets)
-    d_true = box_count(truth).dimension
-    d_ext = box_count(extracted).dimension if extracted.n_traces else float("nan")
+    d_true = float("nan") if d_box_true is None else float(d_box_true)
+    d_ext = float("nan") if d_box_extracted is None else float(d_box_extracted)
     snap = snap_px * scale
     nodes_true, nodes_ext = count_nodes(truth, snap_m=snap), count_nodes(extracted, snap_m=snap)
     total = sum(nodes_true[k] for k in "IYX")

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..dfn.plots import _figure, _segment_colours, _set_legend
 from .frame import uv_to_rc
 
 __all__ = ["plot_overlay"]
@@ -30,11 +31,7 @@ def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title
     set_ids : (n_traces,) array of int, optional
         Joint set of each trace, -1 for none.
     """
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
     from matplotlib.collections import LineCollection
-    from matplotlib.figure import Figure
 
     img = np.asarray(image)
     if img.ndim == 3:
@@ -42,7 +39,7 @@ def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title
     h, w = img.shape
     step = max(1, int(np.ceil(max(h, w) / max_side_px)))
     shown = img[::step, ::step]
-    fig = Figure(figsize=(10.0, 10.0 * h / w + 0.6), layout="constrained")
+    fig = _figure((10.0, 10.0 * h / w + 0.6))
     ax = fig.add_subplot()
     ax.imshow(shown, cmap="gray", extent=(-0.5, w - 0.5, h - 0.5, -0.5), interpolation="antialiased")
     segments = trace_map.segments()
@@ -50,16 +47,9 @@ def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title
         a = uv_to_rc(segments[:, :2], h, m_per_px)
         b = uv_to_rc(segments[:, 2:], h, m_per_px)
         lines = np.stack([a[:, ::-1], b[:, ::-1]], axis=1)  # (x=col, y=row) for matplotlib
-        if set_ids is None:
-            colours = ["C0"] * len(lines)
-        else:
-            per_segment = np.asarray(set_ids)[trace_map.segment_trace_index()]
-            colours = ["0.7" if s < 0 else f"C{int(s) % 10}" for s in per_segment]
+        colours = _segment_colours(trace_map, set_ids, "0.7")
         ax.add_collection(LineCollection(lines, colors=colours, linewidths=1.2))
-    if set_ids is not None:
-        for s in sorted(set(int(v) for v in np.asarray(set_ids) if v >= 0)):
-            ax.plot([], [], color=f"C{s % 10}", label=f"set {s}")
-        ax.legend(fontsize=8, loc="upper right")
+    _set_legend(ax, set_ids)
     ax.set_xlim(-0.5, w - 0.5)
     ax.set_ylim(h - 0.5, -0.5)
     ax.set_axis_off()

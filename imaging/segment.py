@@ -1,6 +1,6 @@
 """Ridge response to a binary joint mask: robust hysteresis threshold, region of interest, cleanup.
 
-REFERENCE.md §2: a global Otsu threshold over-segments rock texture. The ridge response of a face
+docs/imaging.md §4, eq. (4.1): a global Otsu threshold over-segments rock texture. The ridge response of a face
 is mostly texture with a long tail of joints, so the thresholds are set from robust statistics of
 the response (median and MAD, which the tail barely moves) and applied by hysteresis: a pixel above
 the low threshold is kept only when it is connected to a pixel above the high one, which keeps a

@@ -1,6 +1,6 @@
 """Skeleton of a joint mask as a graph, its repairs, and the chaining of branches into traces.
 
-Steps (REFERENCE.md §2), each a function returning a new :class:`SkeletonGraph`:
+Steps (docs/imaging.md §5), each a function returning a new :class:`SkeletonGraph`:
 
 1. :func:`build_graph` — thin the mask (Zhang–Suen [2]_, :func:`skeletonize`) and read its pixel
    graph, classified as skan [1]_ does: *nodes* are end pixels (one neighbour) and junctions (three
@@ -175,7 +175,7 @@ def skeletonize(binary) -> np.ndarray:
     Notes
     -----
     The skeleton is not a medial axis: it shortens each line end by about half the line width
-    (REFERENCE.md §2), and it splits an X crossing of thick lines into two Y junctions, which
+    (docs/imaging.md §7), and it splits an X crossing of thick lines into two Y junctions, which
     :func:`repair_crossings` undoes.
     """
     from skimage.morphology import skeletonize as _skeletonize

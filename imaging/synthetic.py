@@ -307,7 +307,7 @@ def save_synthetic_face(face: SyntheticFace, directory) -> dict[str, Path]:
     import cv2
 
     from ..dfn import write_traces
-    from ..dfn._atomic import atomic_path
+    from ..dfn.atomic import atomic_path
 
     folder = Path(directory)
     folder.mkdir(parents=True, exist_ok=True)

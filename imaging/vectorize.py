@@ -1,6 +1,6 @@
 """Pixel chains to trace polylines in metres: simplification, face frame, per-trace attributes.
 
-REFERENCE.md §2: an 8-connected pixel chain over-estimates length by up to 8 % at 22.5°, so
+docs/imaging.md §7: an 8-connected pixel chain over-estimates length by up to 8 % at 22.5°, so
 lengths are measured on Douglas–Peucker-simplified polylines [1]_; all pixel -> metre conversion
 goes through :mod:`rockmass.imaging.frame`.
 """

@@ -8,7 +8,7 @@ The stages are sub-packages, imported on demand so that ``import rockmass`` stay
 - :mod:`rockmass.blockgen` — block models cut by joints and excavations;
 - :mod:`rockmass.solver` — the distinct element (DEM) core.
 
-The package layout, data flow and conventions are described in ``DESIGN.md`` of the project.
+The package layout, data flow and conventions are described in ``docs/design.md``.
 """
 
 from importlib.metadata import PackageNotFoundError, version as _version

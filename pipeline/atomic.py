@@ -1,25 +1,17 @@
-"""Atomic file outputs (DESIGN.md §3): a killed run never leaves a truncated file that looks complete.
+"""Atomic outputs of a command (docs/design.md §3.7): a killed run never leaves a truncated file that looks complete.
 
-Every writer here puts the data in a temporary file *in the same folder* as the target, flushes and
-fsyncs it, then renames it onto the target with :func:`os.replace`, which is atomic on POSIX and on
-Windows when source and target are on the same volume. A reader therefore sees either the old file or
-the complete new one, never a partial write. If anything fails (including ``KeyboardInterrupt``) the
-temporary file is removed and an existing file at the target is left untouched.
-
-Temporary names start with ``.tmp-`` and end with the target's full name (``.tmp-3f9c…-overlay.png``),
-so they are hidden on POSIX, easy to recognise, and keep every suffix of the target: writers that pick
-the format from the suffix (``matplotlib.pyplot.savefig``, ``meshio.write``) work through
-:func:`atomic_path`.
+The file mechanics (a temporary file beside the target, fsync, permissions, rename, clean-up on any
+failure, ``.tmp-`` names that keep the target's suffix) are :mod:`rockmass.dfn.atomic`, the one
+implementation every stage's writer uses; see it for the guarantees. This module is the layer a
+command writes through: it creates the target's folder, and adds bytes, text and JSON entry points
+and the JSON conversion. A command's set of outputs (all files or none) is made of these writers
+inside :func:`rockmass.outputs.output_folder`.
 
 JSON output is strict: NaN and ±Infinity are not JSON, so :func:`atomic_write_json` refuses them with
 a message that names the key path (``result.local_slopes[3] is NaN; JSON has no NaN``) unless the
 caller says that "undefined" is legitimate there (``nan_as_null=True``, which writes ``null``).
 
-The file mechanics (temporary name, fsync, permissions, rename, clean-up, folder fsync) are
-implemented once, in :mod:`rockmass.dfn._atomic`, which the stages' writers use too; this module adds
-what the pipeline needs on top: creating the target's folder, bytes/text/JSON entry points and the
-JSON conversion. It imports nothing heavy: numpy values are recognised only if numpy is already
-imported.
+It imports nothing heavy: numpy values are recognised only if numpy is already imported.
 """
 
 from __future__ import annotations
@@ -36,7 +28,7 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path, PurePath
 from typing import Any
 
-from .dfn import _atomic
+from .dfn import atomic as _file
 
 __all__ = [
     "atomic_write_bytes",
@@ -80,9 +72,7 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes | bytearray | memory
 
     Notes
     -----
-    The temporary file is created with ``O_EXCL`` and mode ``0o666`` filtered by the umask, so the
-    final file gets the same permissions a plain ``open(path, "wb")`` would give (``tempfile.mkstemp``
-    would give ``0o600``): a new file gets the umask's mode and a replaced file keeps its own.
+    Permissions are those a plain ``open(path, "wb")`` would give (:mod:`rockmass.dfn.atomic`).
 
     Examples
     --------
@@ -92,7 +82,7 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes | bytearray | memory
     b'abc'
     """
     target = _prepare(path)
-    with _atomic.atomic_open(target, "wb") as handle:
+    with _file.atomic_open(target, "wb") as handle:
         handle.write(data)
     return target
 
@@ -190,9 +180,8 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
 
     Notes
     -----
-    If the block raises, the temporary file is deleted and the exception propagates; an existing file
-    at ``path`` is left untouched. On success the temporary file is fsynced before the rename, and a
-    replaced file lends it its permission bits.
+    :func:`rockmass.dfn.atomic.atomic_path` with the folder created first: if the block raises,
+    the temporary file is deleted and an existing file at ``path`` is left untouched.
 
     Examples
     --------
@@ -205,7 +194,7 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     >>> sorted(p.name for p in d.iterdir())
     ['plot.png']
     """
-    with _atomic.atomic_path(_prepare(path)) as tmp:
+    with _file.atomic_path(_prepare(path)) as tmp:
         yield tmp
 
 

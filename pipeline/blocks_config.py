@@ -17,6 +17,9 @@ Example::
     center_xy_m = [0.61, 0.305]
     radius_m = 0.076
 
+``[[blocks.sets]]`` tables are :class:`rockmass.blockgen.JointSet` itself (fields, ranges, rules and
+descriptions declared there once).
+
 ``[blocks.cracks]`` (``size_m``, ``pattern`` = "voronoi" or "triangular", ...) subdivides intact
 blocks by potential cracks (:class:`CracksConfig`).
 
@@ -36,7 +39,8 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from .strict import StrictModel, field_problem
+from .blockgen.joints import JointSet
+from .strict import ConfigFile, StrictModel, config_file, field_problem
 
 __all__ = ["BlocksConfig", "BlocksDocument", "DomainSection", "JointSetConfig", "TwoSetsConfig",
            "CracksConfig", "DfnSectionConfig",
@@ -49,16 +53,22 @@ Length = Annotated[float, Field(gt=0, le=1e6)]
 Angle = Annotated[float, Field(ge=-360, le=360)]
 Name = Annotated[str, Field(min_length=1, max_length=64)]
 Sides = Annotated[int, Field(ge=8, le=4096)]
+StageName = Annotated[Name, Field(description="excavation stage name, unique; stages are removed in "
+                                              "the order of the tables")]
+ArcSides = Annotated[Sides, Field(description="sides of the polygon that stands for the arcs")]
 
 
 class DomainSection(StrictModel):
     """``[blocks.domain]``: a ``width_m`` × ``height_m`` rectangle with its lower-left corner at
     ``origin_xy_m`` (default (0, 0)), or any simple polygon ``polygon_xy_m`` (3 to 10⁴ vertices)."""
 
-    width_m: Length | None = None
-    height_m: Length | None = None
-    origin_xy_m: Point = (0.0, 0.0)
-    polygon_xy_m: Annotated[list[Point], Field(min_length=3, max_length=10000)] | None = None
+    width_m: Annotated[Length | None, Field(description="width of the rectangular domain")] = None
+    height_m: Annotated[Length | None, Field(description="height of the rectangular domain")] = None
+    origin_xy_m: Annotated[Point, Field(
+        description="lower-left corner of the rectangle")] = (0.0, 0.0)
+    polygon_xy_m: Annotated[list[Point] | None, Field(
+        min_length=3, max_length=10000,
+        description="outline of a polygonal domain (instead of the rectangle)")] = None
 
     @model_validator(mode="after")
     def _one_form(self):
@@ -81,44 +91,22 @@ class DomainSection(StrictModel):
                 (x, y + self.height_m)]
 
 
-class JointSetConfig(StrictModel):
-    """``[[blocks.sets]]``: one :class:`rockmass.blockgen.JointSet` (same field names and meaning)."""
-
-    angle_deg: Angle
-    spacing_m: Length
-    spacing_distribution: Literal["constant", "exponential", "lognormal"] = "constant"
-    spacing_std_m: float = Field(0.0, ge=0, le=1e6)
-    trace_length_m: Length | None = None
-    gap_length_m: Length | None = None
-    origin_xy_m: Point | None = None
-    name: Name | None = None
-
-    @model_validator(mode="after")
-    def _pairs(self):
-        if (self.trace_length_m is None) != (self.gap_length_m is None):
-            field = "gap_length_m" if self.gap_length_m is None else "trace_length_m"
-            raise field_problem(self, field, "trace_length_m and gap_length_m go together "
-                                "(persistence); give both or neither", None)
-        if self.spacing_distribution == "lognormal" and self.spacing_std_m <= 0:
-            raise field_problem(self, "spacing_std_m", "must be > 0 for a lognormal spacing",
-                                self.spacing_std_m)
-        return self
-
-    def to_joint_set(self):
-        from .blockgen import JointSet
-
-        return JointSet(**self.model_dump())
+#: ``[[blocks.sets]]`` is :class:`rockmass.blockgen.JointSet` itself: its fields, ranges, rules and
+#: descriptions are declared there once.
+JointSetConfig = JointSet
 
 
 class TwoSetsConfig(StrictModel):
     """``[blocks.two_sets]``: seed 000's two sets, set 1 at ``alpha_deg`` from the horizontal and set
     2 at ``alpha_deg + theta_deg`` (0 < θ <= 90), spacings ``spacing_m = [s1, s2]``."""
 
-    alpha_deg: Annotated[float, Field(ge=0, lt=180)]
-    theta_deg: Annotated[float, Field(gt=0, le=90)]
-    spacing_m: Annotated[tuple[Length, Length], Field(strict=False)]
-    trace_length_m: Length | None = None
-    gap_length_m: Length | None = None
+    alpha_deg: Annotated[float, Field(ge=0, lt=180, description="angle α of set 1 from the horizontal")]
+    theta_deg: Annotated[float, Field(gt=0, le=90, description="angle θ from set 1 to set 2")]
+    spacing_m: Annotated[tuple[Length, Length], Field(strict=False, description="spacings [set 1, set 2]")]
+    trace_length_m: Annotated[Length | None, Field(
+        description="joint length along a line, both sets; none: persistent")] = None
+    gap_length_m: Annotated[Length | None, Field(
+        description="rock-bridge length between the joints of a line, both sets")] = None
 
     def to_joint_sets(self):
         from .blockgen import JointSet
@@ -130,11 +118,11 @@ class TwoSetsConfig(StrictModel):
 
 
 class CircleConfig(StrictModel):
-    shape: Literal["circle"]
-    name: Name
-    center_xy_m: Point
-    radius_m: Length
-    n_sides: Sides = 36
+    shape: Annotated[Literal["circle"], Field(description="excavation shape: \"circle\"")]
+    name: StageName
+    center_xy_m: Annotated[Point, Field(description="centre")]
+    radius_m: Annotated[Length, Field(description="radius")]
+    n_sides: ArcSides = 36
 
     def to_excavation(self):
         from .blockgen import circle
@@ -143,12 +131,13 @@ class CircleConfig(StrictModel):
 
 
 class HorseshoeConfig(StrictModel):
-    shape: Literal["horseshoe"]
-    name: Name
-    center_xy_m: Point  # middle of the invert
-    span_m: Length
-    wall_height_m: Length
-    n_sides: Sides = 36
+    shape: Annotated[Literal["horseshoe"], Field(description="excavation shape: \"horseshoe\"")]
+    name: StageName
+    center_xy_m: Annotated[Point, Field(description="middle of the invert")]
+    span_m: Annotated[Length, Field(description="width")]
+    wall_height_m: Annotated[Length, Field(
+        description="height of the vertical walls below the semicircular roof")]
+    n_sides: ArcSides = 36
 
     def to_excavation(self):
         from .blockgen import horseshoe
@@ -157,13 +146,15 @@ class HorseshoeConfig(StrictModel):
 
 
 class ArchedCavernConfig(StrictModel):
-    shape: Literal["arched_cavern"]
-    name: Name
-    center_xy_m: Point  # middle of the floor
-    span_m: Length
-    wall_height_m: Length
-    arch_rise_m: Length
-    n_sides: Sides = 36
+    shape: Annotated[Literal["arched_cavern"], Field(
+        description="excavation shape: \"arched_cavern\"")]
+    name: StageName
+    center_xy_m: Annotated[Point, Field(description="middle of the floor")]
+    span_m: Annotated[Length, Field(description="width")]
+    wall_height_m: Annotated[Length, Field(description="height of the vertical walls")]
+    arch_rise_m: Annotated[Length, Field(
+        description="rise of the roof arch above the walls, <= span_m / 2")]
+    n_sides: ArcSides = 36
 
     @model_validator(mode="after")
     def _rise(self):
@@ -180,11 +171,11 @@ class ArchedCavernConfig(StrictModel):
 
 
 class RectangleConfig(StrictModel):
-    shape: Literal["rectangle"]
-    name: Name
-    center_xy_m: Point
-    width_m: Length
-    height_m: Length
+    shape: Annotated[Literal["rectangle"], Field(description="excavation shape: \"rectangle\"")]
+    name: StageName
+    center_xy_m: Annotated[Point, Field(description="centre")]
+    width_m: Annotated[Length, Field(description="width")]
+    height_m: Annotated[Length, Field(description="height")]
 
     def to_excavation(self):
         from .blockgen import rectangle
@@ -193,9 +184,9 @@ class RectangleConfig(StrictModel):
 
 
 class PolygonConfig(StrictModel):
-    shape: Literal["polygon"]
-    name: Name
-    xy_m: Annotated[list[Point], Field(min_length=3, max_length=10000)]
+    shape: Annotated[Literal["polygon"], Field(description="excavation shape: \"polygon\"")]
+    name: StageName
+    xy_m: Annotated[list[Point], Field(min_length=3, max_length=10000, description="outline vertices")]
 
     def to_excavation(self):
         from .blockgen import polygon_excavation
@@ -214,6 +205,7 @@ class CracksConfig(StrictModel):
     size_m : float
         Target sub-block size (> 0).
     pattern : {"voronoi", "triangular"}, default "voronoi"
+        Voronoi cells of a jittered hexagonal lattice, or triangles.
     jitter : float, default 0.3
         Voronoi seed displacement / lattice spacing, 0 <= jitter <= 0.5.
     angle_deg : float, default 0
@@ -276,7 +268,8 @@ class BlocksConfig(StrictModel):
     ----------
     domain : DomainSection, optional
         Required unless ``dfn_section`` gives the domain (its window).
-    sets : list of JointSetConfig, default []
+    sets : list of JointSet, default []
+        ``[[blocks.sets]]``: joint sets (:class:`rockmass.blockgen.JointSet`), at most 32.
     two_sets : TwoSetsConfig, optional
         Appended after ``sets``.
     traces : str, optional
@@ -286,7 +279,10 @@ class BlocksConfig(StrictModel):
     excavations : list, default []
         Stages (``shape`` = circle, horseshoe, arched_cavern, rectangle, polygon), unique names.
     dangling : {"glued", "joint", "drop"}, default "glued"
-    seed : int, default 0 (0 <= seed < 2**63)
+        Joint or trace ends in intact rock: extended to the next line as a glued contact or as a
+        joint, or dropped.
+    seed : int, default 0
+        Root seed of the random joint offsets, spacings and cracks (0 <= seed < 2**63).
     rounding_m, min_edge_m : float, optional
         Solver corner rounding d and minimum edge (defaults: 1 % of the median edge, 2d).
     merge_slivers, convex, snap_edges : bool, default true
@@ -296,9 +292,9 @@ class BlocksConfig(StrictModel):
     """
 
     domain: DomainSection | None = None
-    sets: Annotated[list[JointSetConfig], Field(max_length=32)] = Field(default_factory=list)
+    sets: Annotated[list[JointSet], Field(max_length=32)] = Field(default_factory=list)
     two_sets: TwoSetsConfig | None = None
-    traces: str | None = None
+    traces: ConfigFile | None = None
     dfn_section: DfnSectionConfig | None = None
     excavations: Annotated[list[ExcavationConfig], Field(max_length=64)] = Field(default_factory=list)
     dangling: Literal["glued", "joint", "drop"] = "glued"
@@ -335,16 +331,13 @@ class BlocksConfig(StrictModel):
         return self
 
     def joint_sets(self):
-        sets = [s.to_joint_set() for s in self.sets]
+        sets = list(self.sets)
         if self.two_sets is not None:
             sets += self.two_sets.to_joint_sets()
         return sets
 
     def traces_path(self, config_path) -> Path | None:
-        if self.traces is None:
-            return None
-        p = Path(self.traces)
-        return p if p.is_absolute() else Path(config_path).parent / p
+        return config_file(config_path, self.traces)
 
 
 class BlocksDocument(StrictModel):

@@ -1,6 +1,6 @@
 """The ``rockmass`` command line: subcommands, exit codes and error reporting.
 
-Exit codes (DESIGN.md §4): 0 success; 2 bad input or configuration (the message names the file, the
+Exit codes (docs/design.md §4): 0 success; 2 bad input or configuration (the message names the file, the
 field and what was expected) — every ``ValueError``, which is what input validation raises, and
 input files that cannot be read, which the subcommands re-raise as :class:`InputError`; 1 failure
 while running — outputs that cannot be written (:class:`RunError`), and anything unexpected. Heavy modules (numpy, numba, matplotlib,

@@ -8,11 +8,19 @@ indices in brackets) and a message that says what was wrong, what is expected an
     site.toml: fractal.grid: must be >= 8, got 0 (allowed: 8 <= grid <= 16384)
     site.toml: fractal.n_offsets: must be an integer, got 3.5 (a float)
 
-Adding a section
-----------------
-Define ``class XyzConfig(StrictModel): ...`` in its own module ``xyz_config.py`` (importing
-:class:`StrictModel` and :func:`field_problem` from :mod:`rockmass.strict`, never from here) and add
-one line to :class:`RockmassConfig`: ``xyz: Stage("xyz_config", "XyzConfig") = None``.
+Adding a section, adding a key
+------------------------------
+A parameter is declared once, where it is used: a library parameter on the library's dataclass
+(:mod:`rockmass.solver.settings`, :class:`rockmass.blockgen.JointSet`; type, range, default and
+``description`` in the annotation, cross-field rules as validators), which the section uses as its
+field type or generates itself from (:func:`rockmass.strict.library_section`). A TOML-only key
+(a file name, a stage name) goes on the section, typed :data:`rockmass.strict.ConfigFile` when it
+names a file. Then regenerate ``docs/config.md`` (:mod:`rockmass.config_reference`); a test fails
+until you do, and when a key has no description.
+
+A new section: ``class XyzConfig(StrictModel): ...`` in its own module ``xyz_config.py`` (importing
+from :mod:`rockmass.strict`, never from here) and one line in :class:`RockmassConfig`:
+``xyz: Stage("xyz_config", "XyzConfig") = None``.
 
 Stage sections (``[dfn]``, ``[blocks]``) are resolved lazily: their module is imported only when
 the document has that section, so ``import rockmass.config`` (and ``RockmassConfig()``) stays free
@@ -390,14 +398,19 @@ def _field_types(info: Any) -> list[Any]:
     return [lazy[0].resolve()] if lazy else _unwrap(info.annotation)
 
 
+def _section_fields(ann: Any) -> dict[str, Any]:
+    """The fields of a table type (a pydantic model or pydantic dataclass), else ``{}``."""
+    return getattr(ann, "__pydantic_fields__", {}) if isinstance(ann, type) else {}
+
+
 def _annotation_at(model: type[BaseModel], keys: list[str | int]) -> list[Any]:
     """Types admitted at key path ``keys`` below ``model`` (empty list if the path is unknown)."""
     current: list[Any] = [model]
     for key in keys:
         following: list[Any] = []
         for ann in current:
-            if isinstance(ann, type) and issubclass(ann, BaseModel) and isinstance(key, str):
-                for name, info in ann.model_fields.items():
+            if _section_fields(ann) and isinstance(key, str):
+                for name, info in _section_fields(ann).items():
                     if key in (name, info.alias):
                         following.extend(_field_types(info))
             elif isinstance(key, int):
@@ -421,8 +434,8 @@ def _annotation_at(model: type[BaseModel], keys: list[str | int]) -> list[Any]:
 def _allowed_keys(model: type[BaseModel], keys: list[str | int]) -> list[str]:
     allowed: list[str] = []
     for ann in _annotation_at(model, keys):
-        if isinstance(ann, type) and issubclass(ann, BaseModel):
-            for name, info in ann.model_fields.items():
+        if _section_fields(ann):
+            for name, info in _section_fields(ann).items():
                 key = info.alias or name
                 if key not in allowed:
                     allowed.append(key)
@@ -480,14 +493,14 @@ def _message(error: dict[str, Any], model: type[BaseModel], keys: list[str | int
     value = error.get("input")
     ctx = error.get("ctx") or {}
 
-    if kind == "extra_forbidden":
+    if kind in ("extra_forbidden", "unexpected_keyword_argument"):
         allowed = _allowed_keys(model, keys[:-1])
         if not allowed:
             return "unknown key (this section takes no keys)" if keys[:-1] else "unknown key"
         text = f"unknown key (allowed: {', '.join(allowed)})"
         close = difflib.get_close_matches(str(keys[-1]), allowed, n=1)
         return text + (f'; did you mean "{close[0]}"?' if close else "")
-    if kind == "missing":
+    if kind in ("missing", "missing_argument"):
         if keys and isinstance(keys[-1], int):
             return "missing array item (the array is too short)"
         return "required key is missing"
@@ -511,7 +524,8 @@ def _message(error: dict[str, Any], model: type[BaseModel], keys: list[str | int
         choices = _literal_choices(model, keys)
         expected = ", ".join(_toml(c) for c in choices) if choices else ctx.get("expected", "?")
         return f"must be one of {expected}; {_got(value)}"
-    if kind in ("model_type", "model_attributes_type", "dict_type", "dataclass_type"):
+    if kind in ("model_type", "model_attributes_type", "dict_type", "dataclass_type",
+                "dataclass_args_type"):
         return f"must be a table ([section] or {{key = value}}), {_got(value)}"
     if kind in ("tuple_type", "list_type", "set_type", "frozen_set_type", "iterable_type"):
         return f"must be an array, {_got(value)}"
@@ -541,9 +555,7 @@ def _allowed_range(model: type[BaseModel], keys: list[str | int]) -> str:
     if not keys or not isinstance(keys[-1], str):
         return ""
     for ann in _annotation_at(model, keys[:-1]):
-        if not (isinstance(ann, type) and issubclass(ann, BaseModel)):
-            continue
-        for name, info in ann.model_fields.items():
+        for name, info in _section_fields(ann).items():
             if keys[-1] not in (name, info.alias):
                 continue
             lower = upper = ""

@@ -5,7 +5,7 @@ writes ``realization_NNNN/fractures.csv`` (``set,cx,cy,cz,nx,ny,nz,radius``),
 ``realization_NNNN/fractures.vtu`` (polygons with ``set`` and ``id`` cell data) and
 ``realization_NNNN/summary.json`` (target and achieved P32, P30 and counts per set), and one top-level
 ``manifest.json``. Everything is computed first and written all-or-nothing. Realization i depends only
-on the root seed and i (DESIGN.md §3), so ``--first 7 --realizations 1`` reproduces realization 7 of
+on the root seed and i (docs/design.md §3.5), so ``--first 7 --realizations 1`` reproduces realization 7 of
 any batch, on any worker.
 
 With ``[dfn.fit]`` the sets are first fitted from the field data the config names (scanlines and face
@@ -19,12 +19,10 @@ re-sampled P10, P21, mean trace length and set orientations, each with a Poisson
 from __future__ import annotations
 
 import argparse
-import time
 
-from .errors import InputError
-from .outputs import output_folder
+from .dfn_stage import produce
 
-__all__ = ["add_parser", "compute", "produce", "realization_summary", "run"]
+__all__ = ["add_parser", "run"]
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -40,211 +38,6 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--first", type=int, default=0, help="index of the first realization (default 0)")
     p.set_defaults(handler=run)
     return p
-
-
-def _check_flag(value, flag: str, low: int, high: int | None = None) -> None:
-    if value is not None and value < low:
-        raise InputError(f"{flag} must be >= {low}, got {value}")
-    if value is not None and high is not None and value > high:
-        raise InputError(f"{flag} must be <= {high} (as dfn.realizations), got {value}")
-
-
-def _realizations_cap() -> int:
-    """The upper bound of ``dfn.realizations`` (one rule for the config and the flag)."""
-    from .dfn_config import DFNConfig
-
-    return next(m.le for m in DFNConfig.model_fields["realizations"].metadata if hasattr(m, "le"))
-
-
-def realization_summary(network, specs, seed: int, index: int) -> dict:
-    """Target and achieved intensities of one realization, per set and in total."""
-    sets = []
-    for j, spec in enumerate(specs):
-        sets.append({"set": j, "name": spec.name, "target_p32": spec.p32,
-                     "achieved_p32": network.p32(j), "p30": network.p30(j),
-                     "count": int((network.set_id == j).sum())})
-    return {"realization": index, "seed": seed, "spawn_key": [index],
-            "domain_m": network.domain_m.tolist(), "volume_m3": network.volume_m3,
-            "units": {"p32": "m2/m3 (one-sided)", "p30": "1/m3 (centres inside the domain)"},
-            "sets": sets,
-            "total": {"target_p32": sum(s["target_p32"] for s in sets), "achieved_p32": network.p32(),
-                      "p30": network.p30(), "count": network.n_fractures}}
-
-
-def _read_field_data(config_path, fit_cfg):
-    """Scanlines and FaceSurveys named by ``[dfn.fit]``; bad files -> InputError naming file and key."""
-    from .dfn.field_fit import FaceSurvey
-    from .dfn.scanline import read_scanline
-    from .dfn.traceio import read_traces
-
-    scanlines, faces = [], []
-    for k, name in enumerate(fit_cfg.scanlines):
-        path = fit_cfg.path(name, config_path)
-        try:
-            scanlines.append(read_scanline(path))
-        except (OSError, ValueError) as exc:
-            raise InputError(f"{config_path}: dfn.fit.scanlines[{k}]: {path}: {exc}") from exc
-        if fit_cfg.validate_ and scanlines[-1].start_xyz_m is None:
-            raise InputError(f"{config_path}: dfn.fit.validate: {path} has no start point (start_xyz_m in its "
-                             "header); validate re-samples realizations along each scanline")
-    for k, face in enumerate(fit_cfg.faces):
-        path = fit_cfg.path(face.file, config_path)
-        try:
-            trace_map = read_traces(path)
-            faces.append(FaceSurvey.from_dip(trace_map, face.dip_deg, face.dip_direction_deg, face.point_m,
-                                              name=str(face.file)))
-        except (OSError, ValueError) as exc:
-            raise InputError(f"{config_path}: dfn.fit.faces[{k}].file: {path}: {exc}") from exc
-        if fit_cfg.validate_ and face.point_m is None:
-            raise InputError(f"{config_path}: dfn.fit.faces[{k}].point_m: required with validate = true "
-                             "(the world position of the face frame's origin)")
-    return scanlines, faces
-
-
-def _fit_sets(config_path, cfg):
-    """(specs, FieldFit, scanlines, faces) from ``[dfn.fit]``."""
-    from .dfn.field_fit import fit_field
-    from .dfn_config import size_from_config
-
-    fit_cfg = cfg.fit
-    scanlines, faces = _read_field_data(config_path, fit_cfg)
-    try:
-        fit = fit_field(scanlines, faces, n_sets=fit_cfg.n_sets, size_family=fit_cfg.size_family,
-                        r_max_m=fit_cfg.r_max_m, tolerance_m=fit_cfg.boundary_tolerance_m, seed=cfg.seed)
-    except ValueError as exc:
-        raise InputError(f"{config_path}: dfn.fit: {exc}") from exc
-    size = None if fit_cfg.size is None else size_from_config(fit_cfg.size)
-    try:
-        specs = fit.specs([size] * len(fit.sets), orientation=fit_cfg.orientation)
-    except ValueError as exc:
-        raise InputError(f"{config_path}: dfn.fit: {exc} (give dfn.fit.size or faces with traces of every "
-                         "set)") from exc
-    return specs, fit, scanlines, faces
-
-
-def _section(network, specs, sec, k: int) -> dict:
-    """``summary.json`` entry of one ``[[dfn.sections]]`` plane (:func:`rockmass.dfn.section_check`)."""
-    from .dfn.orientation import normal_from_dip
-    from .dfn.validation import section_check
-
-    result = section_check(network, specs, sec.point_m, normal_from_dip(sec.dip_deg, sec.dip_direction_deg),
-                           sec.window_uv_m)
-    return {"name": sec.name or f"section {k}", **result}
-
-
-def compute(args, document=None):
-    """Load (unless ``document``, a validated document with a ``dfn`` section, is given), fit if
-    asked, generate, validate if asked; files named in ``[dfn.fit]`` are relative to ``args.config``.
-
-    Returns (config, specs, seed, [(index, network, summary, validation rows or None)], timings, fit).
-    """
-    from .config import load_config
-    from .dfn_config import DFNDocument
-    from .progress import count_bar
-
-    _check_flag(args.seed, "--seed", 0)
-    _check_flag(args.realizations, "--realizations", 1, _realizations_cap())
-    _check_flag(args.first, "--first", 0)
-    t0 = time.perf_counter()
-    if document is None:
-        document = load_config(args.config, model=DFNDocument)
-    cfg = document.dfn
-    specs, fit, field = [], None, None
-    if cfg.fit is not None:
-        specs, fit, *field = _fit_sets(args.config, cfg)
-    for j, set_cfg in enumerate(cfg.sets):
-        try:
-            specs.append(set_cfg.to_spec())
-        except ValueError as exc:
-            raise InputError(f"{args.config}: dfn.sets[{j}]: {exc}") from exc
-    seed = cfg.seed if args.seed is None else args.seed
-    count = cfg.realizations if args.realizations is None else args.realizations
-    indices = list(range(args.first, args.first + count))
-    t1 = time.perf_counter()
-    results = []
-    with count_bar("dfn", len(indices), "realization") as bar:
-        for done, i in enumerate(indices, 1):
-            results.append(_realization(args, cfg, specs, fit, field, seed, i))
-            if bar is not None:
-                bar(done)
-    t2 = time.perf_counter()
-    return document, specs, seed, results, {"load_s": t1 - t0, "generate_s": t2 - t1}, fit
-
-
-def _realization(args, cfg, specs, fit, field, seed: int, i: int) -> tuple:
-    """Realization ``i``: (index, network, summary, validation rows or None)."""
-    from .dfn.generation import generate
-
-    try:
-        network = generate(specs, cfg.domain_m(), seed=seed, realization=i,
-                           max_fractures=cfg.max_fractures)
-    except ValueError as exc:
-        raise InputError(f"{args.config}: dfn.max_fractures: {exc}") from exc
-    rows = None
-    if fit is not None and cfg.fit.validate_:
-        from .dfn.validation import compare_with_field
-
-        rows = compare_with_field(network, fit, *field)
-    summary = realization_summary(network, specs, seed, i)
-    if cfg.sections:
-        summary["sections"] = []
-        for k, sec in enumerate(cfg.sections):
-            try:
-                summary["sections"].append(_section(network, specs, sec, k))
-            except ValueError as exc:
-                raise InputError(f"{args.config}: dfn.sections[{k}]: {exc}") from exc
-    return i, network, summary, rows
-
-
-def validation_document(rows: list[dict], index: int) -> dict:
-    """``validation.json``: measured vs re-sampled rows (no NaN) and the overall pass flag."""
-    import math
-
-    def clean(v):
-        return None if isinstance(v, float) and not math.isfinite(v) else v
-
-    return {"realization": index, "ok": all(r["ok"] for r in rows), "n_failed": sum(not r["ok"] for r in rows),
-            "tolerance": "3 combined standard deviations (Poisson counts); mean pole 1.52 x alpha95",
-            "rows": [{k: clean(v) for k, v in r.items()} for r in rows]}
-
-
-def produce(args, out_dir, document=None):
-    """Compute (:func:`compute`) and write every output into the folder ``out_dir``; return what
-    :func:`compute` returns.
-
-    The work of ``rockmass dfn`` (and of the ``dfn`` stage of ``rockmass run``).
-    """
-    from contextlib import ExitStack
-
-    from .atomic import atomic_path, atomic_write_json
-    from .dfn.network_io import write_fractures_csv, write_fractures_vtu
-    from .manifest import build_manifest
-
-    document, specs, seed, results, timings, fit = computed = compute(args, document)
-    t0 = time.perf_counter()
-    with output_folder(out_dir) as out, ExitStack() as stack:
-        if fit is not None:
-            atomic_write_json(stack.enter_context(atomic_path(out / "fitted.json")), fit.as_dict())
-        for index, network, summary, rows in results:
-            folder = out / f"realization_{index:04d}"
-            names = ["fractures.csv", "fractures.vtu", "summary.json"] + (["validation.json"] if rows else [])
-            paths = {name: stack.enter_context(atomic_path(folder / name)) for name in names}
-            write_fractures_csv(network, paths["fractures.csv"])
-            write_fractures_vtu(network, paths["fractures.vtu"], n_vertices=[s.n_vertices for s in specs])
-            atomic_write_json(paths["summary.json"], summary)
-            if rows:
-                atomic_write_json(paths["validation.json"], validation_document(rows, index))
-        manifest_path = stack.enter_context(atomic_path(out / "manifest.json"))
-        timings["write_s"] = time.perf_counter() - t0
-        manifest = build_manifest(
-            command=args.argv, config=document,
-            inputs=[args.config] + ([] if document.dfn.fit is None else document.dfn.fit.field_files(args.config)),
-            seeds={"root": seed, "realizations": [r[0] for r in results],
-                   "rule": "realization i: SeedSequence(root, spawn_key=(i,)); set j: spawn_key (i, j)"},
-            timings_s=timings,
-            extra={"counts": {f"realization_{i:04d}": s["total"]["count"] for i, _, s, _ in results}})
-        atomic_write_json(manifest_path, manifest)
-    return computed
 
 
 def run(args) -> int:

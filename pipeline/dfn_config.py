@@ -55,7 +55,7 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field, model_validator
 
-from .strict import StrictModel, field_problem
+from .strict import ConfigFile, StrictModel, config_file, field_problem
 
 __all__ = ["DFNConfig", "DFNDocument", "DomainConfig", "FaceConfig", "FitConfig", "FractureSetConfig"]
 
@@ -68,8 +68,8 @@ Triple = Annotated[tuple[float, float, float], Field(strict=False)]
 class DomainConfig(StrictModel):
     """``[dfn.domain]``: the box ``min_m`` .. ``max_m`` (x East, y North, z Up), metres."""
 
-    min_m: Triple
-    max_m: Triple
+    min_m: Annotated[Triple, Field(description="lowest corner (x East, y North, z Up)")]
+    max_m: Annotated[Triple, Field(description="highest corner, above min_m on every axis")]
 
     @model_validator(mode="after")
     def _max_above_min(self) -> DomainConfig:
@@ -85,34 +85,39 @@ class DomainConfig(StrictModel):
 
 
 class FisherConfig(StrictModel):
-    distribution: Literal["fisher"]
-    dip_deg: Dip
-    dip_direction_deg: Azimuth
-    kappa: float = Field(ge=0, le=1e6)
+    distribution: Annotated[Literal["fisher"], Field(
+        description="orientation law: Fisher about a mean pole")]
+    dip_deg: Annotated[Dip, Field(description="dip of the mean plane")]
+    dip_direction_deg: Annotated[Azimuth, Field(description="dip direction of the mean plane")]
+    kappa: float = Field(ge=0, le=1e6, description="Fisher concentration κ (0: uniform)")
 
 
 class UniformConfig(StrictModel):
-    distribution: Literal["uniform"]
+    distribution: Annotated[Literal["uniform"], Field(
+        description="orientation law: uniform on the sphere")]
 
 
 class BootstrapConfig(StrictModel):
-    distribution: Literal["bootstrap"]
-    planes_deg: Annotated[list[Annotated[tuple[Dip, Azimuth], Field(strict=False)]], Field(min_length=1)]
+    distribution: Annotated[Literal["bootstrap"], Field(
+        description="orientation law: resample measured planes")]
+    planes_deg: Annotated[list[Annotated[tuple[Dip, Azimuth], Field(strict=False)]], Field(
+        min_length=1, description="measured planes as [dip, dip direction]")]
 
 
 # -- size ------------------------------------------------------------------------------------------
 
 
 class ConstantConfig(StrictModel):
-    distribution: Literal["constant"]
-    radius_m: Length
+    distribution: Annotated[Literal["constant"], Field(description="size law: one radius")]
+    radius_m: Annotated[Length, Field(description="disk radius")]
 
 
 class PowerLawConfig(StrictModel):
-    distribution: Literal["power_law"]
-    r_min_m: Length
-    r_max_m: Length
-    alpha: float = Field(ge=0, le=20)
+    distribution: Annotated[Literal["power_law"], Field(
+        description="size law: truncated power law of radii")]
+    r_min_m: Annotated[Length, Field(description="smallest radius")]
+    r_max_m: Annotated[Length, Field(description="largest radius")]
+    alpha: float = Field(ge=0, le=20, description="exponent α of the radius density r^-(α+1)")
 
     @model_validator(mode="after")
     def _range(self) -> PowerLawConfig:
@@ -129,11 +134,11 @@ def _truncation(model, r_min: float, r_max: float | None):
 
 
 class LognormalConfig(StrictModel):
-    distribution: Literal["lognormal"]
-    mean_m: Length
-    sd_m: Length
-    r_min_m: float = Field(0.0, ge=0, le=1e6)
-    r_max_m: Length | None = None
+    distribution: Annotated[Literal["lognormal"], Field(description="size law: lognormal radii")]
+    mean_m: Annotated[Length, Field(description="mean radius")]
+    sd_m: Annotated[Length, Field(description="standard deviation of the radius")]
+    r_min_m: float = Field(0.0, ge=0, le=1e6, description="lower truncation")
+    r_max_m: Annotated[Length | None, Field(description="upper truncation; none: no limit")] = None
 
     @model_validator(mode="after")
     def _range(self) -> LognormalConfig:
@@ -141,10 +146,11 @@ class LognormalConfig(StrictModel):
 
 
 class ExponentialConfig(StrictModel):
-    distribution: Literal["exponential"]
-    scale_m: Length
-    r_min_m: float = Field(0.0, ge=0, le=1e6)
-    r_max_m: Length | None = None
+    distribution: Annotated[Literal["exponential"], Field(
+        description="size law: exponential radii")]
+    scale_m: Annotated[Length, Field(description="mean of the untruncated law")]
+    r_min_m: float = Field(0.0, ge=0, le=1e6, description="lower truncation")
+    r_max_m: Annotated[Length | None, Field(description="upper truncation; none: no limit")] = None
 
     @model_validator(mode="after")
     def _range(self) -> ExponentialConfig:
@@ -174,33 +180,41 @@ Intensity = Annotated[float, Field(gt=0, le=1e4)]
 
 
 class P32Config(StrictModel):
-    measure: Literal["P32"]
-    value: Intensity
+    measure: Annotated[Literal["P32"], Field(
+        description="intensity given as P32 (fracture area per volume)")]
+    value: Annotated[Intensity, Field(description="P32, m²/m³")]
 
 
 class P10Config(StrictModel):
-    measure: Literal["P10"]
-    value: Intensity
-    trend_deg: Azimuth
-    plunge_deg: float = Field(ge=-90, le=90)
+    measure: Annotated[Literal["P10"], Field(
+        description="intensity given as P10 (fractures per metre of a line)")]
+    value: Annotated[Intensity, Field(description="P10, 1/m")]
+    trend_deg: Annotated[Azimuth, Field(description="trend of the line")]
+    plunge_deg: float = Field(ge=-90, le=90, description="plunge of the line (down positive)")
 
 
 class P21Config(StrictModel):
-    measure: Literal["P21"]
-    value: Intensity
-    dip_deg: Dip
-    dip_direction_deg: Azimuth
+    measure: Annotated[Literal["P21"], Field(
+        description="intensity given as P21 (trace length per area of a plane)")]
+    value: Annotated[Intensity, Field(description="P21, m/m²")]
+    dip_deg: Annotated[Dip, Field(description="dip of the plane")]
+    dip_direction_deg: Annotated[Azimuth, Field(description="dip direction of the plane")]
 
 
 class FractureSetConfig(StrictModel):
     """One ``[[dfn.sets]]`` entry: ``orientation``, ``size`` and ``intensity`` tables."""
 
-    name: str = Field("", max_length=64)
-    orientation: Annotated[FisherConfig | UniformConfig | BootstrapConfig, Field(discriminator="distribution")]
-    size: SizeTable
-    intensity: Annotated[P32Config | P10Config | P21Config, Field(discriminator="measure")]
-    shape: Literal["disk"] = "disk"
-    n_vertices: int = Field(16, ge=3, le=1024)
+    name: str = Field("", max_length=64, description="label in outputs")
+    orientation: Annotated[FisherConfig | UniformConfig | BootstrapConfig, Field(
+        discriminator="distribution",
+        description="orientation law (distribution = fisher, uniform or bootstrap)")]
+    size: Annotated[SizeTable, Field(
+        description="radius law (distribution = constant, power_law, lognormal or exponential)")]
+    intensity: Annotated[P32Config | P10Config | P21Config, Field(
+        discriminator="measure", description="intensity (measure = P32, P10 or P21)")]
+    shape: Annotated[Literal["disk"], Field(description="fracture shape")] = "disk"
+    n_vertices: int = Field(16, ge=3, le=1024,
+                            description="vertices of the polygon that stands for a disk")
 
     def to_spec(self):
         """The :class:`rockmass.dfn.generation.FractureSetSpec` (imports numpy-level code lazily)."""
@@ -238,10 +252,12 @@ class FractureSetConfig(StrictModel):
 class FaceConfig(StrictModel):
     """One ``[[dfn.fit.faces]]`` entry: a trace file on a face of known orientation."""
 
-    file: str = Field(min_length=1)
-    dip_deg: Dip
-    dip_direction_deg: Azimuth
-    point_m: Triple | None = None
+    file: Annotated[ConfigFile, Field(
+        description="trace map (GeoJSON / CSV with a convex window) in the face frame")]
+    dip_deg: Annotated[Dip, Field(description="dip of the face")]
+    dip_direction_deg: Annotated[Azimuth, Field(description="dip direction of the face")]
+    point_m: Annotated[Triple | None, Field(
+        description="a point of the face plane; none: the origin")] = None
 
 
 class FitConfig(StrictModel):
@@ -269,10 +285,11 @@ class FitConfig(StrictModel):
         Re-sample every realization with the field geometry and write ``validation.json``.
     """
 
-    scanlines: Annotated[list[Annotated[str, Field(min_length=1)]], Field(min_length=1, max_length=100)]
+    scanlines: Annotated[list[ConfigFile], Field(min_length=1, max_length=100)]
     faces: Annotated[list[FaceConfig], Field(max_length=100)] = Field(default_factory=list)
     n_sets: int | None = Field(None, ge=1, le=5)
-    size_family: Literal["best", "power_law", "lognormal", "exponential"] = "best"
+    size_family: Annotated[Literal["best", "power_law", "lognormal", "exponential"], Field(
+        description="radius law fitted, or the best by likelihood")] = "best"
     r_max_m: Length = 100.0
     boundary_tolerance_m: float | None = Field(None, ge=0, le=1e3)
     size: SizeTable | None = None
@@ -295,8 +312,7 @@ class FitConfig(StrictModel):
         return self
 
     def path(self, name: str, config_path) -> Path:
-        p = Path(name)
-        return p if p.is_absolute() else Path(config_path).parent / p
+        return config_file(config_path, name)
 
 
 class SectionConfig(StrictModel):
@@ -306,12 +322,12 @@ class SectionConfig(StrictModel):
     normal of ``dip_deg`` / ``dip_direction_deg``) and ``window_uv_m`` the convex window in that frame.
     """
 
-    name: str = Field("", max_length=64)
-    point_m: Triple
-    dip_deg: Dip
-    dip_direction_deg: Azimuth
-    window_uv_m: Annotated[list[Annotated[tuple[float, float], Field(strict=False)]],
-                           Field(min_length=3, max_length=1000)]
+    name: str = Field("", max_length=64, description="name, used by [blocks.dfn_section]")
+    point_m: Annotated[Triple, Field(description="origin of the plane frame (u, v)")]
+    dip_deg: Annotated[Dip, Field(description="dip of the plane")]
+    dip_direction_deg: Annotated[Azimuth, Field(description="dip direction of the plane")]
+    window_uv_m: Annotated[list[Annotated[tuple[float, float], Field(strict=False)]], Field(
+        min_length=3, max_length=1000, description="convex window in the plane frame (u, v)")]
 
 
 class DFNConfig(StrictModel):
@@ -320,6 +336,7 @@ class DFNConfig(StrictModel):
     Parameters
     ----------
     domain : DomainConfig
+        ``[dfn.domain]``: the box the fractures are generated in.
     seed : int, default 0
         Root seed, 0 <= seed < 2**63 (DESIGN.md §3 seeding rule).
     realizations : int, default 1

@@ -1,4 +1,4 @@
-"""Exceptions that the command-line interface maps to exit codes (DESIGN.md §4).
+"""Exceptions that the command-line interface maps to exit codes (docs/design.md §4).
 
 Exit code 2 means bad input or configuration: the message names the file, the field and what was
 expected. Exit code 1 means a failure while running. Stage packages (``fractal``, ``dfn``, ...) do not

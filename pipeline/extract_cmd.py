@@ -15,16 +15,11 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
-import warnings
-from pathlib import Path
 
-from .errors import InputError
-from .inputs import read_polygon_file
-from .outputs import output_folder, print_json
-from .traces_cmd import dimension_entry
+from .extract_stage import produce
+from .outputs import print_json
 
-__all__ = ["add_parser", "run", "compute", "produce"]
+__all__ = ["add_parser", "run"]
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -62,132 +57,6 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     return p
 
 
-def _settings(args, document=None):
-    """The ``[imaging]`` settings as a dict: from ``document`` (a validated RockmassConfig, e.g. the
-    one ``rockmass run`` planned with) when given, else from ``--config`` (or the defaults), then
-    overridden by the flags given."""
-    from .config import ImagingConfig, load_config
-
-    section = ImagingConfig()
-    if document is None and args.config:
-        document = load_config(args.config)
-    if document is not None:
-        section = document.imaging or section
-    values = section.model_dump()
-    for key in ("m_per_px", "joint_width_px", "face_dip_deg", "face_dip_direction_deg"):
-        if getattr(args, key) is not None:
-            values[key] = getattr(args, key)
-    if args.bright_lines:
-        values["params"] = {**values["params"], "line_polarity": "bright"}
-    return values
-
-
-def compute(args, document=None):
-    """Extract and analyse; return (summary, extraction, traces with sets, image, set ids, timings,
-    settings used). ``document``: the validated config to take ``[imaging]`` from instead of
-    loading ``args.config``."""
-    import dataclasses
-
-    import numpy as np
-
-    from .dfn import trace_map_statistics
-    from .fractal import box_count
-    from .imaging import extract
-    from .imaging.enhance import read_photo
-    from .imaging.extract import STEPS, ExtractParams
-    from .progress import step_bar
-
-    settings = _settings(args, document)
-    path = Path(args.photo)
-    t0 = time.perf_counter()
-    try:
-        image = read_photo(path)
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read the photograph: {exc.strerror or exc}") from exc
-    except ValueError as exc:
-        raise InputError(f"{path}: {exc}") from None
-    roi = None
-    if args.roi:
-        roi = {"uv_m": read_polygon_file(args.roi, "--roi")}
-    elif args.roi_px:
-        roi = {"rc_px": read_polygon_file(args.roi_px, "--roi-px")[:, ::-1]}
-    control = None
-    if args.control_points:
-        r1, c1, r2, c2, distance = args.control_points
-        control = {"rc_px": [(r1, c1), (r2, c2)], "distance_m": distance}
-    t1 = time.perf_counter()
-    with warnings.catch_warnings(), step_bar("extract", STEPS) as bar:
-        warnings.simplefilter("ignore", UserWarning)  # recorded in the result's warnings instead
-        try:
-            result = extract(image, m_per_px=settings["m_per_px"], control_points=control,
-                             joint_width_px=settings["joint_width_px"], roi=roi,
-                             face_dip_deg=settings["face_dip_deg"],
-                             face_dip_direction_deg=settings["face_dip_direction_deg"],
-                             params=ExtractParams(**settings["params"]), debug=args.debug,
-                             progress=bar)
-        except ValueError as exc:
-            raise InputError(f"{path}: {exc}") from None
-    t2 = time.perf_counter()
-    traces = result.traces
-    unit = result.scale.units
-    summary = {"input": {"path": str(path), "shape_px": list(image.shape[:2])},
-               "extraction": result.summary()}
-    set_ids = np.full(traces.n_traces, -1, dtype=np.int64)
-    if traces.n_traces >= 1:
-        stats = trace_map_statistics(traces, n_sets=args.n_sets, length_unit=unit)
-        set_ids = np.asarray(stats["traces"]["set"], dtype=np.int64)
-        dimension = box_count(traces)
-        stats["Box-counting Dimension"] = dimension_entry(dimension)
-        summary["statistics"] = stats
-    else:
-        summary["statistics"] = None
-        summary["extraction"]["warnings"].append("no trace was found: nothing to analyse")
-    attributes = {**traces.attributes, "set": set_ids}
-    traces = dataclasses.replace(traces, attributes=attributes)
-    timings = {"read_s": t1 - t0, "extract_s": t2 - t1, "analyse_s": time.perf_counter() - t2}
-    return summary, result, traces, image, set_ids, timings, settings
-
-
-def produce(args, out_dir, document=None):
-    """Extract, analyse and write every output into the folder ``out_dir``; return the summary.
-
-    The work of ``rockmass extract`` (and of the ``extract`` stage of ``rockmass run``, which passes
-    its planned, validated ``document`` so that the config file is not read again).
-    """
-    from contextlib import ExitStack
-
-    import numpy as np
-
-    summary, result, traces, image, set_ids, timings, settings = compute(args, document)
-    from .atomic import atomic_path, atomic_write_json
-    from .dfn import write_traces
-    from .dfn.plots import rose_diagram
-    from .imaging.overlay import plot_overlay
-    from .manifest import build_manifest
-
-    name = Path(args.photo).name
-    with output_folder(out_dir) as out, ExitStack() as stack:
-        files = ["traces.geojson", "summary.json", "overlay.png", "rose.png", "manifest.json"]
-        files += [f"debug_{key}.png" for key in result.debug]
-        paths = {f: stack.enter_context(atomic_path(out / f)) for f in files}
-        write_traces(traces, paths["traces.geojson"])
-        plot_overlay(image, traces, paths["overlay.png"], m_per_px=result.scale.m_per_px,
-                     set_ids=set_ids, title=f"{name}: {traces.n_traces} traces")
-        stats = summary["statistics"]
-        angles = np.asarray(traces.attributes["angle_deg"], dtype=float)
-        lengths = traces.lengths_m()
-        means = [s["Mean Angle"]["value"] for s in stats["sets"]] if stats else None
-        rose_diagram(angles, lengths, paths["rose.png"], set_means_deg=means,
-                     title=f"{name}: trace orientations")
-        for key, array in result.debug.items():
-            _write_debug_image(array, paths[f"debug_{key}.png"])
-        atomic_write_json(paths["summary.json"], summary)
-        atomic_write_json(paths["manifest.json"], build_manifest(
-            command=args.argv, inputs=[args.photo] + [p for p in (args.roi, args.roi_px, args.config) if p],
-            config={"imaging": settings}, timings_s=timings))
-    return summary
-
-
 def run(args) -> int:
     """Handler of ``rockmass extract``."""
     summary = produce(args, args.out)
@@ -203,13 +72,3 @@ def run(args) -> int:
     return 0
 
 
-def _write_debug_image(array, path) -> None:
-    """An intermediate image as 8-bit PNG (scaled to 0-255)."""
-    import cv2
-    import numpy as np
-
-    a = np.asarray(array, dtype=np.float64)
-    lo, hi = float(np.min(a)), float(np.max(a))
-    scaled = np.zeros(a.shape, np.uint8) if hi <= lo else np.round(255 * (a - lo) / (hi - lo)).astype(np.uint8)
-    if not cv2.imwrite(str(path), scaled):
-        raise OSError(f"could not write {path}")

@@ -6,9 +6,9 @@ A run is planned completely before anything runs (:func:`plan_run`): which stage
 ``"@scanline"`` reference (:mod:`rockmass.run_config` states the rule) — a problem is bad input
 (:class:`~rockmass.errors.InputError`, exit 2) naming the file, the field and what is expected.
 
-Each stage then runs the single-stage subcommand's own compute-and-write function
-(``produce`` of ``extract_cmd``, ``traces_cmd``, ...) into ``DIR/<stage>/``, so a stage folder holds
-exactly the files that subcommand writes into its ``--out``, plus ``stage.json``.
+Each stage then runs the single-stage subcommand's own compute-and-write function (``produce``
+of :mod:`rockmass.extract_stage`, :mod:`rockmass.traces_stage`, ...) into ``DIR/<stage>/``, so a
+stage folder holds exactly the files that subcommand writes into its ``--out``, plus ``stage.json``.
 
 Reuse. A stage's hash is the SHA-256 of its config section(s) (resolved: defaults filled in), the
 SHA-256 of every input file it reads, the hashes of the upstream stages it reads, and the rockmass
@@ -382,41 +382,41 @@ def _run_stage(plan: RunPlan, stage: StagePlan, folder: Path, argv) -> dict:
     run = doc.run
     notes: dict = {}
     if stage.name == "extract":
-        from .extract_cmd import produce
+        from .extract_stage import produce
 
         produce(_ns(plan, argv, photo=str(run.path("photo", plan.config_path)), out=str(folder),
                     m_per_px=None, control_points=None, joint_width_px=None, face_dip_deg=None,
                     face_dip_direction_deg=None, roi=None, roi_px=None, bright_lines=False,
                     n_sets=run.trace_sets, debug=False), folder, document=doc)
     elif stage.name == "traces":
-        from .traces_cmd import produce
+        from .traces_stage import produce
 
         produce(_ns(plan, argv, file=str(plan.trace_map), area=None, n_sets=run.trace_sets,
                     snap_tolerance_m=None, out=str(folder)), folder)
     elif stage.name == "boxcount":
-        from .boxcount_cmd import produce
+        from .boxcount_stage import produce
 
         produce(_ns(plan, argv, file=str(plan.trace_map), grid=None, method=None, range_px=None,
                     n_offsets=None, line_rule=None, window=None, mask="auto", threshold=None,
                     invert=None, skeletonize=None, out=str(folder)), folder, document=doc)
     elif stage.name == "scanline":
-        from .scanline_cmd import DEFAULT_SEED, produce
+        from .scanline_stage import DEFAULT_SEED, produce
 
         produce(_ns(plan, argv, file=str(plan.scanline), n_sets=run.scanline_sets,
                     terzaghi_cap_deg=15.0, seed=DEFAULT_SEED, out=str(folder)), folder)
     elif stage.name == "dfn":
-        from .dfn_cmd import produce
+        from .dfn_stage import produce
         from .dfn_config import DFNDocument
 
         produce(_ns(plan, argv, seed=None, realizations=None, first=0, out=str(folder)), folder,
                 document=DFNDocument(dfn=doc.dfn))
     elif stage.name == "blocks":
-        from .blocks_cmd import produce
+        from .blocks_stage import produce
 
         section = _dfn_section(plan) if doc.blocks.dfn_section is not None else None
         produce(_ns(plan, argv, out=str(folder)), folder, document=doc, section=section)
     elif stage.name == "solve":
-        from .solve_cmd import produce
+        from .solve_stage import produce
         from .solver.result import FAILED_STATUSES
 
         model = None

@@ -23,7 +23,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, field_validator
 
-from .strict import StrictModel
+from .strict import ConfigFile, StrictModel, config_file
 
 __all__ = ["REFERENCES", "STAGES", "RunConfig"]
 
@@ -35,7 +35,6 @@ REFERENCES = {"@traces": "the run's trace map (extract's traces.geojson, or [run
               "@scanline": "the [run] scanline file"}
 
 StageName = Literal["extract", "traces", "boxcount", "scanline", "dfn", "blocks", "solve"]
-FileName = Annotated[str, Field(min_length=1, max_length=4096)]
 
 
 class RunConfig(StrictModel):
@@ -57,9 +56,9 @@ class RunConfig(StrictModel):
         Number of joint sets (1-5) of the trace and scanline statistics; default chosen by BIC.
     """
 
-    photo: FileName | None = None
-    traces: FileName | None = None
-    scanline: FileName | None = None
+    photo: ConfigFile | None = None
+    traces: ConfigFile | None = None
+    scanline: ConfigFile | None = None
     stages: Annotated[list[StageName], Field(min_length=1, max_length=len(STAGES))] | None = None
     trace_sets: int | None = Field(None, ge=1, le=5)
     scanline_sets: int | None = Field(None, ge=1, le=5)
@@ -75,8 +74,4 @@ class RunConfig(StrictModel):
     def path(self, key: str, config_path) -> Path | None:
         """The file of ``key`` (``photo``, ``traces``, ``scanline``) resolved against the config's
         folder, or None."""
-        name = getattr(self, key)
-        if name is None:
-            return None
-        p = Path(name)
-        return p if p.is_absolute() else Path(config_path).parent / p
+        return config_file(config_path, getattr(self, key))

@@ -5,14 +5,15 @@ the same file (built as ``rockmass blocks`` builds it). Writes under ``--out``:
 
 - ``result.json``: the run's status and diagnostic, per stage (steps, time step, simulated time,
   convergence, unbalanced-force ratio, maximum displacements, slipping / open / broken contacts,
-  detached blocks, energy ledger), the block kinetic energy vs volume table (seed 001 Fig. 7),
+  detached blocks, energy ledger), the block kinetic energy vs volume table (Kiran & Juneja 2022, Fig. 7; docs/sources.md §2),
   per monitor its block, its displacement at the end of each stage and the largest plastic
   (slip) displacement on its contacts at the end, the frame list and timings;
 - ``history.csv``: the monitored blocks over time (one column per quantity);
-- ``blocks_NNNN.vtu`` per frame and ``blocks.pvd`` (ParaView time series): the polygons placed at
-  each frame's positions and rotations, cell data ``displacement`` and ``velocity`` (3-vectors,
-  z = 0, displacement from the model's original position), ``rotation_rad``, ``block_id``,
-  ``region``, ``active``, ``failed`` (taken out because it kept moving). Frames at the same instant (the end of one stage and the start of the next,
+- ``blocks_NNNN.vtu`` per frame and ``blocks.pvd`` (ParaView time series), written by
+  :mod:`rockmass.solver.vtu`: the polygons placed at each frame's positions and rotations, cell
+  data ``displacement`` and ``velocity`` (3-vectors, z = 0, displacement from the model's original
+  position), ``rotation_rad``, ``block_id``, ``region``, ``active``, ``failed`` (taken out because
+  it kept moving). Frames at the same instant (the end of one stage and the start of the next,
   after its excavation) get times 1 ns apart in the ``.pvd`` so ParaView shows both; result.json
   has the exact times;
 - ``block_energy.csv``: per block volume, mass, peak velocity and peak kinetic energy (dynamic
@@ -28,15 +29,12 @@ status and diagnostic, then exits with code 1. Bad configuration exits with 2 na
 from __future__ import annotations
 
 import argparse
-import time
-from pathlib import Path
 
-from .errors import ConfigError, InputError, RunError
-from .outputs import output_folder, print_json
+from .errors import RunError
+from .outputs import print_json
+from .solve_stage import produce
 
-__all__ = ["add_parser", "run", "prepare", "solve", "produce"]
-
-_PVD_NUDGE_S = 1e-9
+__all__ = ["add_parser", "run"]
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -53,234 +51,6 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print the result summary as JSON")
     p.set_defaults(handler=run)
     return p
-
-
-def prepare(config_path, document=None, model=None):
-    """Load the config (unless ``document`` is given), the block model (unless ``model`` is given:
-    the ``run`` command passes the model its blocks stage built) and the solver settings.
-
-    Returns ``(document, model, settings, inputs, timings)``; ``inputs`` are the files read (for the
-    manifest). Raises ``ConfigError`` / ``InputError`` (exit 2) naming the file and field.
-    """
-    import types
-
-    from .config import load_config
-
-    t0 = time.perf_counter()
-    if document is None:
-        document = load_config(config_path)
-    cfg = document.solve
-    if cfg is None:
-        raise ConfigError(config_path, [("solve", "required section is missing (rockmass solve "
-                                                  "reads the [solve] section)")])
-    inputs = [str(config_path)]
-    path = cfg.blocks_path(config_path)
-    if path is not None and document.blocks is not None:
-        raise ConfigError(config_path, [("solve.blocks_file", "give either blocks_file or a "
-                                                              "[blocks] section, not both")])
-    t1 = time.perf_counter()
-    if model is not None:
-        source = {"blocks_model": "given"}
-    elif path is not None:
-        from .blockgen import check_model, read_json
-
-        try:
-            model = read_json(path)
-        except OSError as exc:
-            raise InputError(f"{config_path}: solve.blocks_file: cannot read {path}: "
-                             f"{exc.strerror or exc}") from exc
-        except (ValueError, KeyError, TypeError) as exc:
-            raise InputError(f"{config_path}: solve.blocks_file: {path} is not a valid blocks.json: "
-                             f"{exc}") from exc
-        invariants = check_model(model)
-        if not invariants["ok"]:
-            raise InputError(f"{config_path}: solve.blocks_file: {path} fails the block-model "
-                             f"invariants {invariants}")
-        inputs.append(str(path))
-        source = {"blocks_file": str(path)}
-    elif document.blocks is not None:
-        from .blocks_cmd import compute
-
-        _, model, _, _ = compute(types.SimpleNamespace(config=config_path))
-        traces = document.blocks.traces_path(config_path)
-        if traces is not None:
-            inputs.append(str(traces))
-        source = {"blocks_section": True}
-    else:
-        raise ConfigError(config_path, [("solve.blocks_file", "required: a blocks.json written by "
-                                                              "rockmass blocks (or a [blocks] "
-                                                              "section in this file)")])
-    t2 = time.perf_counter()
-    settings = cfg.to_settings(model, config_path)
-    base = Path(config_path).parent
-    inputs += [str(v.history.path(base)) for v in cfg.velocity_inputs if v.history.type == "csv"]
-    t3 = time.perf_counter()
-    timings = {"load_s": t1 - t0, "blocks_s": t2 - t1, "settings_s": t3 - t2}
-    return document, model, settings, {"files": inputs, "source": source}, timings
-
-
-def solve(model, settings, config_path, progress=None):
-    """:func:`rockmass.solver.run`; a ``ValueError`` (settings that do not fit the model: a selector
-    choosing no block, a time step above the stable limit) becomes an ``InputError`` naming the file.
-    ``progress(done, total, stage_name)`` is called while stepping (:func:`rockmass.solver.runner.run`)."""
-    from .solver import run as solver_run
-
-    try:
-        return solver_run(model, settings, progress=progress)
-    except ValueError as exc:
-        raise InputError(f"{config_path}: solve: {exc}") from exc
-
-
-# ------------------------------------------------------------------------------------- outputs --
-
-def _monitor_summary(result, model, settings) -> dict:
-    """Per monitor: its block, and displacement at the end of each stage and its change."""
-    import numpy as np
-
-    from .solver.selectors import block_at_point
-
-    hist = result.history
-    out = {}
-    for m in settings.monitors:
-        block = m.block if m.block is not None else block_at_point(model, m.point_xy_m)
-        entry = {"block": int(block), "region": int(model.region[block]),
-                 "centroid_xy_m": [float(v) for v in model.centroid_xy_m[block]], "stages": []}
-        ux_all = hist.get(f"{m.name}_ux_m")
-        if ux_all is not None and len(ux_all):
-            uy_all = hist[f"{m.name}_uy_m"]
-            stages = np.asarray(hist["stage"])
-            prev = (0.0, 0.0)
-            for s in result.stages:
-                rows = np.flatnonzero(stages == s.name)
-                if not len(rows):
-                    continue
-                ux, uy = float(ux_all[rows[-1]]), float(uy_all[rows[-1]])
-                mag = np.hypot(ux_all[rows], uy_all[rows])
-                entry["stages"].append({
-                    "stage": s.name, "ux_m": ux, "uy_m": uy, "displacement_m": float(np.hypot(ux, uy)),
-                    "max_displacement_in_stage_m": float(mag.max()),
-                    "change_ux_m": ux - prev[0], "change_uy_m": uy - prev[1],
-                    "change_m": float(np.hypot(ux - prev[0], uy - prev[1]))})
-                prev = (ux, uy)
-            final = entry["stages"][-1] if entry["stages"] else None
-            if final is not None:
-                entry["final_ux_m"], entry["final_uy_m"] = final["ux_m"], final["uy_m"]
-                entry["final_displacement_m"] = final["displacement_m"]
-        c = result.contacts or {}
-        if len(c.get("block_a", ())):
-            mine = (np.asarray(c["block_a"]) == block) | (np.asarray(c["block_b"]) == block)
-            slip = np.abs(np.asarray(c["plastic_slip_m"])[mine])
-            entry["contacts_at_end"] = int(mine.sum())
-            entry["max_contact_plastic_slip_m"] = float(slip.max(initial=0.0))
-        out[m.name] = entry
-    return out
-
-
-def _frame_mesh(model, frame):
-    """A meshio Mesh of the blocks placed at the frame's positions and rotations."""
-    import meshio
-    import numpy as np
-
-    offsets = np.asarray(model.offsets)
-    sizes = np.diff(offsets)
-    bov = np.repeat(np.arange(model.n_blocks), sizes)
-    loc = model.xy_m - model.centroid_xy_m[bov]
-    c, s = np.cos(frame.rotation_rad)[bov], np.sin(frame.rotation_rad)[bov]
-    pos = frame.position_m[bov]
-    xy = np.column_stack([pos[:, 0] + c * loc[:, 0] - s * loc[:, 1],
-                          pos[:, 1] + s * loc[:, 0] + c * loc[:, 1]])
-    points = np.column_stack([xy, np.zeros(len(xy))])
-    disp = np.column_stack([frame.position_m - model.centroid_xy_m, np.zeros(model.n_blocks)])
-    vel = np.column_stack([frame.velocity_m_s, np.zeros(model.n_blocks)])
-    cells, data = [], {k: [] for k in ("displacement", "velocity", "rotation_rad", "block_id",
-                                       "region", "active", "failed")}
-    for k in np.unique(sizes):  # meshio groups polygons by vertex count
-        idx = np.flatnonzero(sizes == k)
-        conn = offsets[idx][:, None] + np.arange(k)[None, :]
-        cells.append(("polygon" if k > 4 else {3: "triangle", 4: "quad"}[int(k)], conn))
-        data["displacement"].append(disp[idx])
-        data["velocity"].append(vel[idx])
-        data["rotation_rad"].append(np.asarray(frame.rotation_rad, float)[idx])
-        data["block_id"].append(idx.astype(np.int64))
-        data["region"].append(np.asarray(model.region, np.int64)[idx])
-        data["active"].append(np.asarray(frame.active, np.uint8)[idx])
-        data["failed"].append(np.asarray(frame.failed, np.uint8)[idx])
-    return meshio.Mesh(points, cells, cell_data=data)
-
-
-def _pvd_text(entries) -> str:
-    """ParaView collection of (time, file) with strictly increasing times."""
-    lines = ['<?xml version="1.0"?>',
-             '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
-             "  <Collection>"]
-    last = None
-    for t, name in entries:
-        shown = t if last is None or t > last else last + _PVD_NUDGE_S * max(1.0, abs(last))
-        lines.append(f'    <DataSet timestep="{shown!r}" group="" part="0" file="{name}"/>')
-        last = shown
-    lines += ["  </Collection>", "</VTKFile>", ""]
-    return "\n".join(lines)
-
-
-def _csv_text(columns: dict) -> str:
-    """CSV of equal-length columns (numbers with 17 significant digits, strings quoted if needed)."""
-    import csv
-    import io
-
-    import numpy as np
-
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    names = list(columns)
-    w.writerow(names)
-    cols = [np.asarray(columns[n]) for n in names]
-    n = len(cols[0]) if cols else 0
-
-    def fmt(v):
-        if isinstance(v, (bool, np.bool_)):
-            return int(v)
-        if isinstance(v, (float, np.floating)):
-            return repr(float(v))
-        if isinstance(v, (np.integer,)):
-            return int(v)
-        return v
-
-    for i in range(n):
-        w.writerow([fmt(c[i]) for c in cols])
-    return buf.getvalue()
-
-
-def build_outputs(model, settings, result, timings) -> dict:
-    """Everything ``rockmass solve`` writes, in memory: name -> str (text) or meshio Mesh."""
-    import numpy as np
-
-    files: dict = {}
-    frames, pvd = [], []
-    for i, fr in enumerate(result.frames):
-        name = f"blocks_{i:04d}.vtu"
-        files[name] = _frame_mesh(model, fr)
-        frames.append({"file": name, "stage": fr.stage, "step": int(fr.step),
-                       "time_s": float(fr.time_s)})
-        pvd.append((float(fr.time_s), name))
-    files["blocks.pvd"] = _pvd_text(pvd)
-    history = result.history or {"time_s": np.zeros(0), "stage": np.zeros(0, str)}
-    files["history.csv"] = _csv_text(history)
-    be = result.block_energy
-    files["block_energy.csv"] = _csv_text({
-        "block_id": np.arange(model.n_blocks), "region": model.region,
-        "volume_m3": be["volume_m3"], "mass_kg": be["mass_kg"],
-        "peak_velocity_m_s": be["peak_velocity_m_s"],
-        "peak_kinetic_energy_j": be["peak_kinetic_energy_j"]})
-    contacts = result.contacts or {}
-    files["contacts.csv"] = _csv_text(contacts) if contacts else "block_a,block_b\n"
-    doc = result.to_json_dict()
-    doc["monitors"] = _monitor_summary(result, model, settings)
-    doc["model"] = {"blocks": int(model.n_blocks), "contacts": int(model.n_contacts),
-                    "regions": list(model.region_names), "joint_sets": list(model.set_names)}
-    doc["frames"] = frames
-    doc["timings_s"] = dict(timings)
-    files["result.json"] = doc
-    return files
 
 
 def _summary_line(result, doc) -> str:
@@ -302,55 +72,6 @@ def _summary_line(result, doc) -> str:
             parts.append(f"monitor {name} (block {m['block']}): u = ({m['final_ux_m']:.4g}, "
                          f"{m['final_uy_m']:.4g}) m")
     return "; ".join(parts)
-
-
-def produce(args, out_dir, document=None, model=None, progress=None):
-    """Prepare (:func:`prepare`), solve and write every output into the folder ``out_dir``, also when
-    the run stopped (its status is in result.json); return ``(result, result.json document)``.
-
-    The work of ``rockmass solve`` (and of the ``solve`` stage of ``rockmass run``). Without a
-    ``progress`` callback, a bar per DEM stage on a terminal (:func:`rockmass.progress.solver_bar`).
-    """
-    from contextlib import ExitStack
-
-    from .atomic import atomic_path, atomic_write_json, atomic_write_text
-    from .blockgen import write_json
-    from .manifest import build_manifest
-    from .progress import solver_bar
-
-    document, model, settings, inputs, timings = prepare(args.config, document, model)
-    t0 = time.perf_counter()
-    with solver_bar() as bar:
-        result = solve(model, settings, args.config, progress or bar)
-    timings["solve_s"] = time.perf_counter() - t0
-    t1 = time.perf_counter()
-    files = build_outputs(model, settings, result, timings)
-    timings["outputs_s"] = time.perf_counter() - t1
-    doc = files["result.json"]
-    doc["timings_s"] = dict(timings)
-    names = list(files) + ["blocks.json", "manifest.json"]
-    import meshio
-
-    with output_folder(out_dir) as out, ExitStack() as stack:
-        paths = {name: stack.enter_context(atomic_path(out / name)) for name in names}
-        for name, content in files.items():
-            if name == "result.json":
-                try:
-                    atomic_write_json(paths[name], content)
-                except ValueError as exc:  # NaN would be a solver bug: say so, exit 1
-                    raise RunError(f"{args.config}: the result holds a non-finite value ({exc}); "
-                                   "this is a bug, please report it with this config") from exc
-            elif isinstance(content, str):
-                atomic_write_text(paths[name], content)
-            else:
-                meshio.write(paths[name], content, file_format="vtu")
-        write_json(model, paths["blocks.json"])
-        manifest = build_manifest(command=args.argv, config=document, inputs=inputs["files"],
-                                  timings_s=timings,
-                                  extra={"status": result.status, "diagnostic": result.diagnostic,
-                                         "blocks_source": inputs["source"]})
-        atomic_write_json(paths["manifest.json"], manifest)
-    return result, doc
 
 
 def run(args) -> int:

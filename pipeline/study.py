@@ -6,10 +6,11 @@ this process, in a local process pool or on a Dask worker:
 
 1. build the block model of the case's ``[blocks]`` section (:func:`rockmass.blockgen.build`) and
    check its invariants;
-2. box-count the joint network: the joint segments of the sets (regenerated from the same seeds the
-   builder used, so they are the model's joints) and any traces, clipped to the domain, rasterised
-   on the ``[fractal]`` grid (360 x 360 by default, 1-pixel lines, as Jiang et al. seed 000 §4.1)
-   with the domain as the face: D_box with R², its spread over shifted grids, and P21;
+2. box-count the joint network: the joint segments of the sets (drawn by
+   :func:`rockmass.blockgen.joint_set_segments`, the builder's own seeding rule, so they are the
+   model's joints) and any traces, clipped to the domain, rasterised on the ``[fractal]`` grid
+   (360 x 360 by default, 1-pixel lines, as Jiang et al. did, docs/fractal.md §1) with the domain as the face:
+   D_box with R², its spread over shifted grids, and P21;
 3. run the DEM stages of ``[solve]`` when the base has one (:func:`rockmass.solver.run`) and
    classify the case (:func:`case_outcome`): ``ok`` (every static stage reached equilibrium, no
    block failed), ``failed_blocks`` (blocks kept moving, falling, sliding or rotating, and the
@@ -52,6 +53,7 @@ import traceback
 from pathlib import Path
 from typing import Any, Callable
 
+from .dfn.polygon import polygon_area
 from .solver.failure import MECHANISMS, mechanism_counts
 from .solver.result import FAILED_STATUSES, STATUS_FAILED_BLOCKS, STATUS_OK
 
@@ -183,7 +185,7 @@ def case_cost(document) -> float:
         else:
             xy = next(s.window_uv_m for s in document.dfn.sections
                       if s.name == cfg.dfn_section.section)
-        area = 0.5 * abs(sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1) in zip(xy, [*xy[1:], xy[0]])))
+        area = polygon_area(xy)
         sets = []  # (P21 per m, angle rad)
         for js in cfg.joint_sets():
             persistence = 1.0
@@ -205,7 +207,8 @@ def case_cost(document) -> float:
 
 def joint_network_segments(document, config_path, model=None, traces=None):
     """(n, 4) segments ``x0, y0, x1, y1`` of the joint network of a ``[blocks]`` section, clipped
-    to its domain: the joint sets as the builder generated them (same seeds) and the traces.
+    to its domain: the joint sets as the builder drew them (the builder's own seeding rule,
+    :func:`rockmass.blockgen.joint_set_segments`) and the traces.
 
     ``traces``: the TraceMap that cut the model (the DFN section :func:`_build_model` generated, or
     the trace file it read), so they are not made again; None: read / generate what the config
@@ -215,7 +218,7 @@ def joint_network_segments(document, config_path, model=None, traces=None):
     import numpy as np
     import shapely
 
-    from .blockgen.joints import set_segments
+    from .blockgen import joint_set_segments
 
     cfg = document.blocks
     if model is not None:
@@ -223,13 +226,8 @@ def joint_network_segments(document, config_path, model=None, traces=None):
     else:
         domain_xy = np.asarray(cfg.domain.xy_m(), float)
     domain = shapely.Polygon(domain_xy)
-    parts = []
-    sets = cfg.joint_sets()
-    if sets:
-        children = np.random.SeedSequence(cfg.seed).spawn(len(sets))
-        for i, js in enumerate(sets):  # as rockmass.blockgen.build draws them
-            raw = set_segments(js, domain_xy, np.random.default_rng(children[i]), i)
-            parts.append(np.asarray(raw, float).reshape(-1, 4))
+    parts = [np.asarray(raw, float).reshape(-1, 4)
+             for raw in joint_set_segments(cfg.joint_sets(), domain_xy, cfg.seed)]
     if traces is None:
         traces = _traces(document, config_path)
     if traces is not None:
@@ -250,8 +248,8 @@ def joint_network_segments(document, config_path, model=None, traces=None):
 
 def _dfn_section(document, config_path):
     """``(TraceMap, window)`` of the case's ``[blocks.dfn_section]``
-    (:func:`rockmass.blocks_cmd.dfn_section_traces`), or None without one."""
-    from .blocks_cmd import dfn_section_traces
+    (:func:`rockmass.blocks_stage.dfn_section_traces`), or None without one."""
+    from .blocks_stage import dfn_section_traces
 
     if document.blocks.dfn_section is None:
         return None
@@ -271,11 +269,11 @@ def _traces(document, config_path, section=None):
 
 def _build_model(document, config_path, section=None):
     """The case's block model, built and checked as ``rockmass blocks`` builds it
-    (:func:`rockmass.blocks_cmd.compute`); ``section``: the ``(TraceMap, window)`` of its DFN
+    (:func:`rockmass.blocks_stage.compute`); ``section``: the ``(TraceMap, window)`` of its DFN
     section when already generated (:func:`_dfn_section`)."""
     import types
 
-    from .blocks_cmd import compute
+    from .blocks_stage import compute
 
     _, model, _, _ = compute(types.SimpleNamespace(config=config_path), document, section)
     return model
@@ -358,7 +356,7 @@ def _failed_blocks(stages) -> dict:
 
 
 def _solve(document, config_path, model) -> dict:
-    """The case's DEM stages (:func:`rockmass.solve_cmd.solve`) summed up for results.csv, with
+    """The case's DEM stages (:func:`rockmass.solve_stage.solve`) summed up for results.csv, with
     its ``outcome`` and ``reason`` (:func:`case_outcome`); {} without ``[solve]``.
 
     Displacements are the last stage's over the blocks in equilibrium (failed blocks and slivers
@@ -367,7 +365,7 @@ def _solve(document, config_path, model) -> dict:
     ``worst_ratio``: the largest per-block unbalanced ratio at the end of the static stages (of the
     last stage when every stage is dynamic).
     """
-    from .solve_cmd import solve as solve_stages
+    from .solve_stage import solve as solve_stages
 
     if document.solve is None:
         return {}

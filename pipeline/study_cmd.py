@@ -13,8 +13,8 @@ Writes under ``--out``:
   every output of the single-stage commands);
 - ``results.csv``: one row per finished case in case order, rebuilt (atomically) after every case;
 - ``report.html``: self-contained (images embedded): the cases per outcome, D_box against the
-  maximum displacement of the cases in equilibrium coloured by θ (Jiang et al., seed 000 Figs.
-  7–8; failed-block cases apart), the spread over realizations, the cases not in equilibrium with
+  maximum displacement of the cases in equilibrium coloured by θ (Jiang et al., Figs. 7–8,
+  docs/sources.md §1; failed-block cases apart), the spread over realizations, the cases not in equilibrium with
   their reason, the table;
 - ``manifest.json``: command, config and its hash, seeds, executor, counts, timings.
 

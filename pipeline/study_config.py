@@ -44,7 +44,7 @@ from pydantic import Field, ValidationError, model_validator
 
 from .config import RockmassConfig, canonical_json, problems_from_validation_error
 from .errors import ConfigError
-from .strict import StrictModel, field_problem
+from .strict import StrictModel, config_file, field_problem, file_fields, in_folder
 
 __all__ = ["StudyConfig", "StudyDocument", "StudyCase", "load_study", "expand_cases",
            "realization_seed", "parse_path", "set_path", "get_path", "flatten_overrides",
@@ -119,7 +119,13 @@ class StudyConfig(StrictModel):
 
 
 class StudyDocument(RockmassConfig):
-    """A study file: every stage section of :class:`RockmassConfig` plus ``[study]``."""
+    """A study file: every stage section of :class:`RockmassConfig` plus ``[study]``.
+
+    Parameters
+    ----------
+    study : StudyConfig
+        ``[study]`` section (the cases of ``rockmass study``; required in a study file).
+    """
 
     study: StudyConfig
 
@@ -284,21 +290,17 @@ def _hash_once(path, digests: dict) -> str:
 
 def _input_files(document, config_path, digests: dict) -> dict[str, str]:
     """Files a case reads besides the config -> sha256 or "missing" (their content is part of the
-    case id; a missing file fails its case when it runs, not the study). ``digests``: see
-    :func:`_hash_once`."""
-    paths = []
-    if document.blocks is not None:
-        p = document.blocks.traces_path(config_path)
-        if p is not None:
-            paths.append(p)
-    solve = document.solve
-    if solve is not None:
-        p = solve.blocks_path(config_path)
-        if p is not None:
-            paths.append(p)
-        base = Path(config_path).parent
-        paths += [v.history.path(base) for v in solve.velocity_inputs if v.history.type == "csv"]
+    case id; a missing file fails its case when it runs, not the study). They are the file keys
+    (:data:`rockmass.strict.ConfigFile`) of the sections a case runs, ``[blocks]`` and ``[solve]``.
+    ``digests``: see :func:`_hash_once`."""
+    paths = [config_file(config_path, name) for _, name in _case_files(document)]
     return {os.fspath(p): _hash_once(p, digests) for p in paths}
+
+
+def _case_files(document) -> list[tuple[list[str | int], str]]:
+    """(key path, name) of every file key of the ``[blocks]`` and ``[solve]`` sections."""
+    return [([section, *keys], name) for section in ("blocks", "solve")
+            for keys, name in file_fields(getattr(document, section))]
 
 
 def input_records(digests: dict) -> list[dict]:
@@ -498,13 +500,8 @@ def standalone_config(case: StudyCase, config_path) -> dict:
     (they were relative to the study's config), ready for ``rockmass blocks`` / ``rockmass solve``."""
     data = copy.deepcopy(case.raw)
     base = Path(os.path.abspath(config_path)).parent
-    fields = ["blocks.traces", "solve.blocks_file"]
-    for i, v in enumerate(get_path(data, "solve.velocity_inputs") or []):
-        if isinstance(v, dict) and isinstance(v.get("history"), dict) \
-                and v["history"].get("type") == "csv":
-            fields.append(f"solve.velocity_inputs[{i}].history.file")
-    for path in fields:
-        value = get_path(data, path)
-        if isinstance(value, str) and not Path(value).is_absolute():
-            set_path(data, path, str(base / value))
+    for keys, name in _case_files(case.document):
+        path = _show(keys)
+        if get_path(data, path) == name:
+            set_path(data, path, str(in_folder(base, name)))
     return data

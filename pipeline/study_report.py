@@ -6,7 +6,7 @@ whose blocks failed are shown apart, and the others are listed with their reason
 - a summary line ("N of M cases in equilibrium; K with failed blocks (fall a, slide b); ...") and
   the number of cases per outcome;
 - D_box against the maximum displacement, one colour per value of the colouring field (θ, as in
-  Jiang et al., seed 000 Figs. 7–8): every ``ok`` realization as a dot, the mean of each parameter
+  Jiang et al., Figs. 7–8; docs/sources.md §1): every ``ok`` realization as a dot, the mean of each parameter
   combination with ± one standard deviation over its ``ok`` realizations in both directions; the
   ``failed_blocks`` cases as crosses at the displacement of the blocks left in equilibrium
   (labelled "blocks failed"; never averaged); cases not in equilibrium are not plotted;
@@ -197,7 +197,7 @@ def _figures(study, cases, records) -> list[tuple[str, str]]:
     positive = [y for y in plotted if y > 0]
     log_y = bool(positive) and max(positive) > 100 * min(positive)
 
-    # 1. D_box vs maximum displacement (seed 000 Figs. 7-8): ok cases; failed blocks apart
+    # 1. D_box vs maximum displacement (Jiang et al., Figs. 7–8): ok cases; failed blocks apart
     fig, ax = plt.subplots(figsize=(7.0, 5.0))
     where = " around the excavation" if study.displacement == "boundary" else ""
     ylab = f"maximum displacement{where} (mm)\nblocks in equilibrium"

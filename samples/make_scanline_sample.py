@@ -2,21 +2,21 @@
 
     python samples/make_scanline_sample.py
 
-A synthetic scanline survey across the three joint sets of seed 001, Table 1 (dip / dip direction
+A synthetic scanline survey across the three joint sets of Kiran & Juneja (2022), Table 1 (dip / dip direction
 50/270, 80/10 and 70/150; mean trace lengths 12, 9 and 10 m). Choices of this sample, not of the
 paper: each set is a Poisson network of one-sided intensity P32 = 1.5 m²/m³ with Fisher scatter
 κ = 30; the scanline trends 135°, plunges 10° and is 30 m long (it meets all three sets at 40–55°
 from their planes, so none is in the Terzaghi blind zone).
 
 A line of direction t meets the fractures of a set whose poles are n at rate P32 · E|n·t|
-(REFERENCE.md §4), and the poles of the fractures it meets are biased towards t by the factor |n·t|.
+(docs/fractures.md §7), and the poles of the fractures it meets are biased towards t by the factor |n·t|.
 Both follow from thinning: draw Poisson(P32 · L) candidate fractures with Fisher poles, keep each
 with probability |n·t|, place the kept ones uniformly along the line. Distances are then rounded to
 the centimetre and orientations to the degree, as a tape and a compass read them; trace lengths are
 exponential about the table's means (0.1 m), and ``termination`` is the number of trace ends seen
 (0, 1 or 2). The file's header comments carry the line geometry that ``rockmass scanline`` reads.
 
-Randomness: ``SeedSequence(SEED)`` with one child per set (DESIGN.md §3).
+Randomness: ``SeedSequence(SEED)`` with one child per set (docs/design.md §3.5).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rockmass.dfn._atomic import atomic_open
+from rockmass.dfn.atomic import atomic_open
 from rockmass.dfn import dip_from_normal, pole_from_dip, sample_fisher, vector_from_trend_plunge
 
 HERE = Path(__file__).resolve().parent
@@ -58,7 +58,7 @@ def make_rows() -> list[tuple[float, int, int, float, int]]:
 
 def main() -> None:
     lines = [
-        "# Synthetic scanline across the three joint sets of seed 001 (Table 1), made by",
+        "# Synthetic scanline across the three joint sets of Kiran & Juneja 2022 (Table 1), made by",
         "# samples/make_scanline_sample.py: Fisher kappa = 30, P32 = 1.5 m2/m3 per set.",
         f"# trend: {TREND_DEG:g}",
         f"# plunge: {PLUNGE_DEG:g}",

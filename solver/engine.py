@@ -13,6 +13,7 @@ import numpy as np
 
 from ..blockgen.tolerances import ROUNDING_FRACTION
 from . import _kernels as K
+from . import tolerances as T
 from .selectors import domain_edges, select_blocks
 from .settings import ContinuouslyYielding, Coulomb, Settings
 
@@ -33,7 +34,8 @@ def joint_table(models: list) -> np.ndarray:
             row[K.P_COH], row[K.P_TEN] = m.cohesion_pa, m.tension_pa
             row[K.P_TANPSI] = math.tan(math.radians(m.dilation_deg))
             row[K.P_TANPHIR] = math.tan(math.radians(m.residual_deg))
-            row[K.P_MAXDIL] = m.max_dilation_m if math.isfinite(m.max_dilation_m) else 1e300
+            row[K.P_MAXDIL] = (m.max_dilation_m if math.isfinite(m.max_dilation_m)
+                               else T.NO_DILATION_LIMIT_M)
         elif isinstance(m, ContinuouslyYielding):
             row[K.P_MODEL] = K.MODEL_CY
             row[K.P_KN], row[K.P_KS] = m.an_pa_m, m.as_pa_m
@@ -97,7 +99,7 @@ def rounded_corners(loc: np.ndarray, off: np.ndarray, normal: np.ndarray, roundi
     at the tangent length r_b tan(θ/2) = r_b |n₁ × n₂|/(1 + n₁·n₂) from v (θ the turn at v). The
     rounded block is its inner polygon of centres (the block inset by r_b) grown by a disk of
     radius r_b, so contacts between rounded blocks are distances between inner polygons minus the
-    two radii (UDEC's rounding, REFERENCE.md §5; Cundall 1988).
+    two radii (UDEC's rounding; docs/dem.md §3.1; Cundall 1988).
 
     r_b is the rounding d, reduced on a block whose corners would eat more than half of an edge
     (sharp sliver corners): r_b = min(d, min over edges ½ L / (tan(θ₀/2) + tan(θ₁/2))), so every
@@ -129,7 +131,7 @@ def rounded_corners(loc: np.ndarray, off: np.ndarray, normal: np.ndarray, roundi
     sin_turn = n1[:, 0] * n2[:, 1] - n1[:, 1] * n2[:, 0]  # > 0 at the convex corners
     unit_tan = np.where(sin_turn > 0, sin_turn / np.maximum(1.0 + cos_turn, 1e-12), 0.0)
     length = np.hypot(*(loc[nxt] - loc).T)
-    fit = 0.5 * length / np.maximum(unit_tan + unit_tan[nxt], 1e-300)
+    fit = 0.5 * length / np.maximum(unit_tan + unit_tan[nxt], T.TINY)
     radius = np.full(nb, float(rounding))
     np.minimum.at(radius, block, fit)
     r = radius[block]
@@ -171,15 +173,15 @@ class Engine:
         self.median_edge_m = float(np.median(np.hypot(edge[:, 0], edge[:, 1])))
         # the d the model was built for (blockgen keeps every edge >= 2d with it), else 1 % of the
         # median edge (hand-made models)
-        built_for = (model.quality.get("tolerances") or {}).get("rounding_m")
+        built_for = None if model.quality is None else model.quality.tolerances.rounding_m
         self.rounding_m = settings.rounding_m or built_for or ROUNDING_FRACTION * self.median_edge_m
         centre, tangent, radius = rounded_corners(self.loc, self.off, normal, self.rounding_m)
         self.lgeo = np.ascontiguousarray(np.column_stack([normal, centre, tangent,
                                                           radius[block_of_vertex]]))
         self.wv = np.empty((len(self.loc), K.N_WV_COLUMNS))
         self.ctol_m = settings.contact_tolerance_m or self.rounding_m
-        self.overlap_limit_m = 0.5 * self.rounding_m
-        self.hysteresis_m = 0.01 * self.rounding_m
+        self.overlap_limit_m = T.OVERLAP_LIMIT_ROUNDINGS * self.rounding_m
+        self.hysteresis_m = T.HYSTERESIS_ROUNDINGS * self.rounding_m
 
         # joint models by contact label
         labels = list(settings.joints)
@@ -207,7 +209,7 @@ class Engine:
         self.init_brk = np.zeros(len(self.init_key))
 
         # boundaries
-        self.edges = domain_edges(model, 1e-6 * max(self.median_edge_m, 1e-12))
+        self.edges = domain_edges(model, T.DOMAIN_EDGE_FRACTION * max(self.median_edge_m, 1e-12))
         self.base_mode = np.zeros((nb, 3), np.int8)
         for fix in settings.fixes:
             ids = select_blocks(model, fix.where, self.edges)
@@ -264,7 +266,8 @@ class Engine:
             act = self.S[:, :, K.ACT] != 0
             if act.any():
                 extra = float(np.max((self.S[:, :, K.U0] + self.S[:, :, K.DIL])[act], initial=0.0))
-        return max(2.0 * (self.ctol_m + extra), 0.02 * self.median_edge_m)
+        return max(T.MARGIN_TOLERANCES * (self.ctol_m + extra),
+                   T.MARGIN_EDGE_FRACTION * self.median_edge_m)
 
     def rebuild(self):
         """Broad phase and pair remap (state of surviving pairs kept)."""
@@ -286,13 +289,63 @@ class Engine:
         self.margin = margin
         self.n_rebuilds += 1
 
+    # ------------------------------------------------------------------ kernel arguments --
+    def blocks_tuple(self) -> K.Blocks:
+        """The per-block arrays as the kernels take them (:class:`rockmass.solver._kernels.Blocks`)."""
+        return K.Blocks(self.loc, self.lgeo, self.off, self.radius, self.mass, self.inv_mass,
+                        self.mode, self.dof_input, self.active, self.movable, self.pos, self.rot,
+                        self.vel, self.omg, self.asleep, self.calm, self.wv)
+
+    def pairs_tuple(self) -> K.Pairs:
+        """The pair list and contact state as the kernels take them (:class:`._kernels.Pairs`)."""
+        return K.Pairs(self.pa, self.pb, self.pprop, self.pref, self.pinit, self.init_brk,
+                       self.props, self.S, self.fpair, self.bp_ptr, self.bp_idx, self.ref_pos,
+                       self.ref_rot)
+
+    def loads_tuple(self, presc_val: np.ndarray) -> K.Loads:
+        """Applied loads and the prescribed velocities ``presc_val`` (steps, inputs) of a chunk."""
+        return K.Loads(self.gravity, self.ext_f, self.ext_a, self.ext_b, self.quiet_edges,
+                       presc_val)
+
+    def kernel_params(self, dt: float = 0.0, *, alpha_local: float = 0.0, alpha_mass: float = 0.0,
+                      beta: float = 0.0, tol_ratio: float = 0.0, block_tol: float = 0.0,
+                      sleep_ratio: float = 0.0, sleep_speed: float = 0.0,
+                      w2_new: float = math.inf) -> np.ndarray:
+        """The kernels' float64 parameter vector (indices ``PRM_*`` of :mod:`._kernels`): the
+        scalars of a call and the numeric policy of :mod:`.tolerances`. The defaults give a
+        detection pass: no motion, no damping, no equilibrium test, no sleeping."""
+        entries = (
+            (K.PRM_DT, dt), (K.PRM_CTOL, self.ctol_m), (K.PRM_HYST, self.hysteresis_m),
+            (K.PRM_ROUNDING, self.rounding_m), (K.PRM_OVL_LIMIT, self.overlap_limit_m),
+            (K.PRM_MARGIN, self.margin), (K.PRM_ALPHA_LOCAL, alpha_local),
+            (K.PRM_ALPHA_MASS, alpha_mass), (K.PRM_BETA, beta), (K.PRM_TOL_RATIO, tol_ratio),
+            (K.PRM_BLOCK_TOL, block_tol), (K.PRM_CHECK_EVERY, T.CHECK_EVERY),
+            (K.PRM_SLEEP_RATIO, sleep_ratio), (K.PRM_SLEEP_STEPS, T.SLEEP_STEPS),
+            (K.PRM_SLEEP_SPEED, sleep_speed), (K.PRM_W2_NEW, w2_new), (K.PRM_WAKE, T.WAKE_FACTOR),
+            (K.PRM_REBUILD, T.REBUILD_MARGIN_FRACTION), (K.PRM_CY_CLAMP, T.CY_REVERSAL_CLAMP),
+            (K.PRM_CY_SLIP_F, T.CY_SLIPPING_F), (K.PRM_CY_PROBE, T.CY_PROBE_STRESS_FACTOR),
+            (K.PRM_CY_PROBE_FLOOR, T.CY_PROBE_FLOOR_PA), (K.PRM_FACING_COS, T.FACING_COS),
+            (K.PRM_BOND_GAP, T.BOND_GAP_ROUNDINGS), (K.PRM_FACE_MIN, T.FACE_MIN_FRACTION),
+            (K.PRM_DEGENERATE, T.DEGENERATE_DISTANCE), (K.PRM_TINY, T.TINY))
+        prm = np.full(K.N_PRM, np.nan)
+        for index, value in entries:
+            prm[index] = value
+        assert not np.isnan(prm).any(), "a kernel parameter has no value"
+        return prm
+
+    def advance(self, n_steps: int, presc_val: np.ndarray, out: np.ndarray, dt: float,
+                **params) -> int:
+        """Run :func:`rockmass.solver._kernels.advance` for up to ``n_steps`` steps of ``dt``
+        (``params``: the keywords of :meth:`kernel_params`); returns its ``RC_*`` code."""
+        return K.advance(n_steps, self.blocks_tuple(), self.pairs_tuple(),
+                         self.loads_tuple(presc_val), self.kernel_params(dt, **params), self.E,
+                         out)
+
     def detect(self):
         """Run the narrow phase once without motion: establishes the contact slots."""
         K.world_vertices(self.loc, self.lgeo, self.off, self.pos, self.rot, self.active, self.wv)
-        K.contact_forces(self.wv, self.off, self.pos, self.vel, self.omg, self.radius,
-                         np.zeros(self.nb, np.int8), self.pa, self.pb, self.pprop, self.pref,
-                         self.pinit, self.init_brk, self.props, self.S, 0.0, self.ctol_m, self.hysteresis_m, self.rounding_m, 0.0, self.fpair,
-                         np.zeros(K.N_ENERGY))
+        K.contact_forces(self.blocks_tuple(), self.pairs_tuple(), np.zeros(self.nb, np.int8),
+                         self.kernel_params(), np.zeros(K.N_ENERGY))
 
     def excavate(self, regions):
         """Remove the blocks of the given excavation stages (regions) and wake every block; the
@@ -324,7 +377,7 @@ class Engine:
         eigenvalue, so 2/√(max row sum) ≤ 2/ω_max: a rigorous (conservative) limit for the present
         contacts. Damping, explicit in the scheme, lowers it: with γ a bound on the eigenvalues of
         M^(-1/2) C M^(-1/2), Δt ≤ 4 / (√(4ω² + γ²) + γ) — for a damping ratio ξ = γ/(2ω) this is
-        (2/ω)(√(1 + ξ²) − ξ) (REFERENCE.md §5), and it falls as ω or γ grows, so the two bounds give
+        (2/ω)(√(1 + ξ²) − ξ) (docs/dem.md §2.3, eq. (2.6)), and it falls as ω or γ grows, so the two bounds give
         a safe step. C holds the stiffness-proportional Rayleigh term β K (γ ≤ β ω²) and the
         quiet-boundary dashpots of :attr:`quiet_edges` (Gershgorin row sums like K: a dashpot on a
         small boundary block, c/m large, is what limits the step there).
@@ -366,7 +419,8 @@ class Engine:
         ks = props[:, K.P_KS] * length
         cy = props[:, K.P_MODEL] == K.MODEL_CY
         if cy.any():  # tangent stiffness a σ^e at twice the present stress (e > 0 only)
-            sig = np.maximum(2 * slot[:, K.FN] / np.maximum(length, 1e-300), 1.0)
+            sig = np.maximum(T.CY_PROBE_STRESS_FACTOR * slot[:, K.FN] / np.maximum(length, T.TINY),
+                             T.CY_PROBE_FLOOR_PA)
             kn = np.where(cy, kn * sig ** props[:, K.P_EN], kn)
             ks = np.where(cy, ks * sig ** props[:, K.P_ES], ks)
         a, b = self.pa[p], self.pb[p]
@@ -394,14 +448,14 @@ class Engine:
             return 0.0
         props = self.props[self.pprop[p]]
         length = slot[:, K.LEN]
-        sig = slot[:, K.FN] / np.maximum(length, 1e-300)
+        sig = slot[:, K.FN] / np.maximum(length, T.TINY)
         tau = slot[:, K.TAU]
         kn, ks, en = props[:, K.P_KN], props[:, K.P_KS], props[:, K.P_EN]
         cy = props[:, K.P_MODEL] == K.MODEL_CY
         es = np.where(cy, props[:, K.P_ES], 0.0)
         ks_t = ks * np.where(es > 0, np.maximum(sig, 0.0) ** es, 1.0)
         normal = np.where(cy, np.maximum(sig, 0.0) ** (2 - en) / (kn * (2 - en)), 0.5 * sig ** 2 / kn)
-        shear = np.where(ks_t > 0, 0.5 * tau ** 2 / np.maximum(ks_t, 1e-300), 0.0)
+        shear = np.where(ks_t > 0, 0.5 * tau ** 2 / np.maximum(ks_t, T.TINY), 0.0)
         return float(np.sum(length * (normal + shear)))
 
     def contact_increment_work(self, dt: float) -> tuple[float, float]:
@@ -452,7 +506,7 @@ class Engine:
         """Active contact slots: blocks, point, normal (a to b), length, σ_n (compression +),
         τ, plastic slip, slipping / broken flags."""
         p, k, slot = self._active_slots()
-        length = np.maximum(slot[:, K.LEN], 1e-300)
+        length = np.maximum(slot[:, K.LEN], T.TINY)
         return {"block_a": self.pa[p], "block_b": self.pb[p], "x_m": slot[:, K.PX],
                 "y_m": slot[:, K.PY], "nx": slot[:, K.NX], "ny": slot[:, K.NY],
                 "length_m": slot[:, K.LEN], "normal_stress_pa": slot[:, K.FN] / length,

@@ -9,10 +9,10 @@ Itasca, UDEC manual, "Problem solving with UDEC"); here it is automatic:
 
 A block is **failing** when it has moved more than ``failure_displacement_m`` since the stage
 began and its motion is not dying out: over the last ``checks`` checks (one per chunk of steps) it
-moved at least ``_KEEP_GOING`` times as far as over the ``checks`` checks before, and at least a
-tenth of the threshold. Blocks on their way to equilibrium move less and less under local damping
-(and by elastic amounts: σ/k_n per joint, millimetres for the cavern samples); a block that falls,
-slides or creeps in stick-slip keeps covering ground. Measuring distance over windows of checks,
+moved at least ``FAIL_KEEP_GOING`` (:mod:`.tolerances`) times as far as over the ``checks``
+checks before, and at least a tenth of the threshold. Blocks on their way to equilibrium move
+less and less under local damping (and by elastic amounts: σ/k_n per joint, millimetres for the
+cavern samples); a block that falls, slides or creeps in stick-slip keeps covering ground. Measuring distance over windows of checks,
 not the speed at one instant, keeps a chattering slide from resetting the count.
 
 Each failing block is classified by how it moved since the stage began:
@@ -20,7 +20,7 @@ Each failing block is classified by how it moved since the stage began:
 - ``rotation``: the arc of its rim, |Δθ| r, exceeds half its centroid's translation (a block
   toppling about a corner moves its centroid by about that arc; a sliding or falling block hardly
   turns);
-- ``fall``: otherwise, when its contacts carry less than ``_FALL_SUPPORT`` of its weight;
+- ``fall``: otherwise, when its contacts carry less than ``FALL_SUPPORT`` of its weight;
 - ``slide``: otherwise (it moves while in contact: along a joint).
 
 The runner removes failing blocks from the model (as an excavation removes blocks: inactive, no
@@ -35,13 +35,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .tolerances import FAIL_KEEP_GOING, FAIL_MIN_RECENT, FAIL_ROTATION_ARC, FALL_SUPPORT
+
 __all__ = ["FailureWatch", "FailedBlock", "MECHANISMS", "mechanism_counts"]
 
 #: The mechanisms a failed block is classified by, in the order reports list them.
 MECHANISMS = ("fall", "slide", "rotation")
 
-_KEEP_GOING = 0.5    # moved at least this fraction of the previous window's distance: not settling
-_FALL_SUPPORT = 0.05  # contacts carrying less than this fraction of the weight: free fall
 
 
 @dataclass(frozen=True)
@@ -97,7 +97,8 @@ class FailureWatch:
         now, mid, old = self.track[-1], self.track[-1 - self.checks], self.track[0]
         recent = now - mid
         going = (e.movable & e.active & (now > self.displacement_m)
-                 & (recent >= _KEEP_GOING * (mid - old)) & (recent > 0.1 * self.displacement_m))
+                 & (recent >= FAIL_KEEP_GOING * (mid - old))
+                 & (recent > FAIL_MIN_RECENT * self.displacement_m))
         return np.flatnonzero(going)
 
     def classify(self, ids: np.ndarray) -> list[FailedBlock]:
@@ -113,9 +114,9 @@ class FailureWatch:
             arc = abs(float(e.rot[b] - self.start_rot[b])) * float(e.radius[b])
             support = float(np.hypot(*e.contact_force_on(b)[:2]))
             weight = float(e.mass[b, 0] * np.hypot(*e.gravity))
-            if arc > 0.5 * translation:
+            if arc > FAIL_ROTATION_ARC * translation:
                 mechanism = "rotation"
-            elif support < _FALL_SUPPORT * weight:
+            elif support < FALL_SUPPORT * weight:
                 mechanism = "fall"
             else:
                 mechanism = "slide"

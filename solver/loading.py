@@ -3,8 +3,7 @@
 Stress fields are linear in y at most (uniform, or gravity with K₀), so forces on a straight edge of
 length L between points P₀, P₁ with tractions t₀, t₁ are lumped *consistently* (linear element):
 F₀ = L(2t₀ + t₁)/6 at P₀ and F₁ = L(t₀ + 2t₁)/6 at P₁, which keeps the resultant and its moment
-exact — so a block under an equilibrium stress field starts in equilibrium (REFERENCE.md §5,
-problem 10).
+exact — so a block under an equilibrium stress field starts in equilibrium (docs/dem.md §9.3).
 """
 
 from __future__ import annotations

@@ -2,9 +2,10 @@
 
 UDEC users report the convergence of an opening from *history points* placed on its boundary: the
 "history" command of UDEC (Itasca Consulting Group, UDEC User's Manual; version 3.0, 1996, is the
-one seed 000 cites) records a displacement component at a chosen point of the model every so many
-steps, and a point on the roof, the floor or a wall of the opening belongs to the rock block that
-holds it, so it moves with that block. This module does the same for rigid blocks:
+one Jiang et al. cite; docs/dem.md, References) records a displacement component at a chosen point
+of the model every so many steps, and a point on the roof, the floor or a wall of the opening
+belongs to the rock block that holds it, so it moves with that block. This module does the same
+for rigid blocks:
 
 1. :func:`boundary_points` finds the four classic points on the boundary of the opening left by
    the excavation stages removed so far (the union of their blocks) and attaches each one to the

@@ -88,9 +88,9 @@ class Result:
     ``<name>_contact_fx_n`` (sum of contact forces on the block), …). ``contacts``: the active
     contact slots at the end (:meth:`Engine.contact_table`).
     ``block_energy``: per block volume (area × 1 m), mass, peak velocity and peak kinetic energy
-    over the dynamic stages (seed 001 Fig. 7). ``status`` is ``ok``, ``failed_blocks`` (blocks kept
-    moving in a static stage and were taken out; ``failed`` marks them) or the failure of the last
-    stage.
+    over the dynamic stages (as in Kiran & Juneja 2022, Fig. 7; docs/dem.md, References).
+    ``status`` is ``ok``, ``failed_blocks`` (blocks kept moving in a static stage and were taken
+    out; ``failed`` marks them) or the failure of the last stage.
     """
 
     stages: list

@@ -26,6 +26,7 @@ from collections.abc import Callable
 import numpy as np
 
 from . import _kernels as K
+from . import tolerances as T
 from .engine import FIXED, Engine
 from .failure import FailureWatch
 from .loading import apply_boundary_stress, apply_insitu, quiet_edge_table
@@ -36,18 +37,11 @@ from .settings import Settings, Stage
 
 __all__ = ["run"]
 
-_CHECK_EVERY = 10         # static convergence test interval (steps)
-_STATIC_CHUNK = 500       # steps between records in static stages
-_DYNAMIC_RECORDS = 400    # records per dynamic stage (history rows) when history_every == 0
-_SLEEP_STEPS = 100        # steps a block stays calm (ratio < tolerance / 10, slow) before it sleeps
-_GUARD_EVERY = 200       # steps between the time-step and energy-ledger checks (and at a stage's end)
-_STEP_CUT_SLACK = 0.01  # the step is lowered when the safe step falls by more than this fraction
-_FAILURE_ROUNDINGS = 0.25  # default failure displacement, in rounding lengths d
-_SLEEP_CREEP = 1e-3       # calm = moving less than this fraction of the rounding in _SLEEP_STEPS steps
+
 
 
 def _rayleigh(stage: Stage) -> tuple[float, float]:
-    """(α, β) of C = αM + βK giving ξ at f, with ξ(ω) = ½(α/ω + βω) (REFERENCE.md §5):
+    """(α, β) of C = αM + βK giving ξ at f, with ξ(ω) = ½(α/ω + βω) (docs/dem.md §8, eq. (8.3)):
     both terms (minimum ξ at f): α = ξω, β = ξ/ω; mass only: α = 2ξω; stiffness only: β = 2ξ/ω."""
     if stage.kind != "dynamic" or stage.rayleigh_ratio <= 0:
         return 0.0, 0.0
@@ -255,13 +249,13 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
                              f"{' with Rayleigh damping' if beta else ''}); use at most that")
         dt = stage.time_step_s
     elif not math.isfinite(limit):  # no contact at all: free flight
-        dt = (stage.duration_s or 1.0) / 1000.0
+        dt = (stage.duration_s or 1.0) / T.FREE_FLIGHT_STEPS
     n_steps = math.ceil(stage.duration_s / dt) if dynamic else stage.max_steps
     inputs = settings.velocity_inputs if dynamic else ()
     if stage.history_every:
         chunk = stage.history_every
     else:
-        chunk = max(1, n_steps // _DYNAMIC_RECORDS) if dynamic else _STATIC_CHUNK
+        chunk = max(1, n_steps // T.DYNAMIC_RECORDS) if dynamic else T.STATIC_CHUNK
     frame_every = max(1, n_steps // stage.frames) if (dynamic and stage.frames) else 0
 
     stage_pos, stage_rot = eng.pos.copy(), eng.rot.copy()
@@ -285,9 +279,10 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
         rec.frame(stage.name, 0)
     tol = stage.tolerance if not dynamic else 0.0
     alpha_local = stage.local_damping if not dynamic else 0.0
-    sleep_ratio = 0.1 * stage.tolerance if (settings.sleep and not dynamic) else 0.0
+    sleep_ratio = (T.SLEEP_RATIO_OF_TOLERANCE * stage.tolerance if (settings.sleep and not dynamic)
+                   else 0.0)
     watch = None if dynamic else FailureWatch(
-        eng, settings.failure_displacement_m or _FAILURE_ROUNDINGS * eng.rounding_m,
+        eng, settings.failure_displacement_m or T.FAILURE_ROUNDINGS * eng.rounding_m,
         settings.failure_checks, settings.sliver_area_m2)
     failed, removed_j = [], 0.0
     safety = settings.time_step_safety
@@ -301,16 +296,11 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
             presc[:, i] = inp.history(t_half)
         snap = eng.snapshot()
         ke_check = out[7]
-        rc = K.advance(todo, eng.loc, eng.lgeo, eng.off, eng.pos, eng.rot, eng.vel, eng.omg, eng.inv_mass,
-                       eng.mass, eng.mode, eng.dof_input, presc, eng.active, eng.movable,
-                       eng.gravity, eng.ext_f, eng.ext_a, eng.ext_b, eng.quiet_edges, eng.pa,
-                       eng.pb, eng.pprop, eng.pref, eng.pinit, eng.init_brk, eng.props, eng.S,
-                       eng.ref_pos, eng.ref_rot, eng.radius, dt, eng.ctol_m, eng.hysteresis_m,
-                       eng.rounding_m, eng.overlap_limit_m, eng.margin, alpha_local, alpha_mass,
-                       beta, tol, stage.block_tolerance, _CHECK_EVERY, eng.wv, eng.fpair,
-                       eng.bp_ptr, eng.bp_idx, eng.E, out, eng.asleep, eng.calm, sleep_ratio,
-                       _SLEEP_STEPS, _SLEEP_CREEP * eng.rounding_m / (_SLEEP_STEPS * dt),
-                       _new_contact_w2(dt, safety if stage.time_step_s is None else 1.0))
+        rc = eng.advance(todo, presc, out, dt, alpha_local=alpha_local, alpha_mass=alpha_mass,
+                         beta=beta, tol_ratio=tol, block_tol=stage.block_tolerance,
+                         sleep_ratio=sleep_ratio,
+                         sleep_speed=T.SLEEP_CREEP * eng.rounding_m / (T.SLEEP_STEPS * dt),
+                         w2_new=_new_contact_w2(dt, safety if stage.time_step_s is None else 1.0))
         steps = int(out[0])
         dt_used = dt
         if rc == K.RC_STIFF:  # a contact formed that this step cannot resolve: shorter step
@@ -342,7 +332,7 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
         # again with the new step; within it (the safety factor's margin) the new step applies
         # from here on
         guard = (rc in (K.RC_CONVERGED, K.RC_OVERLAP) or done + steps >= n_steps
-                 or done + steps - guarded >= _GUARD_EVERY)
+                 or done + steps - guarded >= T.GUARD_EVERY)
         if guard:
             guarded = done + steps
             new_dt, new_limit = _auto_time_step(eng, settings, beta)
@@ -355,7 +345,7 @@ def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, re
                               f"the state of step {done} is kept")
                 break
             if (stage.time_step_s is None and math.isfinite(new_limit)
-                    and dt > new_dt * (1 + _STEP_CUT_SLACK)):
+                    and dt > new_dt * (1 + T.STEP_CUT_SLACK)):
                 kept = 0 if redo else steps  # steps of this chunk that stand
                 if dynamic:
                     left = stage.duration_s - (eng.time_s + kept * dt - stage_t0)

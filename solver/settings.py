@@ -8,45 +8,57 @@ Sign conventions (stated once, used everywhere in :mod:`rockmass.solver`)
 - Angles are degrees, lengths metres, stiffnesses per unit contact area Pa/m (force per unit length of
   contact per metre of closure, unit thickness in 2D), time seconds, gravity a vector in m/s².
 
-Everything here is a frozen dataclass with checks in ``__post_init__`` that raise ``ValueError``
-naming the field and what was expected; the pipeline maps these to exit code 2.
+Parameters are declared once, here
+----------------------------------
+Every type but :class:`TableHistory` is a frozen ``pydantic`` dataclass
+(:func:`rockmass.dfn.specs.spec`): each field's annotation carries its type, range and
+description, its default is the dataclass default, and cross-field rules are validators on the
+class. Constructing one from Python (``Coulomb(kn_pa_m=-1, ...)``) and reading one from a
+TOML ``[solve]`` section (:mod:`rockmass.solve_config`, which uses these classes as its field types)
+run the same checks; a bad value raises ``pydantic.ValidationError`` (a ``ValueError``) naming the
+field, and the pipeline maps it to exit code 2. Numbers are checked strictly (an ``int`` field takes
+no float, a ``bool`` field no number; NaN and infinity are refused unless a field says otherwise), and
+sequences accept any iterable (stored as tuples). The generated configuration reference
+(``docs/config.md``) is written from these declarations. The solver kernels see none of this: the
+engine reads the values into plain arrays.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Literal, Union
+import typing
+from dataclasses import dataclass as _plain_dataclass
+from typing import Annotated, Any, Callable, Literal, Optional, Union
 
 import numpy as np
+from pydantic import BeforeValidator, Field, PlainSerializer, Strict, model_validator
+
+from ..dfn.specs import Bool, Float, Int, field_error, spec
 
 __all__ = ["Coulomb", "ContinuouslyYielding", "JointModel", "Material", "InSituStress",
            "Fix", "BoundaryStress", "Sine", "Ricker", "TableHistory", "History", "VelocityInput",
            "QuietBoundary", "Monitor", "Stage", "Settings", "SIDES"]
 
-SIDES = ("left", "right", "bottom", "top")
+
+def _none_is_inf(value: Any) -> Any:
+    return math.inf if value is None else value
 
 
-def _positive(name: str, value: float, allow_zero: bool = False):
-    ok = math.isfinite(value) and (value >= 0 if allow_zero else value > 0)
-    if not ok:
-        raise ValueError(f"{name} must be a finite number {'>= 0' if allow_zero else '> 0'}, "
-                         f"got {value!r}")
+# the domain quantities used by several classes
+Stiffness = Annotated[Float, Field(gt=0, le=1e16)]
+Friction = Annotated[Float, Field(ge=0, lt=90)]
+Stress = Annotated[Float, Field(ge=-1e11, le=1e11)]
+Coord = Annotated[Float, Field(ge=-1e7, le=1e7)]
+Side = Literal["left", "right", "bottom", "top"]
+SIDES = typing.get_args(Side)
+Sides = Annotated[tuple[Side, ...], Field(min_length=1, max_length=4)]
+Where = Annotated[str, Strict(), Field(min_length=1, max_length=4096)]
+
+_WHERE = ("blocks chosen by a side (left, right, bottom, top: blocks touching that side of the "
+          "domain), \"region:K\", \"box:x0,y0,x1,y1\" (centroid inside) or \"blocks:i,j,k\"")
 
 
-def _sides(sides) -> tuple[str, ...]:
-    sides = tuple(sides)
-    if not sides or any(s not in SIDES for s in sides):
-        raise ValueError(f"sides must be a non-empty subset of {SIDES}, got {sides!r}")
-    return sides
-
-
-def _angle(name: str, value: float, low: float = 0.0, high: float = 90.0):
-    if not (math.isfinite(value) and low <= value < high):
-        raise ValueError(f"{name} must be in [{low}, {high}) degrees, got {value!r}")
-
-
-@dataclass(frozen=True)
+@spec
 class Coulomb:
     """Linear Coulomb slip joint with cohesion, tensile strength and dilation (brittle).
 
@@ -57,33 +69,28 @@ class Coulomb:
     A glued contact (potential crack, seed 000 eqs. 1–2) is this model with intact-rock c, φ, T.
     """
 
-    kn_pa_m: float
-    ks_pa_m: float
-    friction_deg: float
-    cohesion_pa: float = 0.0
-    tension_pa: float = 0.0
-    dilation_deg: float = 0.0
-    residual_friction_deg: float | None = None
-    max_dilation_m: float = math.inf
-
-    def __post_init__(self):
-        _positive("kn_pa_m", self.kn_pa_m)
-        _positive("ks_pa_m", self.ks_pa_m)
-        _angle("friction_deg", self.friction_deg)
-        _positive("cohesion_pa", self.cohesion_pa, allow_zero=True)
-        _positive("tension_pa", self.tension_pa, allow_zero=True)
-        _angle("dilation_deg", self.dilation_deg, 0.0, 60.0)
-        if self.residual_friction_deg is not None:
-            _angle("residual_friction_deg", self.residual_friction_deg)
-        if not self.max_dilation_m >= 0:
-            raise ValueError(f"max_dilation_m must be >= 0, got {self.max_dilation_m!r}")
+    kn_pa_m: Annotated[Stiffness, Field(description="normal stiffness k_n")]
+    ks_pa_m: Annotated[Stiffness, Field(description="shear stiffness k_s")]
+    friction_deg: Annotated[Friction, Field(description="friction angle φ")]
+    cohesion_pa: Annotated[Float, Field(ge=0, le=1e11, description="cohesion c (lost at failure)")] = 0.0
+    tension_pa: Annotated[Float, Field(ge=0, le=1e11,
+                                       description="tensile strength T (lost at failure)")] = 0.0
+    dilation_deg: Annotated[Float, Field(ge=0, lt=60, description="dilation angle ψ while slipping")] = 0.0
+    residual_friction_deg: Annotated[Optional[Friction], Field(
+        description="friction angle after failure; none: friction_deg")] = None
+    max_dilation_m: Annotated[
+        float, Strict(), Field(ge=0, allow_inf_nan=True,
+                               description="largest opening by dilation; none or inf: no limit"),
+        BeforeValidator(_none_is_inf), PlainSerializer(lambda v: None if math.isinf(v) else v)
+    ] = math.inf
+    model: Annotated[Literal["coulomb"], Field(description="joint model: \"coulomb\"")] = "coulomb"
 
     @property
     def residual_deg(self) -> float:
         return self.friction_deg if self.residual_friction_deg is None else self.residual_friction_deg
 
 
-@dataclass(frozen=True)
+@spec
 class ContinuouslyYielding:
     """Continuously yielding joint (Cundall & Hart 1984; seed 001 eqs. 4–13; REFERENCE.md §5).
 
@@ -94,44 +101,39 @@ class ContinuouslyYielding:
     With e_n = e_s = 0 (as in seed 001, Table 2) the stiffnesses are a_n and a_s (Pa/m).
     """
 
-    an_pa_m: float
-    as_pa_m: float
-    initial_friction_deg: float = 59.3
-    basic_friction_deg: float = 30.0
-    roughness_m: float = 1e-4
-    en: float = 0.0
-    es: float = 0.0
+    an_pa_m: Annotated[Stiffness, Field(description="normal stiffness factor a_n")]
+    as_pa_m: Annotated[Stiffness, Field(description="shear stiffness factor a_s")]
+    initial_friction_deg: Annotated[Friction, Field(
+        description="initial mobilised friction angle φ_m")] = 59.3
+    basic_friction_deg: Annotated[Friction, Field(
+        description="basic friction angle φ_b, <= initial_friction_deg")] = 30.0
+    roughness_m: Annotated[Float, Field(gt=0, le=1e3,
+                                        description="roughness R of the friction decay")] = 1e-4
+    en: Annotated[Float, Field(ge=0, lt=1, description="exponent e_n of k_n = a_n σ_n^e_n")] = 0.0
+    es: Annotated[Float, Field(ge=0, lt=1, description="exponent e_s of k_s = a_s σ_n^e_s")] = 0.0
+    model: Annotated[Literal["cy"], Field(description="joint model: \"cy\"")] = "cy"
 
-    def __post_init__(self):
-        _positive("an_pa_m", self.an_pa_m)
-        _positive("as_pa_m", self.as_pa_m)
-        _angle("initial_friction_deg", self.initial_friction_deg)
-        _angle("basic_friction_deg", self.basic_friction_deg)
+    @model_validator(mode="after")
+    def _basic_below_initial(self):
         if self.basic_friction_deg > self.initial_friction_deg:
-            raise ValueError("basic_friction_deg must not exceed initial_friction_deg "
-                             f"({self.basic_friction_deg} > {self.initial_friction_deg})")
-        _positive("roughness_m", self.roughness_m)
-        for name in ("en", "es"):
-            if not 0.0 <= getattr(self, name) < 1.0:
-                raise ValueError(f"{name} must be in [0, 1), got {getattr(self, name)!r}")
+            raise field_error(self, "basic_friction_deg", "must not exceed initial_friction_deg "
+                              f"({self.initial_friction_deg}), got {self.basic_friction_deg}",
+                              self.basic_friction_deg)
+        return self
 
 
-JointModel = Union[Coulomb, ContinuouslyYielding]
+JointModel = Annotated[Union[Coulomb, ContinuouslyYielding], Field(discriminator="model")]
 
 
-@dataclass(frozen=True)
+@spec
 class Material:
     """Intact rock: density, and elastic moduli (used by quiet boundaries only: blocks are rigid)."""
 
-    density_kg_m3: float = 2700.0
-    bulk_modulus_pa: float | None = None
-    shear_modulus_pa: float | None = None
-
-    def __post_init__(self):
-        _positive("density_kg_m3", self.density_kg_m3)
-        for name in ("bulk_modulus_pa", "shear_modulus_pa"):
-            if getattr(self, name) is not None:
-                _positive(name, getattr(self, name))
+    density_kg_m3: Annotated[Float, Field(gt=0, le=1e5, description="density ρ")] = 2700.0
+    bulk_modulus_pa: Annotated[Optional[Float], Field(
+        gt=0, le=1e13, description="bulk modulus K (quiet boundaries only)")] = None
+    shear_modulus_pa: Annotated[Optional[Float], Field(
+        gt=0, le=1e13, description="shear modulus G (quiet boundaries only)")] = None
 
     def wave_speeds(self) -> tuple[float, float]:
         """(C_p, C_s) = (√((K + 4G/3)/ρ), √(G/ρ)) in m/s."""
@@ -141,7 +143,7 @@ class Material:
         return math.sqrt((k + 4.0 * g / 3.0) / rho), math.sqrt(g / rho)
 
 
-@dataclass(frozen=True)
+@spec
 class InSituStress:
     """Initial stress written into the contact forces (compression positive, Pa).
 
@@ -151,22 +153,18 @@ class InSituStress:
     linear variation so every block starts in equilibrium.
     """
 
-    sxx_pa: float = 0.0
-    syy_pa: float = 0.0
-    sxy_pa: float = 0.0
-    gravity_gradient: bool = False
-    k0: float = 1.0
-    y_ref_m: float | None = None
-
-    def __post_init__(self):
-        for name in ("sxx_pa", "syy_pa", "sxy_pa", "k0"):
-            if not math.isfinite(getattr(self, name)):
-                raise ValueError(f"{name} must be finite, got {getattr(self, name)!r}")
-        if self.k0 < 0:
-            raise ValueError(f"k0 must be >= 0, got {self.k0}")
+    sxx_pa: Annotated[Stress, Field(description="horizontal stress σ_xx (at y_ref_m)")] = 0.0
+    syy_pa: Annotated[Stress, Field(description="vertical stress σ_yy (at y_ref_m)")] = 0.0
+    sxy_pa: Annotated[Stress, Field(description="shear stress σ_xy")] = 0.0
+    gravity_gradient: Annotated[Bool, Field(
+        description="add the weight of the rock above: σ_yy grows by ρ|g| per metre below y_ref_m")] = False
+    k0: Annotated[Float, Field(ge=0, le=100, description="ratio of the horizontal to the vertical "
+                                                         "gravity stress")] = 1.0
+    y_ref_m: Annotated[Optional[Coord], Field(
+        description="level where the gravity part is zero; none: the top of the model")] = None
 
 
-@dataclass(frozen=True)
+@spec
 class Fix:
     """Fix degrees of freedom of the blocks chosen by ``where``.
 
@@ -176,41 +174,34 @@ class Fix:
     on a vertical side.
     """
 
-    where: str
-    dofs: str = "xyr"
-
-    def __post_init__(self):
-        if not self.dofs or set(self.dofs) - set("xyr"):
-            raise ValueError(f"dofs must be a non-empty combination of 'x', 'y', 'r', got {self.dofs!r}")
+    where: Annotated[Where, Field(description=_WHERE)]
+    dofs: Annotated[str, Strict(), Field(pattern=r"^[xyr]{1,3}$", description=(
+        "fixed degrees of freedom, letters of x, y, r (rotation): \"xyr\" clamps, \"x\" is a "
+        "roller on a vertical side"))] = "xyr"
 
 
-@dataclass(frozen=True)
+@spec
 class BoundaryStress:
     """Constant stress (compression positive, Pa) applied as tractions on the domain edges of the
     blocks on ``sides``: force on an edge = −σ·n_out L (tension-positive σ), lumped to its ends."""
 
-    sides: tuple[str, ...]
-    sxx_pa: float = 0.0
-    syy_pa: float = 0.0
-    sxy_pa: float = 0.0
-    from_insitu: bool = False
-
-    def __post_init__(self):
-        object.__setattr__(self, "sides", _sides(self.sides))
+    sides: Annotated[Sides, Field(description="domain sides loaded")]
+    sxx_pa: Annotated[Stress, Field(description="σ_xx applied")] = 0.0
+    syy_pa: Annotated[Stress, Field(description="σ_yy applied")] = 0.0
+    sxy_pa: Annotated[Stress, Field(description="σ_xy applied")] = 0.0
+    from_insitu: Annotated[Bool, Field(
+        description="apply the in-situ stress at each edge instead of sxx_pa, syy_pa, sxy_pa")] = False
 
 
-@dataclass(frozen=True)
+@spec
 class Sine:
     """v(t) = amplitude sin(2π f t) for ``cycles`` cycles (all time if None), then 0."""
 
-    amplitude: float
-    frequency_hz: float
-    cycles: float | None = None
-
-    def __post_init__(self):
-        _positive("frequency_hz", self.frequency_hz)
-        if self.cycles is not None:
-            _positive("cycles", self.cycles)
+    amplitude: Annotated[Float, Field(ge=-1e6, le=1e6, description="peak value (m/s of velocity)")]
+    frequency_hz: Annotated[Float, Field(gt=0, le=1e7, description="frequency f")]
+    cycles: Annotated[Optional[Float], Field(
+        gt=0, le=1e7, description="number of cycles, then 0; none: all time")] = None
+    type: Annotated[Literal["sine"], Field(description="history kind: \"sine\"")] = "sine"
 
     def __call__(self, t):
         t = np.asarray(t, float)
@@ -220,16 +211,15 @@ class Sine:
         return np.where(t >= 0, v, 0.0)
 
 
-@dataclass(frozen=True)
+@spec
 class Ricker:
     """Ricker wavelet a(1 − 2π²f²τ²) exp(−π²f²τ²), τ = t − t0 (t0 = 1.5/f when None)."""
 
-    amplitude: float
-    peak_frequency_hz: float
-    t0_s: float | None = None
-
-    def __post_init__(self):
-        _positive("peak_frequency_hz", self.peak_frequency_hz)
+    amplitude: Annotated[Float, Field(ge=-1e6, le=1e6, description="peak value a (m/s of velocity)")]
+    peak_frequency_hz: Annotated[Float, Field(gt=0, le=1e7, description="peak frequency f")]
+    t0_s: Annotated[Optional[Float], Field(ge=0, le=1e7,
+                                           description="centre time t0; none: 1.5/f")] = None
+    type: Annotated[Literal["ricker"], Field(description="history kind: \"ricker\"")] = "ricker"
 
     def __call__(self, t):
         f = self.peak_frequency_hz
@@ -238,9 +228,13 @@ class Ricker:
         return self.amplitude * (1.0 - 2.0 * a) * np.exp(-a)
 
 
-@dataclass(frozen=True)
+@_plain_dataclass(frozen=True)
 class TableHistory:
-    """Piecewise-linear history from samples (times strictly increasing); 0 outside."""
+    """Piecewise-linear history from samples (times strictly increasing); 0 outside.
+
+    A plain dataclass (checked in ``__post_init__``): it is built from arrays (a CSV file read by
+    :func:`rockmass.solve_config.read_history_csv`), never from configuration keys.
+    """
 
     times_s: tuple[float, ...]
     values: tuple[float, ...]
@@ -272,47 +266,48 @@ class TableHistory:
 History = Union[Sine, Ricker, TableHistory]
 
 
-@dataclass(frozen=True)
+@spec
 class VelocityInput:
     """Prescribe velocity component ``component`` (``"x"`` or ``"y"``) of the chosen blocks to
     ``history(t)`` (m/s) during dynamic stages — the shake-table base and sides (seed 002 §3).
     ``t`` is the time since the start of the dynamic stage (each dynamic stage starts its input at
     t = 0); in static stages these degrees of freedom are held fixed."""
 
-    where: str
-    component: Literal["x", "y"]
-    history: History
-
-    def __post_init__(self):
-        if self.component not in ("x", "y"):
-            raise ValueError(f"component must be 'x' or 'y', got {self.component!r}")
+    where: Annotated[Where, Field(description=_WHERE)]
+    component: Annotated[Literal["x", "y"], Field(description="velocity component prescribed")]
+    history: Annotated[Callable[[Any], Any], Field(
+        description="velocity in m/s as a function of time: a Sine, Ricker, TableHistory or any "
+                    "callable of a time array")]
 
 
-@dataclass(frozen=True)
+@spec
 class QuietBoundary:
     """Viscous (Lysmer–Kuhlemeyer) boundary on the domain edges of ``sides``: tractions −ρC_p v_n
     and −ρC_s v_s (REFERENCE.md §5), active in dynamic stages only."""
 
-    sides: tuple[str, ...]
-
-    def __post_init__(self):
-        object.__setattr__(self, "sides", _sides(self.sides))
+    sides: Annotated[Sides, Field(description="domain sides that absorb waves (needs "
+                                              "material.bulk_modulus_pa and shear_modulus_pa)")]
 
 
-@dataclass(frozen=True)
+@spec
 class Monitor:
     """Record the block containing ``point_xy_m`` (or block ``block``) in ``history.csv``."""
 
-    name: str
-    point_xy_m: tuple[float, float] | None = None
-    block: int | None = None
+    name: Annotated[str, Strict(), Field(pattern=r"^[A-Za-z0-9_\-]{1,40}$",
+                                         description="column name in history.csv")]
+    point_xy_m: Annotated[Optional[tuple[Coord, Coord]], Field(
+        description="point (x, y) inside the recorded block")] = None
+    block: Annotated[Optional[Int], Field(ge=0, description="number of the recorded block")] = None
 
-    def __post_init__(self):
+    @model_validator(mode="after")
+    def _one_of(self):
         if (self.point_xy_m is None) == (self.block is None):
-            raise ValueError(f"monitor {self.name!r}: give exactly one of point_xy_m and block")
+            raise field_error(self, "point_xy_m", f"monitor {self.name!r}: give exactly one of "
+                              "point_xy_m and block", self.point_xy_m)
+        return self
 
 
-@dataclass(frozen=True)
+@spec
 class Stage:
     """One stage of a run.
 
@@ -328,49 +323,46 @@ class Stage:
     a value above the stable limit is refused.
     """
 
-    name: str
-    kind: Literal["static", "dynamic"] = "static"
-    excavate: tuple[int, ...] = ()
-    max_steps: int = 200_000
-    tolerance: float = 1e-5
-    block_tolerance: float = 1e-3
-    local_damping: float = 0.8
-    duration_s: float | None = None
-    rayleigh_ratio: float = 0.0
-    rayleigh_frequency_hz: float | None = None
-    rayleigh_mode: Literal["mass_stiffness", "mass", "stiffness"] = "mass_stiffness"
-    time_step_s: float | None = None
-    frames: int = 10
-    history_every: int = 0
+    name: Annotated[str, Strict(), Field(min_length=1, max_length=64,
+                                         description="stage name, unique in the run")]
+    kind: Annotated[Literal["static", "dynamic"], Field(
+        description="static: step to equilibrium; dynamic: step for duration_s")] = "static"
+    excavate: Annotated[tuple[Annotated[Int, Field(ge=1)], ...], Field(
+        max_length=64, description="regions of the block model removed at the start")] = ()
+    max_steps: Annotated[Int, Field(ge=1, le=10 ** 10, description="step limit")] = 200_000
+    tolerance: Annotated[Float, Field(gt=0, le=1, description=(
+        "static: the model's unbalanced-force ratio at equilibrium"))] = 1e-5
+    block_tolerance: Annotated[Float, Field(gt=0, le=1, description=(
+        "static: every block's own force and moment ratio at equilibrium"))] = 1e-3
+    local_damping: Annotated[Float, Field(ge=0, lt=1, description=(
+        "static: local non-viscous damping coefficient"))] = 0.8
+    duration_s: Annotated[Optional[Float], Field(gt=0, le=1e6, description=(
+        "dynamic: stage duration (required)"))] = None
+    rayleigh_ratio: Annotated[Float, Field(ge=0, lt=1, description=(
+        "dynamic: Rayleigh damping ratio ξ"))] = 0.0
+    rayleigh_frequency_hz: Annotated[Optional[Float], Field(gt=0, le=1e9, description=(
+        "dynamic: frequency where the damping ratio is ξ (required when rayleigh_ratio > 0)"))] = None
+    rayleigh_mode: Annotated[Literal["mass_stiffness", "mass", "stiffness"], Field(description=(
+        "dynamic: Rayleigh terms used (mass_stiffness: minimum at the frequency; the stiffness "
+        "part shortens the stable step)"))] = "mass_stiffness"
+    time_step_s: Annotated[Optional[Float], Field(gt=0, le=1e3, description=(
+        "time step; none: chosen automatically (a value above the stable limit is refused)"))] = None
+    frames: Annotated[Int, Field(ge=0, le=10_000, description="snapshots written in the stage")] = 10
+    history_every: Annotated[Int, Field(ge=0, le=10 ** 9, description=(
+        "steps between monitor records; 0: chosen automatically"))] = 0
 
-    def __post_init__(self):
-        object.__setattr__(self, "excavate", tuple(int(k) for k in self.excavate))
-        if self.kind not in ("static", "dynamic"):
-            raise ValueError(f"stage {self.name!r}: kind must be 'static' or 'dynamic', got {self.kind!r}")
-        if self.max_steps < 1:
-            raise ValueError(f"stage {self.name!r}: max_steps must be >= 1")
-        _positive(f"stage {self.name!r}: tolerance", self.tolerance)
-        _positive(f"stage {self.name!r}: block_tolerance", self.block_tolerance)
-        if not 0.0 <= self.local_damping < 1.0:
-            raise ValueError(f"stage {self.name!r}: local_damping must be in [0, 1), got {self.local_damping}")
-        if self.kind == "dynamic":
-            if self.duration_s is None:
-                raise ValueError(f"stage {self.name!r}: a dynamic stage needs duration_s")
-            _positive(f"stage {self.name!r}: duration_s", self.duration_s)
-        if not 0.0 <= self.rayleigh_ratio < 1.0:
-            raise ValueError(f"stage {self.name!r}: rayleigh_ratio must be in [0, 1)")
-        if self.rayleigh_mode not in ("mass_stiffness", "mass", "stiffness"):
-            raise ValueError(f"stage {self.name!r}: rayleigh_mode must be 'mass_stiffness', 'mass' or "
-                             f"'stiffness', got {self.rayleigh_mode!r}")
+    @model_validator(mode="after")
+    def _kind_needs(self):
+        if self.kind == "dynamic" and self.duration_s is None:
+            raise field_error(self, "duration_s", f"stage {self.name!r}: a dynamic stage needs "
+                              "duration_s (> 0 s)", None)
         if self.rayleigh_ratio > 0 and self.rayleigh_frequency_hz is None:
-            raise ValueError(f"stage {self.name!r}: rayleigh_ratio needs rayleigh_frequency_hz")
-        if self.time_step_s is not None:
-            _positive(f"stage {self.name!r}: time_step_s", self.time_step_s)
-        if self.frames < 0 or self.history_every < 0:
-            raise ValueError(f"stage {self.name!r}: frames and history_every must be >= 0")
+            raise field_error(self, "rayleigh_frequency_hz", f"stage {self.name!r}: required when "
+                              "rayleigh_ratio > 0", None)
+        return self
 
 
-@dataclass(frozen=True)
+@spec
 class Settings:
     """Everything :func:`rockmass.solver.run` needs besides the :class:`BlockModel`.
 
@@ -397,52 +389,64 @@ class Settings:
     ends it with status ``unstable``.
     """
 
-    joints: dict
-    stages: tuple[Stage, ...]
-    material: Material = field(default_factory=Material)
-    gravity_m_s2: tuple[float, float] = (0.0, -9.81)
-    insitu: InSituStress | None = None
-    fixes: tuple[Fix, ...] = ()
-    boundary_stress: tuple[BoundaryStress, ...] = ()
-    velocity_inputs: tuple[VelocityInput, ...] = ()
-    quiet: QuietBoundary | None = None
-    monitors: tuple[Monitor, ...] = ()
-    rounding_m: float | None = None
-    contact_tolerance_m: float | None = None
-    time_step_safety: float = 0.5
-    sleep: bool = False
-    failure_displacement_m: float | None = None
-    failure_checks: int = 3
-    sliver_area_m2: float = 0.0
-    energy_tolerance: float = 0.2
+    joints: Annotated[dict[Annotated[str, Strict(), Field(min_length=1, max_length=64)], JointModel],
+                      Field(min_length=1, description=(
+                          "joint model of each contact label: a joint set name, a contact kind "
+                          "(joint, trace, glued, excavation) or default (required)"))]
+    stages: Annotated[tuple[Stage, ...], Field(min_length=1, max_length=1000, description=(
+        "stages, run in order (unique names)"))]
+    material: Annotated[Material, Field(description="intact rock")] = Material()
+    gravity_m_s2: Annotated[tuple[Annotated[Float, Field(ge=-1e4, le=1e4)],
+                                  Annotated[Float, Field(ge=-1e4, le=1e4)]],
+                            Field(description="gravity vector (x, y)")] = (0.0, -9.81)
+    insitu: Annotated[Optional[InSituStress], Field(description="initial stress")] = None
+    fixes: Annotated[tuple[Fix, ...], Field(max_length=256, description="fixed blocks")] = ()
+    boundary_stress: Annotated[tuple[BoundaryStress, ...], Field(
+        max_length=16, description="stresses applied on domain sides")] = ()
+    velocity_inputs: Annotated[tuple[VelocityInput, ...], Field(
+        max_length=64, description="prescribed velocities (dynamic stages)")] = ()
+    quiet: Annotated[Optional[QuietBoundary], Field(
+        description="viscous boundary (dynamic stages)")] = None
+    monitors: Annotated[tuple[Monitor, ...], Field(
+        max_length=1000, description="blocks recorded in history.csv (unique names)")] = ()
+    rounding_m: Annotated[Optional[Float], Field(gt=0, le=1e6, description=(
+        "corner rounding d; none: the block model's, else 1 % of the median edge"))] = None
+    contact_tolerance_m: Annotated[Optional[Float], Field(gt=0, le=1e6, description=(
+        "gap below which blocks are in contact; none: chosen from the rounding"))] = None
+    time_step_safety: Annotated[Float, Field(gt=0, le=1, description=(
+        "fraction of the stable time step used"))] = 0.5
+    sleep: Annotated[Bool, Field(description=(
+        "static stages: stop integrating blocks in equilibrium until a neighbour moves"))] = False
+    failure_displacement_m: Annotated[Optional[Float], Field(gt=0, le=1e6, description=(
+        "displacement after which a block that keeps moving fails; none: a quarter of the "
+        "rounding"))] = None
+    failure_checks: Annotated[Int, Field(ge=1, le=1000, description=(
+        "consecutive checks (500 steps apart) a failing block keeps moving"))] = 3
+    sliver_area_m2: Annotated[Float, Field(ge=0, le=1e12, description=(
+        "failing blocks smaller than this are slivers, left out of displacement measures"))] = 0.0
+    energy_tolerance: Annotated[Float, Field(gt=0, le=1e6, description=(
+        "energy-ledger residual, as a fraction of the energy turned over in a stage, that ends it "
+        "as unstable"))] = 0.2
 
-    def __post_init__(self):
-        for name in ("stages", "fixes", "boundary_stress", "velocity_inputs", "monitors"):
-            object.__setattr__(self, name, tuple(getattr(self, name)))
-        if not self.stages:
-            raise ValueError("settings need at least one stage")
-        if "default" not in self.joints:
-            raise ValueError("joints must define a 'default' joint model (used for any contact "
-                             "whose set or kind has none, and for contacts formed during the run)")
-        for label, model in self.joints.items():
-            if not isinstance(model, (Coulomb, ContinuouslyYielding)):
-                raise ValueError(f"joints[{label!r}] must be a Coulomb or ContinuouslyYielding model")
-        g = tuple(float(v) for v in self.gravity_m_s2)
-        if len(g) != 2 or not all(math.isfinite(v) for v in g):
-            raise ValueError(f"gravity_m_s2 must be two finite numbers, got {self.gravity_m_s2!r}")
-        object.__setattr__(self, "gravity_m_s2", g)
-        if self.rounding_m is not None:
-            _positive("rounding_m", self.rounding_m)
-        if self.contact_tolerance_m is not None:
-            _positive("contact_tolerance_m", self.contact_tolerance_m)
-        if self.failure_displacement_m is not None:
-            _positive("failure_displacement_m", self.failure_displacement_m)
-        if self.failure_checks < 1:
-            raise ValueError(f"failure_checks must be >= 1, got {self.failure_checks}")
-        _positive("sliver_area_m2", self.sliver_area_m2, allow_zero=True)
-        _positive("energy_tolerance", self.energy_tolerance)
-        if not 0 < self.time_step_safety <= 1:
-            raise ValueError(f"time_step_safety must be in (0, 1], got {self.time_step_safety}")
-        names = [s.name for s in self.stages]
+    @model_validator(mode="after")
+    def _consistent(self):
+        _check_settings(self)
+        return self
+
+
+def _check_settings(settings: Any) -> None:
+    """The cross-field rules of :class:`Settings`, for it and for anything with its fields (the
+    ``[solve]`` section, :class:`rockmass.solve_config.SolveConfig`): a ``default`` joint model,
+    unique stage and monitor names, elastic moduli for a quiet boundary."""
+    if "default" not in settings.joints:
+        raise field_error(settings, "joints", "needs a 'default' joint model ([solve.joints."
+                          "default]: used for any contact whose set or kind has none, and "
+                          "for contacts formed during the run)", sorted(settings.joints))
+    for field, items in (("stages", settings.stages), ("monitors", settings.monitors)):
+        names = [item.name for item in items]
         if len(set(names)) != len(names):
-            raise ValueError(f"stage names must be unique, got {names}")
+            raise field_error(settings, field, f"names must be unique, got {names}", names)
+    if settings.quiet is not None and (settings.material.bulk_modulus_pa is None
+                                       or settings.material.shear_modulus_pa is None):
+        raise field_error(settings, "quiet", "quiet boundaries need material.bulk_modulus_pa "
+                          "and material.shear_modulus_pa", None)

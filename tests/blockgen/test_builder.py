@@ -75,8 +75,8 @@ def test_shake_table_model_satisfies_the_invariants():
     m = shake_table()
     _assert_invariants(m)
     q = m.quality
-    assert q["area_balance"]["relative_error"] <= 1e-9
-    assert q["convex_splits"], "blocks around the tunnel are concave before the split"
+    assert q.area_balance["relative_error"] <= 1e-9
+    assert q.convex_splits, "blocks around the tunnel are concave before the split"
     glued = m.contact_kind == CONTACT_KINDS.index("glued")
     assert glued.sum() > 0 and (m.contact_source[glued] == -2).all()
 
@@ -114,7 +114,7 @@ def test_non_persistent_joints_follow_the_dangling_choice(dangling):
     m = build(square(10.0), sets, dangling=dangling, seed=3)
     _assert_invariants(m)
     glued = m.contact_kind == CONTACT_KINDS.index("glued")
-    q = m.quality["dangling"]
+    q = m.quality.dangling
     assert q["rule"] == dangling and q["n_dangling_ends"] > 0
     if dangling == "glued":
         assert glued.sum() > 0 and set(m.contact_source[glued]) <= {0, 1, -2}
@@ -140,7 +140,7 @@ def test_slivers_are_merged_and_reported():
     # a joint 1 mm from a domain edge of a 1 m square with 0.25 m blocks: 1 mm wide slivers
     sets = [JointSet(0, 0.25, origin_xy_m=(0, 0)), JointSet(90, 0.25, origin_xy_m=(0.001, 0))]
     m = build(square(1.0), sets, min_edge_m=0.005)
-    assert len(m.quality["slivers_merged"]) == 4
+    assert len(m.quality.slivers_merged) == 4
     assert m.n_blocks == 16
     _assert_invariants(m)
 

@@ -88,7 +88,7 @@ def test_dfn_sample_labels_contacts_by_trace(tmp_path):
     model = read_json(tmp_path / "blocks.json")
     kinds = set(model.contact_kind.tolist())
     assert {1, 2, 3, 4} <= kinds  # trace, glued (extended dangling ends), excavation, domain
-    assert model.quality["dangling"]["n_extended"] > 0
+    assert model.quality.dangling["n_extended"] > 0
 
 
 def test_cracks_sample_has_glued_crack_contacts_only_near_the_cavern(tmp_path, capsys):
@@ -130,7 +130,7 @@ def test_dfn_section_sample_cuts_the_window_by_the_section_traces(tmp_path):
     assert main(["blocks", str(SAMPLES / "blocks_dfn_section.toml"), "--out", str(tmp_path)]) == 0
     model = read_json(tmp_path / "blocks.json")
     # the domain is the 40 m x 30 m section window
-    assert model.quality["area_balance"]["domain_m2"] == pytest.approx(1200.0, rel=1e-12)
+    assert model.quality.area_balance["domain_m2"] == pytest.approx(1200.0, rel=1e-12)
     assert (model.contact_kind == KIND_TRACE).sum() > 100
     # the traces are the section of the file's [dfn] sets with its seed, realization 0
     doc = load_config(SAMPLES / "blocks_dfn_section.toml")
@@ -138,7 +138,7 @@ def test_dfn_section_sample_cuts_the_window_by_the_section_traces(tmp_path):
     traces = generate_section([s.to_spec() for s in doc.dfn.sets], sec.point_m,
                               normal_from_dip(sec.dip_deg, sec.dip_direction_deg), sec.window_uv_m,
                               seed=doc.dfn.seed, realization=0)
-    assert model.quality["n_traces_used"] == traces.n_traces
+    assert model.quality.n_traces_used == traces.n_traces
 
 
 _SECTION = """

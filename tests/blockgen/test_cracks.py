@@ -1,4 +1,4 @@
-"""Potential cracks (seed 000, expanded DEM): convex glued sub-blocks of the intact blocks."""
+"""Potential cracks (Jiang et al., expanded DEM; docs/blocks.md §4): convex glued sub-blocks of the intact blocks."""
 
 import math
 
@@ -125,8 +125,8 @@ def test_no_sliver_is_left_in_the_subdivided_blocks():
         polys = m.to_shapely()
         width = 2 * shapely.area(polys) / shapely.length(polys)
         cracked = np.unique(m.contact_blocks[_crack(m)].ravel())
-        kept = m.quality["cracks"].get("slivers_kept", 0)
-        n_thin = int((width[cracked] < m.quality["tolerances"]["sliver_width_m"]).sum())
+        kept = m.quality.cracks.get("slivers_kept", 0)
+        n_thin = int((width[cracked] < m.quality.tolerances.sliver_width_m).sum())
         assert n_thin <= kept
 
 

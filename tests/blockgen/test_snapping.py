@@ -34,7 +34,7 @@ def _near_concurrent_traces():
 def test_without_snapping_the_short_edge_is_there_and_listed():
     m = build(square(), traces=_near_concurrent_traces(), rounding_m=ROUNDING, snap_edges=False)
     assert _edges(m).min() == pytest.approx(EPS, rel=1e-6)
-    assert m.quality["tiny_edges"]["count"] > 0 and "edges_snapped" not in m.quality
+    assert m.quality.tiny_edges["count"] > 0 and m.quality.edges_snapped is None
 
 
 def test_short_edges_collapse_and_the_model_stays_valid():
@@ -42,9 +42,9 @@ def test_short_edges_collapse_and_the_model_stays_valid():
     inv = check_model(m)
     assert inv["ok"] and inv["n_concave"] == 0
     assert _edges(m).min() >= 2 * ROUNDING
-    report = m.quality["edges_snapped"]
+    report = m.quality.edges_snapped
     assert report["count"] >= 1 and report["not_snapped"] == 0
-    assert m.quality["tiny_edges"]["count"] == 0
+    assert m.quality.tiny_edges["count"] == 0
     first = report["changes"][0]
     assert first["edge_m"] == pytest.approx(EPS, rel=1e-6)
     # every node moved by less than the edge it collapsed
@@ -60,7 +60,7 @@ def test_a_node_near_a_domain_corner_moves_onto_the_corner_and_the_outline_is_un
     traces = np.array([[[EPS, 0.0], [0.6, 1.0]], [[0.0, 0.5], [1.0, 0.5]]])
     m = build(square(), traces=traces, rounding_m=ROUNDING)
     assert check_model(m)["ok"]
-    change = m.quality["edges_snapped"]["changes"][0]
+    change = m.quality.edges_snapped["changes"][0]
     assert change["to_xy_m"] == [0.0, 0.0]
     assert _edges(m).min() >= 2 * ROUNDING
     # the blocks still cover the unit square exactly
@@ -74,7 +74,7 @@ def test_excavation_stage_area_is_exact_after_snapping():
                          JointSet(90, 0.05, origin_xy_m=(0.0007, 0))],
               excavations=[circle((0.5, 0.5), 0.2, "tunnel", 36)], rounding_m=0.0025)
     assert check_model(m)["ok"]
-    assert m.quality["edges_snapped"]["count"] > 0
+    assert m.quality.edges_snapped["count"] > 0
     exact = 36 / 2 * 0.2 ** 2 * math.sin(2 * math.pi / 36)
     assert m.area_m2[m.region == 1].sum() == pytest.approx(exact, rel=1e-9)
     assert m.contact_length_m[m.contact_kind == KIND_EXCAVATION].sum() == pytest.approx(
@@ -86,12 +86,12 @@ def test_cracked_models_have_no_edge_below_the_minimum_unless_listed(pattern, se
     m = build(square(10.0), [JointSet(30, 1.7), JointSet(100, 2.3)],
               excavations=[circle((5, 5), 1.5)], cracks=Cracks(0.5, pattern=pattern), seed=seed)
     assert check_model(m)["ok"]
-    min_edge = m.quality["tolerances"]["min_edge_m"]
+    min_edge = m.quality.tolerances.min_edge_m
     n_short = int((_edges(m) < min_edge).sum())
     # the report counts short edges per block (a shared edge twice), and every one left is an edge
     # the snapping rule refused (listed as not_snapped)
-    assert n_short == m.quality["tiny_edges"]["count"]
-    assert n_short <= 2 * m.quality["edges_snapped"]["not_snapped"]
+    assert n_short == m.quality.tiny_edges["count"]
+    assert n_short <= 2 * m.quality.edges_snapped["not_snapped"]
 
 
 def test_a_vertex_off_its_line_by_round_off_is_not_reflex_but_a_real_notch_is():

@@ -21,7 +21,7 @@ def test_random_trace_maps_give_valid_convex_models(seed, dangling):
               dangling=dangling)
     inv = check_model(m)
     assert inv["ok"], inv
-    assert m.quality["concave_blocks_left"] == 0
+    assert m.quality.concave_blocks_left == 0
 
 
 def test_near_parallel_sets_keep_the_invariants():

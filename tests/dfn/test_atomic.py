@@ -1,4 +1,4 @@
-"""The shared atomic-write primitives (DESIGN.md §3), beyond what the trace writers already exercise.
+"""The shared atomic-write primitives (docs/design.md §3.7), beyond what the trace writers already exercise.
 
 The byte, text, JSON and path writers of ``rockmass.atomic`` are built on these; their round trips
 and failure paths are tested in ``tests/pipeline/test_atomic.py``.
@@ -11,7 +11,7 @@ import stat
 
 import pytest
 
-from rockmass.dfn._atomic import atomic_open, atomic_path
+from rockmass.dfn.atomic import atomic_open, atomic_path
 
 posix_only = pytest.mark.skipif(os.name != "posix", reason="permission bits are POSIX")
 

@@ -1,7 +1,7 @@
 """``rockmass dfn`` with ``[dfn.fit]``: fit from field files, fitted.json, realizations, validation.json.
 
 The field data of ``samples/dfn_fit_seed001.toml`` are virtual: two scanlines and two mapped faces of
-one realization of ``samples/dfn_seed001.toml`` (the three sets of seed 001, P32 = 1 m²/m³), made by
+one realization of ``samples/dfn_seed001.toml`` (the three sets of Kiran & Juneja 2022, P32 = 1 m²/m³), made by
 :func:`make_field_sample` below (``python -m tests.dfn.test_cli_fit`` rewrites them). Oracles: the
 known sets they were sampled from (recovered within the fit's own standard deviations) and the
 bundled files equal what the generator writes.

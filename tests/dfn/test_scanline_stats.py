@@ -136,7 +136,7 @@ def test_terzaghi_p10_of_a_long_synthetic_line_estimates_p32_per_set():
     from rockmass.dfn.sets3d import fit_sets_3d
 
     rng = np.random.default_rng(2024)  # fixed seed
-    truth = ((50.0, 270.0), (80.0, 10.0), (70.0, 150.0))  # seed 001, Table 1
+    truth = ((50.0, 270.0), (80.0, 10.0), (70.0, 150.0))  # Kiran & Juneja 2022, Table 1
     p32, kappa, length = 1.5, 30.0, 300.0
     line = vector_from_trend_plunge(135.0, 10.0)
     poles, labels = [], []

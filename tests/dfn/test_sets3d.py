@@ -7,7 +7,7 @@ from rockmass.dfn.fisher import fit_fisher, sample_fisher
 from rockmass.dfn.orientation import angle_between, pole_from_dip
 from rockmass.dfn.sets3d import fit_sets_3d
 
-SEED001_SETS = ((50.0, 270.0), (80.0, 10.0), (70.0, 150.0))  # seed 001, Table 1: dip / dip direction
+SEED001_SETS = ((50.0, 270.0), (80.0, 10.0), (70.0, 150.0))  # Kiran & Juneja 2022, Table 1: dip / dip direction
 
 
 def _three_sets(n=60, kappa=30.0):

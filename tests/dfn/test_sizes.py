@@ -30,7 +30,7 @@ DISTRIBUTIONS = POWER_LAWS + [
 
 
 def _reference_power_moment(size, k):
-    """REFERENCE.md §4 as printed (valid for α > 0 and k != α)."""
+    """docs/fractures.md §10 as printed (valid for α > 0 and k != α)."""
     a, lo, hi = size.alpha, size.r_min_m, size.r_max_m
     return a * lo ** a * (hi ** (k - a) - lo ** (k - a)) / ((1 - (lo / hi) ** a) * (k - a))
 

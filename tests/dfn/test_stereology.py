@@ -24,7 +24,7 @@ from rockmass.dfn.stereology import (
     terzaghi_weights,
 )
 
-# REFERENCE.md §4 check values: (kappa, angle between line or plane normal and the mean pole) -> C.
+# docs/fractures.md §7 check values: (kappa, angle between line or plane normal and the mean pole) -> C.
 C13_CHECK = [(10, 0, 1.111), (10, 30, 1.283), (10, 60, 2.145), (10, 90, 4.123), (50, 0, 1.020), (50, 90, 8.930)]
 C23_CHECK = [(10, 0, 2.625), (10, 30, 1.776), (10, 60, 1.191), (10, 90, 1.051), (50, 0, 5.685), (50, 90, 1.010)]
 KAPPAS = [1e-6, 1e-3, 0.1, 1.0, 10.0, 50.0, 1e3, 1e5, 1e8]
@@ -191,7 +191,7 @@ def test_terzaghi_weights_by_hand_with_the_cap():
 
 
 def _three_sets():
-    """Three Fisher sets in the spirit of seed 001: two steep, one flat (poles, κ, P32 m²/m³)."""
+    """Three Fisher sets in the spirit of Kiran & Juneja 2022: two steep, one flat (poles, κ, P32 m²/m³)."""
     poles = pole_from_dip([80.0, 75.0, 10.0], [40.0, 130.0, 200.0])
     return poles, np.array([25.0, 15.0, 40.0]), np.array([1.0, 2.0, 0.5])
 

@@ -15,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import rockmass.dfn
-import rockmass.dfn._atomic
+import rockmass.dfn.atomic
 import rockmass.dfn.traceio
 import rockmass.dfn.tracemap
 from rockmass.dfn import TraceMap
@@ -337,14 +337,14 @@ def test_repr_summarises_instead_of_printing_arrays():
 
 
 def test_docstring_examples_run():
-    for module in (rockmass.dfn.tracemap, rockmass.dfn.traceio, rockmass.dfn._atomic):
+    for module in (rockmass.dfn.tracemap, rockmass.dfn.traceio, rockmass.dfn.atomic):
         assert doctest.testmod(module).failed == 0, module.__name__
 
 
 def test_importing_dfn_or_its_atomic_writes_loads_neither_the_pipeline_nor_heavy_modules():
-    # public names load lazily, so the pipeline's rockmass.atomic can build on rockmass.dfn._atomic
+    # public names load lazily, so the pipeline's rockmass.atomic can build on rockmass.dfn.atomic
     code = (
-        "import sys, rockmass.dfn, rockmass.dfn._atomic; "
+        "import sys, rockmass.dfn, rockmass.dfn.atomic; "
         "print(sorted(m for m in sys.modules if m.split('.')[0] in "
         "('numpy', 'shapely', 'numba', 'matplotlib', 'cv2', 'skimage', 'scipy') or "
         "(m.startswith('rockmass.') and not m.startswith('rockmass.dfn'))))"

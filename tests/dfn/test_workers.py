@@ -1,4 +1,4 @@
-"""Realization i is the same network whatever the number of workers, the chunking or the order (DESIGN.md §3).
+"""Realization i is the same network whatever the number of workers, the chunking or the order (docs/design.md §3.5).
 
 Oracle: byte equality of every array against realization i generated alone in this process.
 Workers are separate interpreters (multiprocessing "spawn"), so no state is shared with the parent.

@@ -71,7 +71,7 @@ def test_koch_curve_within_003_of_log4_over_log3(method):
 #   sierpinski_carpet(6)   1.8960 (exact 1.8928, error +0.003)
 #   cantor_dust(6)         1.3358 (exact 1.2619, error +0.074)
 #   vicsek(6)              1.3814 (exact 1.4650, error -0.084)
-# (benchmarks/bench_fractal_boxcount.py prints these for 360, 720 and 1440.) REFERENCE.md §1 expects
+# (benchmarks/bench_fractal_boxcount.py prints these for 360, 720 and 1440.) docs/fractal.md §7 expects
 # 0.04-0.17 low; with divisor box sizes the error has either sign. Documented tolerance: |error| <= 0.10.
 @pytest.mark.parametrize("name, make, level, m, b", BASE_MATCHED)
 def test_embedded_in_360_grid_is_within_010(name, make, level, m, b):

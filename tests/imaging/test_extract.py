@@ -6,8 +6,9 @@ import cv2
 import numpy as np
 import pytest
 
+from rockmass.accuracy import trace_accuracy
 from rockmass.imaging.extract import ExtractParams, extract, scale_from_control_points
-from rockmass.imaging.metrics import buffered_match, set_mean_angles, trace_accuracy
+from rockmass.imaging.metrics import buffered_match, set_mean_angles
 from rockmass.imaging.synthetic import synthetic_face
 
 

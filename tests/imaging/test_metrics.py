@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
+from rockmass.accuracy import trace_accuracy
 from rockmass.dfn import TraceMap
-from rockmass.imaging.metrics import buffered_match, count_nodes, set_mean_angles, trace_accuracy
+from rockmass.imaging.metrics import buffered_match, count_nodes, set_mean_angles
 
 WINDOW = [[0, 0], [10, 0], [10, 10], [0, 10]]
 

@@ -1,4 +1,4 @@
-"""Atomic outputs (DESIGN.md §3): complete new file or untouched old file, never a partial one."""
+"""Atomic outputs (docs/design.md §3.7): complete new file or untouched old file, never a partial one."""
 
 from __future__ import annotations
 

@@ -21,7 +21,7 @@ def test_sample_gives_the_three_seed001_sets_and_writes_every_output(tmp_path, c
         assert (out / name).stat().st_size > 0
     summary = json.loads((out / "summary.json").read_text())
     means = sorted((round(s["mean_dip_direction_deg"] / 10) * 10 % 360, s["mean_dip_deg"]) for s in summary["sets"])
-    # seed 001, Table 1: 80/10, 70/150, 50/270 (dip directions to the nearest 10°, dips within 10°)
+    # Kiran & Juneja 2022, Table 1: 80/10, 70/150, 50/270 (dip directions to the nearest 10°, dips within 10°)
     assert [m[0] for m in means] == [10, 150, 270]
     assert [d for _, d in means] == pytest.approx([80, 70, 50], abs=10)
     # the same numbers as the API

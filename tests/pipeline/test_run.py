@@ -300,7 +300,7 @@ def test_solver_progress_reports_every_stage_up_to_its_steps(first_run, tmp_path
 
     from rockmass.blockgen import read_json
     from rockmass.config import load_config
-    from rockmass.solve_cmd import produce
+    from rockmass.solve_stage import produce
 
     config, out = first_run
     calls = []
@@ -331,7 +331,7 @@ def test_solver_progress_reports_every_stage_up_to_its_steps(first_run, tmp_path
 
 
 def test_a_stage_killed_while_writing_never_looks_finished(copy_of_run, tmp_path, monkeypatch):
-    from rockmass import solve_cmd
+    from rockmass import solve_stage
 
     _, out = copy_of_run
     before = _snapshot(out)
@@ -342,7 +342,7 @@ def test_a_stage_killed_while_writing_never_looks_finished(copy_of_run, tmp_path
         (Path(out_dir) / "result.json").write_text("{")  # half written, then killed
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(solve_cmd, "produce", killed)
+    monkeypatch.setattr(solve_stage, "produce", killed)
     changed = _write(tmp_path, _config_text(friction=35.0), "changed.toml")
     assert main(["run", str(changed), "--out", str(out)]) == 130
     # the finished solve folder is the old one, whole; the partial one has no stage.json

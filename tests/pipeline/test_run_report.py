@@ -152,7 +152,7 @@ def _stage_json(out: Path, stage: str, name: str):
 
 
 def test_report_is_written_atomically_at_the_returned_path(run_dir, tmp_path, monkeypatch):
-    from rockmass.dfn import _atomic
+    from rockmass.dfn import atomic as _atomic
 
     out, _, path, _ = run_dir
     assert path == out / "report.html" and path.is_file()

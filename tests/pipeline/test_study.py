@@ -443,6 +443,60 @@ def test_joint_network_is_the_models_joints(tmp_path):
         assert length == pytest.approx(model.contact_length_m[joint].sum(), rel=1e-4)
 
 
+RANDOM_SETS = """[blocks]
+[blocks.domain]
+width_m = 10.0
+height_m = 8.0
+origin_xy_m = [2.0, -3.0]
+[[blocks.sets]]
+angle_deg = 25.0
+spacing_m = 1.5
+spacing_distribution = "lognormal"
+spacing_std_m = 0.5
+[[blocks.sets]]
+angle_deg = 115.0
+spacing_m = 2.0
+spacing_distribution = "exponential"
+"""
+
+
+def test_box_counted_joints_are_where_the_built_model_has_its_joints(tmp_path):
+    """The segments a study box-counts are the joints of the model blockgen built for the same
+    config and seed. Expectation taken from the built model alone: the edges two blocks share
+    along a joint contact (the blocks' polygons). Random spacings (lognormal, exponential) make
+    every joint's position depend on the seed, so segments drawn by any other seeding rule miss
+    those edges by about a spacing; the last check shows the test sees that (another seed)."""
+    import shapely
+    import tomllib
+
+    from rockmass.blockgen import CONTACT_KINDS
+    from rockmass.config import RockmassConfig
+    from rockmass.study import _build_model, joint_network_segments
+
+    data = tomllib.loads(RANDOM_SETS)
+    path = tmp_path / "x.toml"
+    for seed in (0, 12345):  # fixed seeds: no sliver is merged, so every joint stays a contact
+        doc = RockmassConfig.model_validate({"blocks": {**data["blocks"], "seed": seed}})
+        model = _build_model(doc, path)
+        polygons = model.to_shapely()
+        joint = np.flatnonzero(model.contact_kind == CONTACT_KINDS.index("joint"))
+        shared = [shapely.intersection(polygons[a].boundary, polygons[b].boundary)
+                  for a, b in model.contact_blocks[joint]]
+        corners = shapely.points(shapely.get_coordinates(np.array(shared)))
+
+        def miss_m(study_seed):
+            other = RockmassConfig.model_validate({"blocks": {**data["blocks"], "seed": study_seed}})
+            segs = joint_network_segments(other, path, model)
+            network = shapely.multilinestrings(segs.reshape(-1, 2, 2))
+            return float(shapely.distance(corners, network).max()), segs
+
+        miss, segs = miss_m(seed)
+        assert miss < 1e-6  # the builder snaps to a 1e-11 m grid
+        length = np.hypot(segs[:, 2] - segs[:, 0], segs[:, 3] - segs[:, 1]).sum()
+        assert length == pytest.approx(model.contact_length_m[joint].sum(), rel=1e-9)
+        assert miss_m(seed + 1)[0] > 0.1  # spacings of 1.5 m and 2 m: a wrong rule is seen
+
+
 def test_realization_seeds_follow_the_seed_sequence_rule():
     """Pinned values: a resumed study recognises its finished cases by case ids that include the
     seeds, and common random numbers need realization r to get the same seed in every run and

@@ -126,7 +126,7 @@ def fake_solver(monkeypatch):
     """Replace the DEM by OUTCOMES (the case is known from the task run_case is given); returns
     the list of (max_steps, realization) solved, in order. ``fake_solver.raising`` (a set of keys)
     makes those cases raise."""
-    import rockmass.solve_cmd as solve_cmd
+    import rockmass.solve_stage as solve_stage
     import rockmass.study as study
 
     real_run_case = study.run_case
@@ -147,7 +147,7 @@ def fake_solver(monkeypatch):
 
     calls.raising = set()
     monkeypatch.setattr(study, "run_case", tracking)
-    monkeypatch.setattr(solve_cmd, "solve", fake_solve)
+    monkeypatch.setattr(solve_stage, "solve", fake_solve)
     return calls
 
 
@@ -408,7 +408,7 @@ def test_resume_keeps_every_outcome_but_error(study_file, tmp_path, fake_solver,
 
 def test_overlap_case_is_kept_on_resume_and_the_study_exits_1(study_file, tmp_path, monkeypatch,
                                                               capsys):
-    import rockmass.solve_cmd as solve_cmd
+    import rockmass.solve_stage as solve_stage
 
     calls = []
 
@@ -418,7 +418,7 @@ def test_overlap_case_is_kept_on_resume_and_the_study_exits_1(study_file, tmp_pa
                         _stage("tunnel", status="overlap", converged=False, equilibrium_m=0.2)],
                        status="overlap", diagnostic="blocks 3 and 8 overlap by 4 mm")
 
-    monkeypatch.setattr(solve_cmd, "solve", overlap)
+    monkeypatch.setattr(solve_stage, "solve", overlap)
     cfg = tmp_path / "one.toml"
     cfg.write_text(BASE + "\n[study]\n", encoding="utf-8")
     out = tmp_path / "out"

@@ -192,7 +192,7 @@ def test_moment_equilibrium_is_part_of_convergence():
 def test_failed_block_is_marked_in_the_frames_and_the_vtu():
     """The frames say which blocks were taken out as failed (inactive too), and the VTU cell data
     of ``rockmass solve`` carries it (``failed``), apart from excavated blocks."""
-    from rockmass.solve_cmd import _frame_mesh
+    from rockmass.solver.vtu import frame_mesh
 
     settings = Settings(joints={"default": Coulomb(KN, KN, 40.0)}, material=Material(RHO),
                         fixes=(Fix("blocks:0"), Fix("blocks:1,2,3,4", "xr")),
@@ -203,7 +203,7 @@ def test_failed_block_is_marked_in_the_frames_and_the_vtu():
     result = run(model, settings)
     first, last = result.frames[0], result.frames[-1]
     assert not first.failed.any() and last.failed.tolist() == [False] * 5 + [True]
-    mesh = _frame_mesh(model, last)
+    mesh = frame_mesh(model, last)
     ids = np.concatenate(mesh.cell_data["block_id"])
     failed = np.concatenate(mesh.cell_data["failed"])
     active = np.concatenate(mesh.cell_data["active"])

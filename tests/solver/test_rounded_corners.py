@@ -263,7 +263,7 @@ def test_default_rounding_is_the_one_the_block_model_was_built_for(how):
     settings = Settings(joints={"default": Coulomb(KN, KN, 30.0)}, material=Material(2500),
                         stages=(Stage("s", "static"),))
     eng = Engine(model, settings)
-    built_for = model.quality["tolerances"]["rounding_m"]
+    built_for = model.quality.tolerances.rounding_m
     assert built_for == (0.05 if how == "rounding_m" else pytest.approx(0.005))
     assert abs(eng.median_edge_m * 0.01 - built_for) > 0.2 * built_for  # the two rules differ here
     assert eng.rounding_m == built_for

@@ -1,4 +1,7 @@
-"""Atomic file replacement: the one implementation every rockmass writer uses (DESIGN.md §3).
+"""Atomic file replacement: the one public implementation every rockmass writer uses (docs/design.md §3.7).
+
+Public API: :func:`atomic_open` (a file handle) and :func:`atomic_path` (a temporary name, for
+writers that take a path: ``savefig``, ``meshio.write``). Each replaces one file.
 
 A writer never opens its destination. It writes a temporary file in the destination's folder (the
 same file system, so the final rename is atomic on POSIX and on Windows), fsyncs it, and renames it
@@ -15,10 +18,16 @@ Permissions are those the file would have had if written in place: a new file ge
 by the umask (the temporary file is created with that mode, not the ``0o600`` of
 :func:`tempfile.mkstemp`), and a replaced file keeps its permission bits.
 
-This module lives in the lowest stage so that every writer can import it (the dependency arrows point
-from ``rockmass`` and the other stages to ``rockmass.dfn``); :mod:`rockmass.atomic` builds the
-pipeline's byte, text and JSON writers on it. It imports only the standard library, and importing it
-does not load numpy or shapely (``rockmass.dfn`` loads its public names lazily).
+Where it lives and who uses it. ``rockmass.dfn`` is the base layer of the dependency direction
+(docs/design.md §1): imaging, blockgen and solver build on it and the pipeline imports every stage, so
+each of them imports this module as ``from rockmass.dfn.atomic import atomic_open, atomic_path``.
+``rockmass.fractal`` imports nothing of ours: its one writer, the box-count plot, saves to the path
+it is given, and its caller (``rockmass boxcount``) gives it a temporary name from
+:func:`atomic_path`. The pipeline's :mod:`rockmass.atomic` is the layer above, for a command's
+outputs: it creates the target's folder and adds bytes, text and strict-JSON entry points, all
+through this module (no second copy of the mechanics). The module imports only the standard
+library, and importing it does not load numpy or shapely (``rockmass.dfn`` loads its public names
+lazily).
 """
 
 from __future__ import annotations
