@@ -11,7 +11,8 @@ excavation (docs/blocks.md §9; Goodman & Shi 1985; Warburton 1981):
    some direction s has s·m_i ≤ 0 for every contact face and s·f > 0 for the outward normal f of its
    largest free face (a linear programme). Otherwise it is ``locked`` (tapered).
 3. **Mode under its weight** r = ρ g V (0, 0, −1):
-   - ``fall`` when r·m_i < 0 for every face (it lifts off all of them): factor of safety 0;
+   - ``fall`` when r·m_i ≤ 0 for every face (it lifts off or slides freely along all of them):
+     factor of safety 0;
    - ``slide`` on face i when r·m_i > 0 and the direction s = r − (r·m_i) m_i has s·m_j ≤ 0 for
      every other face: N = r·m_i, T = |s|, FS = (N tan φ_i + c_i A_i) / T;
    - ``slide2`` on faces i, j when r = N_i m_i + N_j m_j + T e with e = ±(m_i × m_j)/|m_i × m_j|,
@@ -128,7 +129,7 @@ def _mode(weight: np.ndarray, contacts: list, strength: dict):
     """Fall, slide on one face or on two, or stable, with the factor of safety (module docstring)."""
     normals = [m for m, _, _ in contacts]
     w = float(np.linalg.norm(weight))
-    if all(weight @ m < -_ALONG * w for m in normals):
+    if all(weight @ m <= _ALONG * w for m in normals):
         return "fall", tuple(lab for _, _, lab in contacts), 0.0, weight / w
     for i, (m, area, label) in enumerate(contacts):
         n_force = weight @ m

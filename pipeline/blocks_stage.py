@@ -73,16 +73,13 @@ def compute(args, document=None, section=None):
     ``args.config``.
     """
     from .blockgen import build, check_model
-    from .config import load_config
+    from .config import load_config, required_section
 
     t0 = time.perf_counter()
     # the whole document is validated (a file may hold other stages too); this command reads [blocks]
     if document is None:
         document = load_config(args.config)
-    if document.blocks is None:
-        raise ConfigError(args.config, [("blocks", "required section is missing (rockmass blocks "
-                                                   "reads the [blocks] section)")])
-    cfg = document.blocks
+    cfg = required_section(document, "blocks", args.config)
     traces = None
     path = cfg.traces_path(args.config)
     domain_xy = None if cfg.domain is None else cfg.domain.xy_m()

@@ -58,7 +58,8 @@ import typing
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import AfterValidator, BaseModel, Field, ValidationError, field_validator, model_validator
+from pydantic import (AfterValidator, BaseModel, Field, ValidationError, field_validator, model_serializer,
+                      model_validator)
 
 from .atomic import to_jsonable
 from .errors import ConfigError
@@ -213,6 +214,7 @@ def Stage(module: str, name: str) -> Any:  # noqa: N802 (reads as a type in a fi
 DFNSection = Stage("dfn_config", "DFNConfig")
 BlocksSection = Stage("blocks_config", "BlocksConfig")
 SolveSection = Stage("solve_config", "SolveConfig")
+Blocks3DSection = Stage("blocks3d_config", "Blocks3DConfig")
 
 
 class RockmassConfig(StrictModel):
@@ -231,6 +233,9 @@ class RockmassConfig(StrictModel):
         ``[dfn]`` section (disk fracture network generation).
     blocks : rockmass.blocks_config.BlocksConfig or None
         ``[blocks]`` section (block model of a 2D section).
+    blocks3d : rockmass.blocks3d_config.Blocks3DConfig or None
+        ``[blocks3d]`` section (3D blocks, keyblocks and block sizes); left out of dumps and hashes
+        when absent, so adding it changed no existing config hash.
     solve : rockmass.solve_config.SolveConfig or None
         ``[solve]`` section (DEM run of a block model).
     run : rockmass.run_config.RunConfig or None
@@ -242,15 +247,33 @@ class RockmassConfig(StrictModel):
     fractal: FractalConfig | None = None
     dfn: DFNSection = None
     blocks: BlocksSection = None
+    blocks3d: Blocks3DSection = None
     solve: SolveSection = None
     # left out of dumps and hashes (exclude=True): it names the inputs of ``rockmass run``, which
     # hashes them itself, so adding it changed no existing config hash (study resume keeps working)
     run: Annotated[Stage("run_config", "RunConfig"), Field(exclude=True)] = None
 
+    @model_serializer(mode="wrap")
+    def _sections_added_later_only_when_present(self, handler):
+        dumped = handler(self)
+        if isinstance(dumped, dict) and dumped.get("blocks3d", 0) is None:
+            del dumped["blocks3d"]
+        return dumped
+
 
 # ------------------------------------------------------------------------------------------ loading
 
 _TOML_LINE_COL = re.compile(r"at line (\d+), column (\d+)")
+
+
+def required_section(document: BaseModel, name: str, config_path: str | os.PathLike) -> Any:
+    """The ``[name]`` section of ``document``; a :class:`ConfigError` naming it when it is absent
+    (the command ``rockmass <name>`` reads that section)."""
+    section = getattr(document, name)
+    if section is None:
+        raise ConfigError(config_path, [(name, f"required section is missing (rockmass {name} reads "
+                                               f"the [{name}] section)")])
+    return section
 
 
 def load_config(path: str | os.PathLike, model: type[BaseModel] = RockmassConfig) -> BaseModel:

@@ -30,15 +30,12 @@ def prepare(config_path, document=None, model=None):
     """
     import types
 
-    from .config import load_config
+    from .config import load_config, required_section
 
     t0 = time.perf_counter()
     if document is None:
         document = load_config(config_path)
-    cfg = document.solve
-    if cfg is None:
-        raise ConfigError(config_path, [("solve", "required section is missing (rockmass solve "
-                                                  "reads the [solve] section)")])
+    cfg = required_section(document, "solve", config_path)
     inputs = [str(config_path)]
     path = cfg.blocks_path(config_path)
     if path is not None and document.blocks is not None:

@@ -91,7 +91,7 @@ def test_unknown_key_names_file_field_and_allowed_keys(write):
 
 def test_unknown_section_lists_known_sections(write):
     assert _problems(write("[fractl]\ngrid = 3\n")) == {
-        "fractl": 'unknown key (allowed: imaging, fractal, dfn, blocks, solve, run); did you mean "fractal"?'
+        "fractl": 'unknown key (allowed: imaging, fractal, dfn, blocks, blocks3d, solve, run); did you mean "fractal"?'
     }
 
 
