@@ -1,4 +1,4 @@
-"""Strict TOML configuration (DESIGN.md §4): unknown keys are errors, every number is range-checked.
+"""Strict TOML configuration (docs/design.md §4): unknown keys are errors, every number is range-checked.
 
 A config file is read with :mod:`tomllib` and validated by a pydantic model. Every problem in the
 file is reported at once, each as ``(field, message)`` with the field as a dotted key path (list

@@ -3,7 +3,7 @@
 Every key of every section is listed with its type, unit, default, allowed range and description,
 all read from the declarations: the pydantic sections of :mod:`rockmass.config` and the library
 dataclasses they use (:mod:`rockmass.solver.settings`). The unit comes from the key's suffix (the
-naming rule of DESIGN.md: ``_pa_m`` is Pa/m, ``_deg`` degrees, ...); the description is the field's
+naming rule of docs/design.md §3.1: ``_pa_m`` is Pa/m, ``_deg`` degrees, ...); the description is the field's
 ``description``, or else its entry in the Parameters section of the class docstring.
 ``tests/pipeline/test_config_reference.py`` regenerates the file and fails when it differs, and
 when a key has no description. Regenerate with::

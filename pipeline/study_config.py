@@ -219,7 +219,7 @@ def _show(keys: list[str | int]) -> str:
 
 def realization_seed(root: int, realization: int) -> int:
     """Seed of realization ``r``: 63 bits of the child with spawn key ``(r,)`` of
-    ``SeedSequence(root)`` (DESIGN.md §3), the same whichever case, order or worker runs it.
+    ``SeedSequence(root)`` (docs/design.md §3.5), the same whichever case, order or worker runs it.
 
     >>> realization_seed(0, 0) == realization_seed(0, 0) != realization_seed(0, 1)
     True

@@ -16,7 +16,9 @@ Public names
 
 Also: :mod:`rockmass.solver.failure` (blocks that keep moving in a static stage: detected,
 classified as fall / slide / rotation, taken out) and :mod:`rockmass.solver.monitoring` (points
-fixed on the excavation boundary: crown, walls, invert).
+fixed on the excavation boundary: crown, walls, invert), :mod:`rockmass.solver.vtu` (the frames as
+ParaView files: ``blocks_NNNN.vtu`` and ``blocks.pvd``) and :mod:`rockmass.solver.tolerances` (the
+numeric policy, each constant with its reason). The formulas are in docs/dem.md.
 
 The numba kernels (:mod:`rockmass.solver._kernels`) load on first use of :func:`run` or
 :class:`Engine`; importing this package does not compile anything.

@@ -34,16 +34,17 @@ along +t relative to ``pa``. Forces are per metre of thickness (2D, unit thickne
 column  sym.   meaning                                                                unit
 ======  =====  =====================================================================  ==========
 ACT            1: slot in contact (active); 0: open (every other column then stale)   flag
-U0      u_0    normal closure offset added to the geometric overlap: the in-situ      m
-               stress written into the contact, or minus a face's initial overlap
+U0      u_0    normal closure offset added to the geometric overlap, set by the       m
+               in-situ stress (u_n(σ₀) − δ on faces, −δ on corner touches); else 0
 DIL     u_d    dilation: normal closure added by plastic shear (tan ψ or CY angle i)  m, ≥ 0
 TAU     τ      shear stress                                                           Pa
 PHIM    φ_m    continuously yielding: mobilised friction angle (φ_m⁰ at activation)   rad
-RREV    r      continuously yielding: the ratio τ/τ_m at the last shear reversal      1, [0, 1)
+RREV    r      continuously yielding: τ d/τ_m at the last shear reversal, d the new   1, < 1
+               direction (0 before the first; used capped below 1)
 DIR            continuously yielding: sign of the last shear increment (0: none yet)  ±1 or 0
 COORD          slot point's coordinate along t about ``pa``'s centroid (matches a     m
                one-slot contact to the slot it used before)
-BRK            1: broken — a bond that failed, or a contact that was never bonded    flag
+BRK            1: broken — a bond that failed, or a contact that was never bonded     flag
 LEN     l      contact length the slot stands for (half a face, or a corner's share)  m
 FN      F_n    normal force σ_n l, compression positive                               N/m
 FS      F_s    shear force τ l (sign of TAU)                                          N/m
@@ -405,91 +406,11 @@ def _update_slot(S, p, k, prop, delta, dus, length, cy_clamp, cy_slipping_f, E):
     S[p, k, LEN] = length
     S[p, k, OVL] = delta
     S[p, k, SLIP] = 0.0
-    un = delta + S[p, k, U0] + S[p, k, DIL]
-    intact = S[p, k, BRK] == 0.0
+    un = delta + S[p, k, U0] + S[p, k, DIL]  # eq. (4.3)
     if prop[P_MODEL] == MODEL_COULOMB:
-        kn = prop[P_KN]
-        ks = prop[P_KS]
-        sig = kn * un
-        ten = prop[P_TEN] if intact else 0.0
-        if sig < -ten:
-            released = 0.5 * S[p, k, TAU] ** 2 / ks * length
-            if intact and ten > 0.0:
-                S[p, k, BRK] = 1.0
-                E[E_NEW_BROKEN] += 1.0
-                E[E_BROKEN] += 0.5 * sig * sig / kn * length + released
-            else:
-                E[E_SLIP] += released  # shear spring unloaded as the joint opens
-            S[p, k, FN] = 0.0
-            S[p, k, FS] = 0.0
-            S[p, k, TAU] = 0.0
-            return
-        tanphi = prop[P_TANPHI] if intact else prop[P_TANPHIR]
-        coh = prop[P_COH] if intact else 0.0
-        tmax = max(coh + sig * tanphi, 0.0)
-        tau_old = S[p, k, TAU]
-        tau = tau_old + ks * dus
-        if abs(tau) > tmax:
-            if intact and (prop[P_COH] > 0.0 or prop[P_TEN] > 0.0):
-                S[p, k, BRK] = 1.0
-                E[E_NEW_BROKEN] += 1.0
-                tmax = max(sig * prop[P_TANPHIR], 0.0)
-            sgn = 1.0 if tau > 0 else -1.0
-            dup = (abs(tau) - tmax) / ks
-            tau = sgn * tmax
-            # dissipation = work of the mean shear stress over the step − change of elastic energy
-            released = 0.5 * (tau_old + tau) * dus - 0.5 * (tau * tau - tau_old * tau_old) / ks
-            ddil = 0.0
-            if prop[P_TANPSI] > 0.0 and S[p, k, DIL] < prop[P_MAXDIL]:
-                ddil = min(prop[P_TANPSI] * dup, prop[P_MAXDIL] - S[p, k, DIL])
-                S[p, k, DIL] += ddil
-            S[p, k, USP] += dup
-            S[p, k, SLIP] = 1.0 if sig > 0.0 else 0.0  # an unloaded touch is not a slipping joint
-            E[E_SLIP] += (released - sig * ddil) * length
-        S[p, k, TAU] = tau
-        S[p, k, FN] = sig * length
-        S[p, k, FS] = tau * length
-        return
-    # continuously yielding
-    sig = _cy_normal_stress(prop[P_KN], prop[P_EN], un)
-    if sig <= 0.0:
-        S[p, k, FN] = 0.0
-        S[p, k, FS] = 0.0
-        S[p, k, TAU] = 0.0
-        S[p, k, RREV] = 0.0
-        S[p, k, DIR] = 0.0
-        return
-    ks = prop[P_KS] * sig ** prop[P_ES] if prop[P_ES] != 0.0 else prop[P_KS]
-    tau = S[p, k, TAU]
-    tau_old = tau
-    if dus != 0.0:
-        d = 1.0 if dus > 0.0 else -1.0
-        phim = S[p, k, PHIM]
-        tm = sig * math.tan(phim)
-        if S[p, k, DIR] != 0.0 and S[p, k, DIR] != d:
-            S[p, k, RREV] = tau * d / tm
-        S[p, k, DIR] = d
-        r = min(S[p, k, RREV], cy_clamp)
-        f = (1.0 - tau * d / tm) / (1.0 - r)
-        f = min(max(f, 0.0), 1.0)
-        tau += f * ks * dus
-        if tau * d > tm:
-            tau = d * tm
-        dup = (1.0 - f) * abs(dus)
-        if dup > 0.0:
-            phib = prop[P_PHIB]
-            S[p, k, PHIM] = phib + (phim - phib) * math.exp(-dup / prop[P_ROUGH])
-            ang = math.atan(abs(tau) / sig) - phib
-            ddil = math.tan(ang) * dup if ang > 0.0 else 0.0
-            S[p, k, DIL] += ddil
-            S[p, k, USP] += dup
-            released = 0.5 * (tau_old + tau) * dus - 0.5 * (tau * tau - tau_old * tau_old) / ks
-            E[E_SLIP] += (released - sig * ddil) * length
-        if f < cy_slipping_f:
-            S[p, k, SLIP] = 1.0
-    S[p, k, TAU] = tau
-    S[p, k, FN] = sig * length
-    S[p, k, FS] = tau * length
+        _coulomb_law(S, p, k, prop, un, dus, length, E)
+    else:
+        _cy_law(S, p, k, prop, un, dus, length, cy_clamp, cy_slipping_f, E)
 
 
 @njit(cache=True)

@@ -64,9 +64,9 @@ class Coulomb:
 
     Elastic: Δσ_n = k_n Δu_n, Δτ = k_s Δu_s. Strength |τ| ≤ c + σ_n tan φ, tension σ_n ≥ −T. When
     either limit is reached the contact fails: c → 0, T → 0 and φ → ``residual_friction_deg``
-    (UDEC's brittle Coulomb slip; REFERENCE.md §5; seed 002 eqs. 7–9). While slipping the joint
+    (UDEC's brittle Coulomb slip; docs/dem.md §5, eqs. (5.1)–(5.7); Varma et al. 2019). While slipping the joint
     dilates by tan ψ per unit plastic shear displacement, up to ``max_dilation_m`` of opening.
-    A glued contact (potential crack, seed 000 eqs. 1–2) is this model with intact-rock c, φ, T.
+    A glued contact (potential crack; docs/dem.md §7, eqs. (7.1)–(7.3)) is this model with intact-rock c, φ, T.
     """
 
     kn_pa_m: Annotated[Stiffness, Field(description="normal stiffness k_n")]
@@ -92,13 +92,13 @@ class Coulomb:
 
 @spec
 class ContinuouslyYielding:
-    """Continuously yielding joint (Cundall & Hart 1984; seed 001 eqs. 4–13; REFERENCE.md §5).
+    """Continuously yielding joint (Cundall & Hart 1984; docs/dem.md §6, eqs. (6.1)–(6.8)).
 
     k_n = a_n σ_n^e_n, k_s = a_s σ_n^e_s; Δτ = F k_s Δu_s with F = (1 − τ/τ_m)/(1 − r),
     τ_m = σ_n tan φ_m, r = 0 at the start and reset to τ/τ_m at each reversal;
     φ_m = φ_b + (φ_m − φ_b) exp(−Δu_p / R) with Δu_p = (1 − F)|Δu_s| (eq. 12);
     dilation angle i = atan(|τ|/σ_n) − φ_b (eq. 13). No tensile strength.
-    With e_n = e_s = 0 (as in seed 001, Table 2) the stiffnesses are a_n and a_s (Pa/m).
+    With e_n = e_s = 0 (as in Kiran & Juneja 2022, Table 2) the stiffnesses are a_n and a_s (Pa/m).
     """
 
     an_pa_m: Annotated[Stiffness, Field(description="normal stiffness factor a_n")]
@@ -149,7 +149,7 @@ class InSituStress:
 
     σ_yy(y) = syy + ρ g_unit (y_ref − y) when ``gravity_gradient`` (ρ|g| from the settings), and
     σ_xx = sxx + k0 (σ_yy − syy) (so ``k0`` scales only the gravity part), σ_xy = sxy. Contact forces
-    start at F_n = n·σ·n l, F_s = t·σ·n l (REFERENCE.md §5, problem 10), lumped consistently for the
+    start at F_n = n·σ·n l, F_s = t·σ·n l (docs/dem.md §9.3 and §13, problem 10), lumped consistently for the
     linear variation so every block starts in equilibrium.
     """
 
@@ -269,7 +269,7 @@ History = Union[Sine, Ricker, TableHistory]
 @spec
 class VelocityInput:
     """Prescribe velocity component ``component`` (``"x"`` or ``"y"``) of the chosen blocks to
-    ``history(t)`` (m/s) during dynamic stages — the shake-table base and sides (seed 002 §3).
+    ``history(t)`` (m/s) during dynamic stages — the shake-table base and sides (Varma et al. 2019 §3; docs/dem.md §9.2).
     ``t`` is the time since the start of the dynamic stage (each dynamic stage starts its input at
     t = 0); in static stages these degrees of freedom are held fixed."""
 
@@ -283,7 +283,7 @@ class VelocityInput:
 @spec
 class QuietBoundary:
     """Viscous (Lysmer–Kuhlemeyer) boundary on the domain edges of ``sides``: tractions −ρC_p v_n
-    and −ρC_s v_s (REFERENCE.md §5), active in dynamic stages only."""
+    and −ρC_s v_s (docs/dem.md §9.4, eq. (9.1)), active in dynamic stages only."""
 
     sides: Annotated[Sides, Field(description="domain sides that absorb waves (needs "
                                               "material.bulk_modulus_pa and shear_modulus_pa)")]
@@ -375,9 +375,9 @@ class Settings:
     contacts turn smoothly over corners; None takes the d the block model was built for (its
     ``quality["tolerances"]["rounding_m"]``, which blockgen's minimum edge 2d was made for), else
     1 % of the median edge length; the overlap
-    limit is d/2 (REFERENCE.md §5). ``sleep``: in static
+    limit is d/2 (docs/dem.md §3.4). ``sleep``: in static
     stages, blocks whose own unbalanced-force ratio stays below the stage tolerance stop being
-    integrated until a neighbour disturbs them (REFERENCE.md §6; speed-up and the displacement error
+    integrated until a neighbour disturbs them (docs/dem.md §10.2; speed-up and the displacement error
     it adds are measured in ``benchmarks/bench_solver.py``).
 
     Failing blocks (:mod:`rockmass.solver.failure`): in static stages a block that has moved more

@@ -1,4 +1,4 @@
-"""Strict TOML configs (DESIGN.md §4): every problem reported at once, naming file, field and value."""
+"""Strict TOML configs (docs/design.md §4): every problem reported at once, naming file, field and value."""
 
 from __future__ import annotations
 

@@ -77,8 +77,8 @@ def incline(psi_deg: float, b: float = 1.0, h: float = 0.5, base_length: float =
 
     ``vertical_sides``: block 1 is instead the parallelogram on the same base with vertical sides of
     height h, so its centroid lies straight above the middle of its base: the weight needs no
-    moment from the base and the normal stress under it is uniform (the closed forms of REFERENCE.md
-    §5 problem 1 assume the mean stresses).
+    moment from the base and the normal stress under it is uniform (the closed forms of docs/dem.md
+    §13 problem 1 assume the mean stresses).
     """
     half = base_length / 2
     base = rotate(rect(-half, -1.0, half, 0.0), psi_deg)

@@ -19,7 +19,7 @@ __all__ = ["roof_wedge", "chain_column", "cy_branch", "chain_reflection", "chain
 
 # --------------------------------------------------------------------------------- models --
 def roof_wedge(alpha_deg: float, h: float = 1.0, top: float = 0.2, side: float = 2.0):
-    """A symmetric roof wedge (REFERENCE.md §5, problem 7) between two side blocks.
+    """A symmetric roof wedge (docs/dem.md §13, problem 7) between two side blocks.
 
     Block 1 is the wedge: a trapezoid whose faces lean at the half-apex angle α from the vertical
     and meet above the model (apex up, the free base y = 0 is the roof of the opening). Its top, of
@@ -54,7 +54,7 @@ def chain_column(n: int, s: float = 1.0, width: float = 1.0, soft_joint: int | N
 # ------------------------------------------------------------ continuously yielding joint --
 def cy_branch(tau0: float, phi0: float, d: int, r: float, s_eval: np.ndarray, sigma_n: float,
               ks: float, phi_b: float, rough: float):
-    """τ, φ_m and the dilation along one monotonic branch of the CY joint (seed 001 eqs. 6–13) at
+    """τ, φ_m and the dilation along one monotonic branch of the CY joint (docs/dem.md §6; Kiran & Juneja 2022, eqs. 6–13) at
     constant σ_n.
 
     ``s_eval``: path lengths |Δu| from the start of the branch (increasing), ``d`` = ±1 the

@@ -1,4 +1,4 @@
-"""Rounded corners (REFERENCE.md §5, UDEC's rounding d): the arcs, and contacts that pass over a
+"""Rounded corners (docs/dem.md §3.1, UDEC's rounding d): the arcs, and contacts that pass over a
 corner.
 
 Closed forms used here: a corner with turn θ (interior angle π − θ) rounded with radius r has its arc

@@ -1,4 +1,4 @@
-"""DEM verification, REFERENCE.md §5 problems 6, 7, 8, 11 and 12: each against an answer computed
+"""DEM verification, docs/dem.md §13, problems 6, 7, 8, 11 and 12: each against an answer computed
 here from its equations (an ODE integrated with scipy, a limit-equilibrium threshold, energy
 conservation, the reflection and transmission of a discrete chain), never against numbers the
 solver printed before.
@@ -42,7 +42,7 @@ def _assert_finite(result):
 # ------------------------------------------------------------------------------------------
 CY_SIGMA = 1.0e6        # Pa, constant normal stress
 CY_KS = 1.0e10          # Pa/m (a_s, e_s = 0)
-CY_PHI0, CY_PHIB, CY_R = 59.3, 30.0, 1.0e-4   # seed 001: φ_m⁰, φ_b, R = 0.1 mm
+CY_PHI0, CY_PHIB, CY_R = 59.3, 30.0, 1.0e-4   # Kiran & Juneja 2022: φ_m⁰, φ_b, R = 0.1 mm
 CY_U1 = 1.0e-3          # m, first reversal at +1 mm, second at −1 mm, end at +1 mm
 
 
@@ -104,7 +104,7 @@ def cy_runs():
 
 
 def test_cy_stress_dependent_stiffness():
-    """k_n = a_n σ_n^e_n, k_s = a_s σ_n^e_s (seed 001 eqs. 5, 7) with e = 0.5 and a = k/σ_n^0.5: at
+    """k_n = a_n σ_n^e_n, k_s = a_s σ_n^e_s (docs/dem.md §6; Kiran & Juneja 2022, eqs. 5, 7) with e = 0.5 and a = k/σ_n^0.5: at
     constant σ_n the joint must follow the same CY curve as with e = 0 and k (tolerance and
     measured error as in the e = 0 test: 1.5 k_s Δu; measured 0.46 k_s Δu)."""
     speed = 4e-4

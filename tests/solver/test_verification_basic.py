@@ -1,4 +1,4 @@
-"""DEM verification against closed forms: REFERENCE.md §5, problems 1–5, 9 and 10.
+"""DEM verification against closed forms: docs/dem.md §13, problems 1–5, 9 and 10.
 
 Every expected value is computed here from the closed form (never copied from a run). Tolerances
 are stated next to each check with what limits them: the central-difference period error
@@ -257,7 +257,7 @@ def test_direct_shear_coulomb_constant_normal_stiffness():
     joint by tan ψ per unit plastic slip u_p; with the spring and the joint in series
     σ_n = σ_n0 + K_eff tan ψ u_p, K_eff = K k_n/(K + k_n), τ = σ_n tan φ while slipping, so τ rises
     linearly with the shear displacement u_s at slope a/(1 + a/k_s), a = K_eff tan ψ tan φ
-    (REFERENCE.md §5 problem 5). The sample rises by k_n tan ψ u_p/(k_n + K).
+    (docs/dem.md §13, problem 5). The sample rises by k_n tan ψ u_p/(k_n + K).
 
     σ_n0 comes from the in-situ stress in both joints (equilibrium at the start, no gravity); a slow
     shear (1 mm/s) keeps the undamped normal oscillation of the sample small (< 0.1 % of Δσ_n).
@@ -372,7 +372,7 @@ def test_stability_boundary_is_two_over_omega_max(monkeypatch, factor, stable):
 @pytest.mark.parametrize("factor, decays", [(0.97, True), (1.03, False)])
 def test_stability_boundary_with_stiffness_damping(monkeypatch, factor, decays):
     """Stiffness-proportional Rayleigh damping β lowers the limit to (2/ω)(√(1 + ξ²) − ξ),
-    ξ = βω_max/2 (REFERENCE.md §5). With ξ = 0.5 on the fastest mode: the engine's damped limit is
+    ξ = βω_max/2 (docs/dem.md §2.3, eq. (2.6)). With ξ = 0.5 on the fastest mode: the engine's damped limit is
     below it, and with the refusal switched off the motion decays at 0.97 of it (kinetic energy
     down by > 1e10) but not at 1.03 (the fastest mode grows without bound until the overlap
     limit stops the run)."""
