@@ -230,216 +230,272 @@ def _monitor_displacements(points, eng: Engine, ref) -> dict:
     return {p.name: float(disp[f"{p.name}_u_m"]) for p in kept}
 
 
-def _run_stage(eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, ref,
-               progress=None, points=()) -> StageResult:
-    wall0 = time.perf_counter()
-    eng.excavate(list(stage.excavate))
-    dynamic = stage.kind == "dynamic"
-    eng.set_stage_modes(dynamic)
-    eng.rebuild()
-    eng.detect()
-    alpha_mass, beta = _rayleigh(stage)
-    eng.quiet_edges = (quiet_edge_table(eng, settings.quiet) if dynamic and settings.quiet
-                       else np.zeros((0, 8)))  # before the step limit: the dashpots lower it
-    dt, limit = _auto_time_step(eng, settings, beta)
-    if stage.time_step_s is not None:
-        if stage.time_step_s > limit:
-            raise ValueError(f"stage {stage.name!r}: time_step_s = {stage.time_step_s:.6g} s exceeds "
-                             f"the stable limit {limit:.6g} s (2/ω_max of the contact stiffnesses"
-                             f"{' with Rayleigh damping' if beta else ''}); use at most that")
-        dt = stage.time_step_s
-    elif not math.isfinite(limit):  # no contact at all: free flight
-        dt = (stage.duration_s or 1.0) / T.FREE_FLIGHT_STEPS
-    n_steps = math.ceil(stage.duration_s / dt) if dynamic else stage.max_steps
-    inputs = settings.velocity_inputs if dynamic else ()
-    if stage.history_every:
-        chunk = stage.history_every
-    else:
-        chunk = max(1, n_steps // T.DYNAMIC_RECORDS) if dynamic else T.STATIC_CHUNK
-    frame_every = max(1, n_steps // stage.frames) if (dynamic and stage.frames) else 0
+class _StageRun:
+    """One stage, in named steps: :meth:`__init__` sets it up (excavation, degrees of freedom, time
+    step, budgets, the energy reference), :meth:`run` steps it chunk by chunk — each chunk is
+    advanced (:meth:`_advance`), then checked (:meth:`_after_chunk`: a contact the step cannot
+    resolve, a non-finite value, the periodic time-step and energy guard, overlap, convergence,
+    failing blocks) — and :meth:`result` reports it. ``self.status`` / ``self.diagnostic`` say why
+    it stopped."""
 
-    stage_pos, stage_rot = eng.pos.copy(), eng.rot.copy()
-    stage_t0 = eng.time_s  # velocity histories run on the stage's own clock
-    eng.E[:] = 0.0
-    # strain energies in the leapfrog's own ('shadow') form, so the ledger closes to O((ωΔt)²):
-    # at the start the normal part is at p_0 and the shear part lags at p_-1; at the end both are
-    # at p_N-1 while the positions are p_N (see Engine.contact_increment_work)
-    wn, ws = eng.contact_increment_work(dt)
-    ke0, se0 = eng.kinetic_energy(), eng.strain_energy()
-    se0_shadow = se0 - 0.5 * wn + 0.5 * ws
-    out = np.zeros(8)
-    out[7] = math.inf  # kinetic energy of the previous convergence check
-    done = 0
-    status = "max_steps" if not dynamic else "completed"
-    diagnostic = None
-    ratio = math.inf
-    rebuilds0 = eng.n_rebuilds
-    rec.record(stage.name, 0.0)  # ratio unknown before the first step
-    if stage.frames:
-        rec.frame(stage.name, 0)
-    tol = stage.tolerance if not dynamic else 0.0
-    alpha_local = stage.local_damping if not dynamic else 0.0
-    sleep_ratio = (T.SLEEP_RATIO_OF_TOLERANCE * stage.tolerance if (settings.sleep and not dynamic)
-                   else 0.0)
-    watch = None if dynamic else FailureWatch(
-        eng, settings.failure_displacement_m or T.FAILURE_ROUNDINGS * eng.rounding_m,
-        settings.failure_checks, settings.sliver_area_m2)
-    failed, removed_j = [], 0.0
-    safety = settings.time_step_safety
-    step_cuts = 0
-    guarded = 0  # step of the last time-step and energy check
-    while done < n_steps:
-        todo = min(chunk - done % chunk, n_steps - done)
-        t_half = eng.time_s - stage_t0 + (np.arange(todo) + 0.5) * dt
-        presc = np.zeros((todo, max(1, len(inputs))))
-        for i, inp in enumerate(inputs):
+    def __init__(self, eng: Engine, stage: Stage, settings: Settings, rec: _Recorder, ref,
+                 progress=None, points=()):
+        self.eng, self.stage, self.settings, self.rec, self.ref = eng, stage, settings, rec, ref
+        self.progress, self.points = progress, points
+        self.wall0 = time.perf_counter()
+        eng.excavate(list(stage.excavate))
+        self.dynamic = dynamic = stage.kind == "dynamic"
+        eng.set_stage_modes(dynamic)
+        eng.rebuild()
+        eng.detect()
+        self.alpha_mass, self.beta = _rayleigh(stage)
+        eng.quiet_edges = (quiet_edge_table(eng, settings.quiet) if dynamic and settings.quiet
+                           else np.zeros((0, 8)))  # before the step limit: the dashpots lower it
+        self.dt, self.limit = self._first_time_step()
+        self.n_steps = math.ceil(stage.duration_s / self.dt) if dynamic else stage.max_steps
+        self.inputs = settings.velocity_inputs if dynamic else ()
+        if stage.history_every:
+            self.chunk = stage.history_every
+        else:
+            self.chunk = max(1, self.n_steps // T.DYNAMIC_RECORDS) if dynamic else T.STATIC_CHUNK
+        self.frame_every = max(1, self.n_steps // stage.frames) if (dynamic and stage.frames) else 0
+
+        self.stage_pos, self.stage_rot = eng.pos.copy(), eng.rot.copy()
+        self.stage_t0 = eng.time_s  # velocity histories run on the stage's own clock
+        eng.E[:] = 0.0
+        # strain energies in the leapfrog's own ('shadow') form, so the ledger closes to O((ωΔt)²):
+        # at the start the normal part is at p_0 and the shear part lags at p_-1; at the end both
+        # are at p_N-1 while the positions are p_N (see Engine.contact_increment_work)
+        wn, ws = eng.contact_increment_work(self.dt)
+        self.ke0, self.se0 = eng.kinetic_energy(), eng.strain_energy()
+        self.se0_shadow = self.se0 - 0.5 * wn + 0.5 * ws
+        self.out = np.zeros(8)
+        self.out[7] = math.inf  # kinetic energy of the previous convergence check
+        self.done = 0
+        self.status = "max_steps" if not dynamic else "completed"
+        self.diagnostic = None
+        self.ratio = math.inf
+        self.rebuilds0 = eng.n_rebuilds
+        rec.record(stage.name, 0.0)  # ratio unknown before the first step
+        if stage.frames:
+            rec.frame(stage.name, 0)
+        self.tol = stage.tolerance if not dynamic else 0.0
+        self.alpha_local = stage.local_damping if not dynamic else 0.0
+        self.sleep_ratio = (T.SLEEP_RATIO_OF_TOLERANCE * stage.tolerance
+                            if (settings.sleep and not dynamic) else 0.0)
+        self.watch = None if dynamic else FailureWatch(
+            eng, settings.failure_displacement_m or T.FAILURE_ROUNDINGS * eng.rounding_m,
+            settings.failure_checks, settings.sliver_area_m2)
+        self.failed, self.removed_j = [], 0.0
+        self.step_cuts = 0
+        self.guarded = 0  # step of the last time-step and energy check
+
+    def _first_time_step(self) -> tuple[float, float]:
+        """(Δt, stable limit): automatic, or the stage's own (refused above the limit), or a
+        fraction of the duration when nothing is in contact (free flight)."""
+        stage = self.stage
+        dt, limit = _auto_time_step(self.eng, self.settings, self.beta)
+        if stage.time_step_s is not None:
+            if stage.time_step_s > limit:
+                raise ValueError(f"stage {stage.name!r}: time_step_s = {stage.time_step_s:.6g} s exceeds "
+                                 f"the stable limit {limit:.6g} s (2/ω_max of the contact stiffnesses"
+                                 f"{' with Rayleigh damping' if self.beta else ''}); use at most that")
+            dt = stage.time_step_s
+        elif not math.isfinite(limit):  # no contact at all: free flight
+            dt = (stage.duration_s or 1.0) / T.FREE_FLIGHT_STEPS
+        return dt, limit
+
+    def run(self) -> StageResult:
+        """Step until the budget is spent or a chunk says stop, then report."""
+        while self.done < self.n_steps:
+            if not self._chunk():
+                break
+        if self.stage.frames:
+            self.rec.frame(self.stage.name, self.done)
+        return self.result()
+
+    def _stop(self, status: str, diagnostic: str | None) -> bool:
+        self.status, self.diagnostic = status, diagnostic
+        return False
+
+    def _advance(self, todo: int) -> int:
+        """Advance ``todo`` steps (or fewer: the kernel returns early); its return code."""
+        eng, stage, dt = self.eng, self.stage, self.dt
+        t_half = eng.time_s - self.stage_t0 + (np.arange(todo) + 0.5) * dt
+        presc = np.zeros((todo, max(1, len(self.inputs))))
+        for i, inp in enumerate(self.inputs):
             presc[:, i] = inp.history(t_half)
+        return eng.advance(todo, presc, self.out, dt, alpha_local=self.alpha_local,
+                           alpha_mass=self.alpha_mass, beta=self.beta, tol_ratio=self.tol,
+                           block_tol=stage.block_tolerance, sleep_ratio=self.sleep_ratio,
+                           sleep_speed=T.SLEEP_CREEP * eng.rounding_m / (T.SLEEP_STEPS * dt),
+                           w2_new=_new_contact_w2(dt, self.settings.time_step_safety
+                                                  if stage.time_step_s is None else 1.0))
+
+    def _shorter_step(self, new_dt: float, new_limit: float, kept: int) -> None:
+        """Continue with the step ``new_dt``; a dynamic stage keeps its duration (``kept`` steps of
+        the current chunk stand)."""
+        if self.dynamic:
+            left = self.stage.duration_s - (self.eng.time_s + kept * self.dt - self.stage_t0)
+            self.n_steps = self.done + kept + max(0, math.ceil(left / new_dt))
+        self.dt, self.limit = new_dt, new_limit
+        self.step_cuts += 1
+
+    def _chunk(self) -> bool:
+        """One chunk of steps and what follows from it; False when the stage stops."""
+        eng, stage, out = self.eng, self.stage, self.out
+        done = self.done
+        todo = min(self.chunk - done % self.chunk, self.n_steps - done)
         snap = eng.snapshot()
         ke_check = out[7]
-        rc = eng.advance(todo, presc, out, dt, alpha_local=alpha_local, alpha_mass=alpha_mass,
-                         beta=beta, tol_ratio=tol, block_tol=stage.block_tolerance,
-                         sleep_ratio=sleep_ratio,
-                         sleep_speed=T.SLEEP_CREEP * eng.rounding_m / (T.SLEEP_STEPS * dt),
-                         w2_new=_new_contact_w2(dt, safety if stage.time_step_s is None else 1.0))
+        rc = self._advance(todo)
         steps = int(out[0])
-        dt_used = dt
+        dt_used = self.dt
         if rc == K.RC_STIFF:  # a contact formed that this step cannot resolve: shorter step
-            new_dt, new_limit = _auto_time_step(eng, settings, beta)
+            new_dt, new_limit = _auto_time_step(eng, self.settings, self.beta)
             eng.restore(snap)
             out[7] = ke_check
-            if stage.time_step_s is not None or not new_dt < dt:
-                status = "unstable"
-                diagnostic = (f"a contact that formed during the stage needs a time step below "
-                              f"{new_limit:.4g} s; the step is {dt:.4g} s"
-                              f"{' (the stage time_step_s)' if stage.time_step_s else ''}; the "
-                              f"state of step {done} is kept")
-                break
-            if dynamic:
-                n_steps = done + max(1, math.ceil((stage.duration_s - (eng.time_s - stage_t0))
-                                                  / new_dt))
-            dt, limit = new_dt, new_limit
-            step_cuts += 1
-            continue
+            if stage.time_step_s is not None or not new_dt < self.dt:
+                return self._stop("unstable", (
+                    f"a contact that formed during the stage needs a time step below "
+                    f"{new_limit:.4g} s; the step is {self.dt:.4g} s"
+                    f"{' (the stage time_step_s)' if stage.time_step_s else ''}; the "
+                    f"state of step {done} is kept"))
+            if self.dynamic:
+                self.n_steps = done + max(1, math.ceil((stage.duration_s - (eng.time_s - self.stage_t0))
+                                                       / new_dt))
+            self.dt, self.limit = new_dt, new_limit
+            self.step_cuts += 1
+            return True
         if rc == K.RC_NONFINITE:
             eng.restore(snap)
-            status = "unstable"
-            diagnostic = (f"a non-finite value appeared within steps {done}..{done + steps} at "
-                          f"Δt = {dt:.4g} s (stable limit {limit:.4g} s); the state of step {done} is "
-                          "kept — lower the time step or check the joint stiffnesses")
-            break
+            return self._stop("unstable", (
+                f"a non-finite value appeared within steps {done}..{done + steps} at "
+                f"Δt = {self.dt:.4g} s (stable limit {self.limit:.4g} s); the state of step {done} is "
+                "kept — lower the time step or check the joint stiffnesses"))
         # the step follows the contacts: one that formed in this chunk may be stiffer (or its
         # blocks lighter) than any at the chunk's start. Above the stable limit the chunk is done
         # again with the new step; within it (the safety factor's margin) the new step applies
         # from here on
-        guard = (rc in (K.RC_CONVERGED, K.RC_OVERLAP) or done + steps >= n_steps
-                 or done + steps - guarded >= T.GUARD_EVERY)
+        guard = (rc in (K.RC_CONVERGED, K.RC_OVERLAP) or done + steps >= self.n_steps
+                 or done + steps - self.guarded >= T.GUARD_EVERY)
         if guard:
-            guarded = done + steps
-            new_dt, new_limit = _auto_time_step(eng, settings, beta)
-            redo = math.isfinite(new_limit) and dt > new_limit
+            self.guarded = done + steps
+            new_dt, new_limit = _auto_time_step(eng, self.settings, self.beta)
+            redo = math.isfinite(new_limit) and self.dt > new_limit
             if redo and stage.time_step_s is not None:
                 eng.restore(snap)
-                status = "unstable"
-                diagnostic = (f"contacts that formed during the stage lower the stable time step "
-                              f"to {new_limit:.4g} s, below the stage's time_step_s = {dt:.4g} s; "
-                              f"the state of step {done} is kept")
-                break
+                return self._stop("unstable", (
+                    f"contacts that formed during the stage lower the stable time step "
+                    f"to {new_limit:.4g} s, below the stage's time_step_s = {self.dt:.4g} s; "
+                    f"the state of step {done} is kept"))
             if (stage.time_step_s is None and math.isfinite(new_limit)
-                    and dt > new_dt * (1 + T.STEP_CUT_SLACK)):
-                kept = 0 if redo else steps  # steps of this chunk that stand
-                if dynamic:
-                    left = stage.duration_s - (eng.time_s + kept * dt - stage_t0)
-                    n_steps = done + kept + max(0, math.ceil(left / new_dt))
-                dt, limit = new_dt, new_limit
-                step_cuts += 1
+                    and self.dt > new_dt * (1 + T.STEP_CUT_SLACK)):
+                self._shorter_step(new_dt, new_limit, kept=0 if redo else steps)
                 if redo:
                     eng.restore(snap)
                     out[7] = ke_check
-                    continue
-        done += steps
+                    return True
+        return self._after_chunk(rc, steps, dt_used, guard)
+
+    def _after_chunk(self, rc: int, steps: int, dt_used: float, guard: bool) -> bool:
+        """Book the chunk's steps; record; stop on overlap, a ledger that does not close or
+        convergence; take out failing blocks. False when the stage stops."""
+        eng, stage, rec = self.eng, self.stage, self.rec
+        self.done += steps
+        done = self.done
         eng.time_s += steps * dt_used
-        if progress is not None:
-            progress(done, n_steps, stage.name)
-        ratio = out[1]
-        if dynamic:
+        if self.progress is not None:
+            self.progress(done, self.n_steps, stage.name)
+        self.ratio = self.out[1]
+        if self.dynamic:
             rec.track_peaks()
         if rc == K.RC_OVERLAP:
-            status = "overlap"
-            diagnostic = _overlap_diagnostic(eng, int(out[3]), out[2], dt)
-            break
+            return self._stop("overlap", _overlap_diagnostic(eng, int(self.out[3]), self.out[2], self.dt))
         if rc == K.RC_REBUILD:
             eng.rebuild()
-        if done % chunk == 0 or done == n_steps or rc == K.RC_CONVERGED:
-            rec.record(stage.name, ratio)
-        if guard:
-            energy = _energy_ledger(eng, dt, ke0, se0, se0_shadow, removed_j)
-            err = ledger_error(energy)
-            if err > settings.energy_tolerance:
-                status = "unstable"
-                diagnostic = (f"the energy ledger does not close after {done} steps: residual "
-                              f"{energy['residual_j']:.4g} J is {err:.3g} of the energy turned over "
-                              f"(tolerance {settings.energy_tolerance}); Δt = {dt:.4g} s, stable "
-                              f"limit {limit:.4g} s — a block was thrown by a contact the time step "
-                              "did not resolve; lower time_step_safety")
-                break
-        if frame_every and done % frame_every == 0 and done < n_steps:
+        if done % self.chunk == 0 or done == self.n_steps or rc == K.RC_CONVERGED:
+            rec.record(stage.name, self.ratio)
+        if guard and not self._ledger_closes():
+            return False
+        if self.frame_every and done % self.frame_every == 0 and done < self.n_steps:
             rec.frame(stage.name, done)
         if rc == K.RC_CONVERGED:
-            status = "converged"
-            break
-        if watch is not None and done % chunk == 0:
-            going = watch.check()
+            return self._stop("converged", None)
+        if self.watch is not None and done % self.chunk == 0:
+            going = self.watch.check()
             if len(going):
-                gone, energy_out = _remove_failed(eng, watch, going)
-                failed += gone
-                removed_j += energy_out
-                out[7] = math.inf
-    if stage.frames:
-        rec.frame(stage.name, done)
+                gone, energy_out = _remove_failed(eng, self.watch, going)
+                self.failed += gone
+                self.removed_j += energy_out
+                self.out[7] = math.inf
+        return True
 
-    removed = ~eng.active & (eng.model.region > 0) & ~eng.failed
-    disp_ref = eng.vertex_displacement(*ref)
-    disp_stage = eng.vertex_displacement(stage_pos, stage_rot)
-    live = eng.active
-    counted = live & (eng.model.area_m2 >= settings.sliver_area_m2)
-    boundary = _boundary_blocks(eng, removed)
-    slipping, n_open, n_broken = _contact_counts(eng)
-    energy = _energy_ledger(eng, dt, ke0, se0, se0_shadow, removed_j)
-    worst_block, worst_ratio = int(out[6]), float(out[5])
-    if failed and status in ("converged", "max_steps"):
-        diagnostic = (f"{len(failed)} block(s) kept moving and were taken out: "
-                      + ", ".join(f"{f.block} ({f.mechanism}, {f.area_m2:.3g} m²)"
-                                  for f in failed[:10]) + (" …" if len(failed) > 10 else "")
-                      + ("; the rest reached equilibrium" if status == "converged" else
-                         "; the rest did not reach equilibrium within max_steps"))
+    def _ledger_closes(self) -> bool:
+        """The energy guard: False (status ``unstable``) when the residual exceeds the tolerance."""
+        energy = _energy_ledger(self.eng, self.dt, self.ke0, self.se0, self.se0_shadow, self.removed_j)
+        err = ledger_error(energy)
+        if err <= self.settings.energy_tolerance:
+            return True
+        return self._stop("unstable", (
+            f"the energy ledger does not close after {self.done} steps: residual "
+            f"{energy['residual_j']:.4g} J is {err:.3g} of the energy turned over "
+            f"(tolerance {self.settings.energy_tolerance}); Δt = {self.dt:.4g} s, stable "
+            f"limit {self.limit:.4g} s — a block was thrown by a contact the time step "
+            "did not resolve; lower time_step_safety"))
+
+    def _final_status(self, worst_block: int, worst_ratio: float) -> tuple[str, str | None, bool]:
+        """(status, diagnostic, converged apart from the failed blocks)."""
+        status, diagnostic, failed = self.status, self.diagnostic, self.failed
         converged_rest = status == "converged"
-        status = "failed_blocks"
-    else:
-        converged_rest = status == "converged"
-    if status == "max_steps":
-        diagnostic = (f"no equilibrium within max_steps = {done} steps: model ratio {ratio:.3g} (tolerance "
-                      f"{stage.tolerance}), worst block {worst_block} at {worst_ratio:.3g} (block "
-                      f"tolerance {stage.block_tolerance})")
-    return StageResult(
-        name=stage.name, kind=stage.kind, status=status, steps=done, time_step_s=float(dt),
-        stable_time_step_s=float(limit) if math.isfinite(limit) else 0.0,
-        simulated_time_s=float(eng.time_s - stage_t0),
-        converged=converged_rest if not dynamic else None,
-        unbalanced_ratio=float(ratio) if math.isfinite(ratio) else 0.0,
-        max_displacement_m=float(disp_ref[live].max(initial=0.0)),
-        max_displacement_boundary_m=float(disp_ref[boundary].max(initial=0.0)),
-        max_displacement_stage_m=float(disp_stage[live].max(initial=0.0)),
-        max_displacement_equilibrium_m=float(disp_ref[counted].max(initial=0.0)),
-        max_displacement_boundary_equilibrium_m=float(disp_ref[boundary & counted].max(initial=0.0)),
-        monitors=_monitor_displacements(points, eng, ref),
-        worst_block=worst_block, worst_ratio=min(worst_ratio, 1e300),
-        failed_blocks=[f.to_dict() for f in failed],
-        slipping_contacts=slipping, open_contacts=n_open,
-        newly_broken_contacts=int(eng.E[K.E_NEW_BROKEN]), broken_contacts=n_broken,
-        detached_blocks=_detached(eng, removed), blocks_removed=int(removed.sum()),
-        energy=energy, wall_time_s=time.perf_counter() - wall0,
-        contact_rebuilds=int(eng.n_rebuilds - rebuilds0), diagnostic=diagnostic,
-        time_step_cuts=step_cuts)
+        if failed and status in ("converged", "max_steps"):
+            diagnostic = (f"{len(failed)} block(s) kept moving and were taken out: "
+                          + ", ".join(f"{f.block} ({f.mechanism}, {f.area_m2:.3g} m²)"
+                                      for f in failed[:10]) + (" …" if len(failed) > 10 else "")
+                          + ("; the rest reached equilibrium" if status == "converged" else
+                             "; the rest did not reach equilibrium within max_steps"))
+            status = "failed_blocks"
+        if status == "max_steps":
+            diagnostic = (f"no equilibrium within max_steps = {self.done} steps: model ratio "
+                          f"{self.ratio:.3g} (tolerance {self.stage.tolerance}), worst block "
+                          f"{worst_block} at {worst_ratio:.3g} (block tolerance "
+                          f"{self.stage.block_tolerance})")
+        return status, diagnostic, converged_rest
+
+    def result(self) -> StageResult:
+        """The stage's report: status, steps, displacements, contacts, energy."""
+        eng, stage, settings, ref = self.eng, self.stage, self.settings, self.ref
+        removed = ~eng.active & (eng.model.region > 0) & ~eng.failed
+        disp_ref = eng.vertex_displacement(*ref)
+        disp_stage = eng.vertex_displacement(self.stage_pos, self.stage_rot)
+        live = eng.active
+        counted = live & (eng.model.area_m2 >= settings.sliver_area_m2)
+        boundary = _boundary_blocks(eng, removed)
+        slipping, n_open, n_broken = _contact_counts(eng)
+        energy = _energy_ledger(eng, self.dt, self.ke0, self.se0, self.se0_shadow, self.removed_j)
+        worst_block, worst_ratio = int(self.out[6]), float(self.out[5])
+        status, diagnostic, converged_rest = self._final_status(worst_block, worst_ratio)
+        ratio, limit = self.ratio, self.limit
+        return StageResult(
+            name=stage.name, kind=stage.kind, status=status, steps=self.done, time_step_s=float(self.dt),
+            stable_time_step_s=float(limit) if math.isfinite(limit) else 0.0,
+            simulated_time_s=float(eng.time_s - self.stage_t0),
+            converged=converged_rest if not self.dynamic else None,
+            unbalanced_ratio=float(ratio) if math.isfinite(ratio) else 0.0,
+            max_displacement_m=float(disp_ref[live].max(initial=0.0)),
+            max_displacement_boundary_m=float(disp_ref[boundary].max(initial=0.0)),
+            max_displacement_stage_m=float(disp_stage[live].max(initial=0.0)),
+            max_displacement_equilibrium_m=float(disp_ref[counted].max(initial=0.0)),
+            max_displacement_boundary_equilibrium_m=float(disp_ref[boundary & counted].max(initial=0.0)),
+            monitors=_monitor_displacements(self.points, eng, ref),
+            worst_block=worst_block, worst_ratio=min(worst_ratio, 1e300),
+            failed_blocks=[f.to_dict() for f in self.failed],
+            slipping_contacts=slipping, open_contacts=n_open,
+            newly_broken_contacts=int(eng.E[K.E_NEW_BROKEN]), broken_contacts=n_broken,
+            detached_blocks=_detached(eng, removed), blocks_removed=int(removed.sum()),
+            energy=energy, wall_time_s=time.perf_counter() - self.wall0,
+            contact_rebuilds=int(eng.n_rebuilds - self.rebuilds0), diagnostic=diagnostic,
+            time_step_cuts=self.step_cuts)
 
 
 def run(model, settings: Settings, *,
@@ -470,7 +526,7 @@ def run(model, settings: Settings, *,
         if new:  # the opening grew: its crown, walls and invert are found again
             dug += new
             points = boundary_points(model, dug)
-        res = _run_stage(eng, stage, settings, rec, ref, progress, points)
+        res = _StageRun(eng, stage, settings, rec, ref, progress, points).run()
         stages.append(res)
         if res.status in FAILED_STATUSES:
             status, diagnostic = res.status, res.diagnostic
