@@ -2,18 +2,79 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from collections.abc import Iterator, Mapping
+from dataclasses import asdict, dataclass, field, fields
 
 import numpy as np
 
-__all__ = ["StageResult", "Frame", "Result", "STATUS_OK", "STATUS_FAILED_BLOCKS", "FAILED_STATUSES"]
+__all__ = ["StageResult", "EnergyLedger", "Frame", "Result", "STATUS_OK", "STATUS_FAILED_BLOCKS",
+           "FAILED_STATUSES"]
 
 STATUS_OK = "ok"
 STATUS_FAILED_BLOCKS = "failed_blocks"
 FAILED_STATUSES = ("overlap", "unstable")
 
 
-@dataclass
+@dataclass(frozen=True, eq=False)
+class EnergyLedger(Mapping):
+    """A stage's energy ledger, J per metre of thickness (docs/dem.md §11).
+
+    Work in (``work_gravity_j`` + ``work_boundary_j``) equals the change of kinetic and strain
+    energy plus what was dissipated (slip, bond breakage, damping) and what left with blocks taken
+    out; ``residual_j`` is what does not balance. ``damping_dissipation_j`` is the sum of the local,
+    viscous (Rayleigh) and quiet-boundary terms. It reads like the ``energy`` object of
+    ``result.json`` (a read-only mapping of these names), and :attr:`relative_error` is the guard's
+    measure of it.
+    """
+
+    work_gravity_j: float
+    work_boundary_j: float
+    kinetic_start_j: float
+    kinetic_end_j: float
+    strain_start_j: float
+    strain_end_j: float
+    slip_dissipation_j: float
+    breakage_dissipation_j: float
+    damping_dissipation_j: float
+    local_damping_j: float
+    viscous_damping_j: float
+    quiet_boundary_j: float
+    removed_blocks_j: float
+    residual_j: float
+
+    def __getitem__(self, key: str) -> float:
+        if key not in _LEDGER_TERMS:
+            raise KeyError(key)
+        return getattr(self, key)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(_LEDGER_TERMS)
+
+    def __len__(self) -> int:
+        return len(_LEDGER_TERMS)
+
+    @property
+    def turnover_j(self) -> float:
+        """The energy turned over: |every term| added up, plus 10⁻⁶ of the strain energy held (the
+        round-off of a large stored energy is not an error of the stage)."""
+        return (abs(self.work_gravity_j) + abs(self.work_boundary_j)
+                + abs(self.kinetic_end_j - self.kinetic_start_j)
+                + abs(self.strain_end_j - self.strain_start_j)
+                + abs(self.slip_dissipation_j) + abs(self.breakage_dissipation_j)
+                + abs(self.damping_dissipation_j) + abs(self.removed_blocks_j)
+                + 1e-6 * (self.strain_start_j + self.strain_end_j))
+
+    @property
+    def relative_error(self) -> float:
+        """|residual| / turnover (0 when nothing turned over)."""
+        turnover = self.turnover_j
+        return abs(self.residual_j) / turnover if turnover > 0 else 0.0
+
+
+_LEDGER_TERMS = tuple(f.name for f in fields(EnergyLedger))
+
+
+@dataclass(frozen=True)
 class StageResult:
     """Report of one stage (every number finite; ``status`` says how the stage ended:
     ``converged`` / ``max_steps`` (static), ``failed_blocks`` (static: blocks kept moving and were
@@ -56,14 +117,14 @@ class StageResult:
     broken_contacts: int
     detached_blocks: int
     blocks_removed: int
-    energy: dict
+    energy: EnergyLedger
     wall_time_s: float
     contact_rebuilds: int
     diagnostic: str | None = None
     time_step_cuts: int = 0
 
 
-@dataclass
+@dataclass(frozen=True)
 class Frame:
     """Block placement at one instant (for blocks_NNNN.vtu); ``failed``: blocks taken out so far
     because they kept moving (inactive too)."""
@@ -78,7 +139,7 @@ class Frame:
     failed: np.ndarray
 
 
-@dataclass
+@dataclass(frozen=True)
 class Result:
     """Result of :func:`rockmass.solver.run`.
 

@@ -31,7 +31,8 @@ from .engine import FIXED, Engine
 from .failure import FailureWatch
 from .loading import apply_boundary_stress, apply_insitu, quiet_edge_table
 from .monitoring import boundary_points, point_displacement_from
-from .result import FAILED_STATUSES, STATUS_FAILED_BLOCKS, STATUS_OK, Frame, Result, StageResult
+from .result import (FAILED_STATUSES, STATUS_FAILED_BLOCKS, STATUS_OK, EnergyLedger, Frame, Result,
+                     StageResult)
 from .selectors import block_at_point
 from .settings import Settings, Stage
 
@@ -160,7 +161,7 @@ def _detached(eng: Engine, removed: np.ndarray) -> int:
 
 
 def _energy_ledger(eng: Engine, dt: float, ke0: float, se0: float, se0_shadow: float,
-                   removed_j: float) -> dict:
+                   removed_j: float) -> EnergyLedger:
     """The stage's energy ledger so far (module docstring); ``removed_j``: kinetic and strain
     energy that left with blocks taken out during the stage (failed blocks)."""
     wn, ws = eng.contact_increment_work(dt)
@@ -171,29 +172,13 @@ def _energy_ledger(eng: Engine, dt: float, ke0: float, se0: float, se0_shadow: f
     damping = -(E[K.E_LOCAL_DAMP] + E[K.E_VISCOUS] + E[K.E_QUIET])
     stored = ((ke1 - ke0) + (se1_shadow - se0_shadow) + E[K.E_SLIP] + E[K.E_BROKEN] + damping
               + removed_j)
-    energy = {"work_gravity_j": E[K.E_GRAVITY],
-              "work_boundary_j": E[K.E_EXTERNAL] - E[K.E_CONTACT_PRESC],
-              "kinetic_start_j": ke0, "kinetic_end_j": ke1,
-              "strain_start_j": se0, "strain_end_j": se1,
-              "slip_dissipation_j": E[K.E_SLIP], "breakage_dissipation_j": E[K.E_BROKEN],
-              "damping_dissipation_j": damping,
-              "local_damping_j": -E[K.E_LOCAL_DAMP], "viscous_damping_j": -E[K.E_VISCOUS],
-              "quiet_boundary_j": -E[K.E_QUIET], "removed_blocks_j": removed_j,
-              "residual_j": work_in - stored}
-    return {k: float(v) for k, v in energy.items()}
-
-
-def ledger_error(energy: dict) -> float:
-    """|residual| over the energy turned over in the stage: the work in, the changes of kinetic and
-    strain energy, every dissipation and the energy removed with blocks, plus 10⁻⁶ of the strain
-    energy stored (round-off of a large stored energy is not an error of the stage)."""
-    turnover = (abs(energy["work_gravity_j"]) + abs(energy["work_boundary_j"])
-                + abs(energy["kinetic_end_j"] - energy["kinetic_start_j"])
-                + abs(energy["strain_end_j"] - energy["strain_start_j"])
-                + abs(energy["slip_dissipation_j"]) + abs(energy["breakage_dissipation_j"])
-                + abs(energy["damping_dissipation_j"]) + abs(energy["removed_blocks_j"])
-                + 1e-6 * (energy["strain_start_j"] + energy["strain_end_j"]))
-    return abs(energy["residual_j"]) / turnover if turnover > 0 else 0.0
+    terms = dict(work_gravity_j=E[K.E_GRAVITY], work_boundary_j=E[K.E_EXTERNAL] - E[K.E_CONTACT_PRESC],
+                 kinetic_start_j=ke0, kinetic_end_j=ke1, strain_start_j=se0, strain_end_j=se1,
+                 slip_dissipation_j=E[K.E_SLIP], breakage_dissipation_j=E[K.E_BROKEN],
+                 damping_dissipation_j=damping, local_damping_j=-E[K.E_LOCAL_DAMP],
+                 viscous_damping_j=-E[K.E_VISCOUS], quiet_boundary_j=-E[K.E_QUIET],
+                 removed_blocks_j=removed_j, residual_j=work_in - stored)
+    return EnergyLedger(**{k: float(v) for k, v in terms.items()})
 
 
 def _remove_failed(eng: Engine, watch: FailureWatch, ids: np.ndarray) -> tuple[list, float]:
@@ -434,7 +419,7 @@ class _StageRun:
     def _ledger_closes(self) -> bool:
         """The energy guard: False (status ``unstable``) when the residual exceeds the tolerance."""
         energy = _energy_ledger(self.eng, self.dt, self.ke0, self.se0, self.se0_shadow, self.removed_j)
-        err = ledger_error(energy)
+        err = energy.relative_error
         if err <= self.settings.energy_tolerance:
             return True
         return self._stop("unstable", (
