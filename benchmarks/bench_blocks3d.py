@@ -8,13 +8,27 @@ Table 2 — DFN realizations with the seed-001 orientations (Fisher κ = 20; pow
 side L around two crossing horseshoe tunnels: disks, convex pieces, in-situ blocks, keyblocks by mode,
 time to cut, to analyse keyblocks and to compute shapes, and the volume balance (Σ pieces = box).
 
-    python benchmarks/bench_blocks3d.py [--quick]
+Table 3 — scaling to 10⁵ blocks (issue 21): orthogonal Poisson sets (λ per axis chosen for ~10³, 10⁴,
+10⁵ blocks; exact count Π(1 + N_i)), three oblique persistent sets at fine spacing in a unit cube, and
+a dense seed-001-like DFN without tunnels. Each case runs in a fresh process (after a small warm-up
+cut, so numba compilation is not timed): seconds per phase of ``cut_box`` (cut: the numba kernel plus
+building the ``Polyhedron`` objects; moments; links: shared faces and their real areas; grouping),
+blocks per second, peak resident memory above the warmed-up process and the error columns. The
+cold compile time of the kernels (empty ``NUMBA_CACHE_DIR``) is reported apart. ``--reference`` runs
+the same table with the numpy cutting path (``split`` per piece).
+
+    python benchmarks/bench_blocks3d.py [--quick] [--reference]
 """
 
 from __future__ import annotations
 
+import json
 import math
+import os
+import resource
+import subprocess
 import sys
+import tempfile
 import time
 from collections import Counter
 from pathlib import Path
@@ -24,10 +38,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import header, save, table  # noqa: E402
 
 
-def poisson_case(lam: float, seed: int) -> dict:
+def poisson_planes(lam: float, seed: int):
+    """Three orthogonal Poisson sets of intensity λ in the unit cube, and their plane counts."""
     import numpy as np
 
-    from rockmass.blockgen.blocks3d import Planes, cut_box
+    from rockmass.blockgen.blocks3d import Planes
 
     rng = np.random.default_rng(seed)
     planes, counts = [], []
@@ -36,6 +51,13 @@ def poisson_case(lam: float, seed: int) -> dict:
         m = len(offsets)
         counts.append(m)
         planes.append(Planes(np.tile(axis, (m, 1)), offsets, np.full(m, i), np.zeros((m, 3)), np.full(m, np.inf)))
+    return planes, counts
+
+
+def poisson_case(lam: float, seed: int) -> dict:
+    from rockmass.blockgen.blocks3d import cut_box
+
+    planes, counts = poisson_planes(lam, seed)
     t0 = time.perf_counter()
     blocks = cut_box([[0, 0, 0], [1, 1, 1]], *planes)
     seconds = time.perf_counter() - t0
@@ -45,20 +67,26 @@ def poisson_case(lam: float, seed: int) -> dict:
             "blocks_per_s": blocks.n_blocks / seconds}
 
 
-def dfn_case(side: float, p32: float) -> dict:
+def seed001_network(side: float, p32: float):
+    """The seed-001 orientations (Fisher κ = 20) with power-law radii at total P32 in a cube."""
     import numpy as np
 
-    from rockmass.blockgen.block_shapes import block_shapes
-    from rockmass.blockgen.blocks3d import cut_box, disk_planes
-    from rockmass.blockgen.keyblocks import keyblocks
-    from rockmass.blockgen.openings3d import Tunnel, horseshoe_section
     from rockmass.dfn import FisherOrientation, FractureSetSpec, IntensityP32, generate
     from rockmass.dfn.sizes import PowerLawSize
 
     sets = [FractureSetSpec(FisherOrientation(d, dd, 20.0), PowerLawSize(r, 40.0, 2.5), IntensityP32(p32 / 3))
             for d, dd, r in ((50, 270, 3.53), (80, 10, 2.51), (70, 150, 2.84))]
     box = np.array([[0.0, 0.0, 0.0], [side, side, side]])
-    network = generate(sets, box, seed=1)
+    return box, generate(sets, box, seed=1)
+
+
+def dfn_case(side: float, p32: float) -> dict:
+    from rockmass.blockgen.block_shapes import block_shapes
+    from rockmass.blockgen.blocks3d import cut_box, disk_planes
+    from rockmass.blockgen.keyblocks import keyblocks
+    from rockmass.blockgen.openings3d import Tunnel, horseshoe_section
+
+    box, network = seed001_network(side, p32)
     tunnels = (Tunnel(horseshoe_section(6.0, 3.0), centre_m=(side / 2, 0, side / 2 - 3), trend_deg=0.0),
                Tunnel(horseshoe_section(6.0, 3.0), centre_m=(0, side / 2, side / 2 - 3), trend_deg=90.0))
     t0 = time.perf_counter()
@@ -75,8 +103,80 @@ def dfn_case(side: float, p32: float) -> dict:
             "volume_error": abs(blocks.volume_m3.sum() / side ** 3 - 1.0)}
 
 
+#: Table 3 cases: (kind, parameter, nominal blocks). orthogonal: λ per axis; oblique: planes per unit
+#: length of each set; dfn: P32 (m²/m³) in a 20 m cube.
+SCALE_CASES = (("orthogonal", 9.0, "1e3"), ("orthogonal", 21.0, "1e4"), ("orthogonal", 45.0, "1e5"),
+               ("oblique", 17.0, "1e3"), ("oblique", 40.0, "1e4"), ("oblique", 92.0, "1e5"),
+               ("dfn", 2.0, "1e3"), ("dfn", 6.0, "1e4"))
+
+
+def scale_planes(kind: str, parameter: float):
+    """(box, planes, exact block count or None) of one Table 3 case."""
+    import numpy as np
+
+    from rockmass.blockgen.blocks3d import disk_planes, persistent_set_planes
+
+    if kind == "orthogonal":
+        planes, counts = poisson_planes(parameter, seed=1)
+        return np.array([[0.0] * 3, [1.0] * 3]), planes, math.prod(1 + n for n in counts)
+    if kind == "oblique":
+        box = np.array([[0.0] * 3, [1.0] * 3])
+        rng = np.random.default_rng(3)     # fixed seed: three set normals and origins
+        normals = rng.normal(size=(3, 3))
+        return box, [persistent_set_planes(box, n, 1.0 / parameter, origin_m=rng.uniform(0, 1, 3), label=i)
+                     for i, n in enumerate(normals)], None
+    box, network = seed001_network(20.0, parameter)
+    return box, [disk_planes(network)], None
+
+
+def scale_case(kind: str, parameter: float, reference: bool) -> dict:
+    """One Table 3 row, measured in this (fresh) process."""
+    import numpy as np
+
+    from rockmass.blockgen import blocks3d
+
+    blocks3d._USE_KERNELS = not reference
+    blocks3d.cut_box([[0, 0, 0], [1, 1, 1]], *scale_planes("oblique", 3.0)[1])     # warm-up (compiles)
+    box, planes, exact = scale_planes(kind, parameter)
+    rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    t0 = time.perf_counter()
+    blocks = blocks3d.cut_box(box, *planes)
+    seconds = time.perf_counter() - t0
+    rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return {"case": kind, "param": parameter, "planes": sum(len(p) for p in planes), "pieces": len(blocks.pieces),
+            "blocks": blocks.n_blocks, **{f"{k}_s": v for k, v in blocks3d._PHASE_S.items()}, "total_s": seconds,
+            "blocks_per_s": blocks.n_blocks / seconds, "peak_mb": (rss1 - rss0) / 1024,
+            "count_error": None if exact is None else blocks.n_blocks - exact,
+            "volume_error": abs(blocks.volume_m3.sum() / np.prod(box[1] - box[0]) - 1.0)}
+
+
+def compile_case() -> dict:
+    """First and second small cut in this process (run with an empty NUMBA_CACHE_DIR)."""
+    from rockmass.blockgen.blocks3d import cut_box
+
+    box, planes, _ = scale_planes("oblique", 3.0)
+    t0 = time.perf_counter()
+    cut_box(box, *planes)
+    t1 = time.perf_counter()
+    cut_box(box, *planes)
+    t2 = time.perf_counter()
+    return {"first_s": t1 - t0, "second_s": t2 - t1, "compile_s": (t1 - t0) - (t2 - t1)}
+
+
+def in_fresh_process(args: list[str], env: dict | None = None) -> dict:
+    out = subprocess.run([sys.executable, __file__, *args], capture_output=True, text=True, check=True,
+                         env={**os.environ, **(env or {})})
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
 def main() -> None:
+    if "--case" in sys.argv:
+        kind, parameter = sys.argv[sys.argv.index("--case") + 1:sys.argv.index("--case") + 3]
+        print(json.dumps(compile_case() if kind == "compile" else
+                         scale_case(kind, float(parameter), "--reference" in sys.argv)))
+        return
     quick = "--quick" in sys.argv
+    reference = ["--reference"] if "--reference" in sys.argv else []
     print(header("3D blocks: plane cutting, keyblocks and shapes"))
     rows = [poisson_case(lam, seed) for lam in ((3.0, 6.0) if quick else (3.0, 6.0, 10.0, 16.0))
             for seed in (1, 2)]
@@ -89,7 +189,19 @@ def main() -> None:
     print(table(dfn_rows, [("side_m", ".0f"), ("p32", ".1f"), ("disks", "d"), ("pieces", "d"),
                            ("blocks", "d"), ("fall", "d"), ("slide", "d"), ("cut_s", ".2f"),
                            ("keyblocks_s", ".2f"), ("shapes_s", ".2f"), ("volume_error", ".1e")]))
-    save("bench_blocks3d", {"poisson": rows, "dfn": dfn_rows})
+    scale_rows = [in_fresh_process(["--case", kind, str(parameter), *reference])
+                  for kind, parameter, nominal in SCALE_CASES if not (quick and nominal == "1e5")]
+    print("\nTable 3 - scaling (fresh process per row; peak_mb = peak RSS growth during cut_box)")
+    print(table(scale_rows, [("case", "s"), ("param", ".0f"), ("planes", "d"), ("pieces", "d"), ("blocks", "d"),
+                             ("cut_s", ".2f"), ("moments_s", ".3f"), ("links_s", ".2f"), ("grouping_s", ".3f"),
+                             ("total_s", ".2f"), ("blocks_per_s", ".0f"), ("peak_mb", ".0f"),
+                             ("count_error", "d"), ("volume_error", ".1e")]))
+    with tempfile.TemporaryDirectory() as cache:
+        cold = in_fresh_process(["--case", "compile", "0"], env={"NUMBA_CACHE_DIR": cache})
+    print(f"\ncold numba compile (empty cache): first small cut {cold['first_s']:.2f} s, "
+          f"second {cold['second_s']:.3f} s, compile ~{cold['compile_s']:.2f} s")
+    save("bench_blocks3d", {"poisson": rows, "dfn": dfn_rows, "scale": scale_rows, "cold_compile": cold,
+                            "reference_path": bool(reference)})
 
 
 if __name__ == "__main__":

@@ -47,17 +47,14 @@ def block_shapes(blocks) -> BlockShapes:
     ([0.666667], [0.5])
     """
     n = blocks.n_blocks
-    volume, first, second = np.zeros(n), np.zeros((n, 3)), np.zeros((n, 3, 3))
-    area = np.zeros(n)
-    for p, piece in enumerate(blocks.pieces):
-        b = blocks.block_id[p]
-        if b < 0:
-            continue
-        v, f, s = piece.moments()
-        volume[b] += v
-        first[b] += f
-        second[b] += s
-        area[b] += piece.surface_area_m2()
+    rock = blocks.block_id >= 0
+    ids = blocks.block_id[rock]
+    volume = np.bincount(ids, weights=blocks.volume_m3[rock], minlength=n)
+    first = np.zeros((n, 3))
+    second = np.zeros((n, 3, 3))
+    np.add.at(first, ids, blocks.volume_m3[rock, None] * blocks.centroid_m[rock])
+    np.add.at(second, ids, blocks.second_moment_m5[rock])
+    area = np.bincount(ids, weights=blocks.surface_area_m2[rock], minlength=n)
     inner = ~blocks.excavated[blocks.links[:, 0]] & (blocks.block_id[blocks.links[:, 0]]
                                                     == blocks.block_id[blocks.links[:, 1]])
     np.subtract.at(area, blocks.block_id[blocks.links[inner, 0]], 2.0 * blocks.link_area_m2[inner])

@@ -15,18 +15,25 @@ Each link (piece a, piece b, label) records the shared area and its real (fractu
 part of a polygon that lies wholly inside the disk (all its vertices within the radius — exact, the
 polygon and the disk being convex) is its whole area, else the area of its intersection with the
 disk, computed on a 256-gon (relative error ≤ (2π/256)²/6 ≈ 5·10⁻⁵ of the disk area).
+
+Speed. The cutting by fracture planes and the piece moments run in numba kernels on a flat layout of
+all pieces (:mod:`rockmass.blockgen._polyhedra_kernels`, imported on first use; same rule as
+:func:`~rockmass.blockgen.polyhedra.split`), and shared faces are found by bounding box (shapely
+STRtree) and clipped against each other, convex polygon by convex polygon, in a kernel too.
+``_USE_KERNELS = False`` selects the reference numpy cutting path.
 """
 
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 import shapely
 
-from .polyhedra import Polyhedron, box_polyhedron, plane_basis, split
+from .polyhedra import Polyhedron, _from_flat, _to_flat, box_polyhedron, plane_basis, split
 
 if TYPE_CHECKING:
     from .openings3d import Tunnel
@@ -37,6 +44,10 @@ __all__ = ["Planes", "BlockSet3D", "persistent_set_planes", "disk_planes", "cut_
 DISK_POLYGON_VERTICES = 256
 #: length tolerance / box diagonal.
 TOL_FRACTION = 1e-10
+#: cut and integrate in the numba kernels (False: the reference numpy path through ``split``).
+_USE_KERNELS = True
+#: seconds spent by the last :func:`cut_box` call in each phase (read by benchmarks/bench_blocks3d.py).
+_PHASE_S: dict[str, float] = {}
 
 
 @dataclass(frozen=True)
@@ -64,6 +75,8 @@ class BlockSet3D:
     ``link_area_m2`` and ``link_real_area_m2`` (the fractured part; the rest is fictitious, glued).
     ``planes`` are all the cutting planes (fractures first, then tunnel walls, labelled −2 − k);
     ``box_m`` is the domain; ``excavated (n,)`` marks the pieces inside a tunnel (``block_id`` −1).
+    ``second_moment_m5 (n, 3, 3)``: ∫x xᵀ dV of each piece about the origin; ``surface_area_m2
+    (n,)``: the area of each piece's faces.
     """
 
     pieces: tuple[Polyhedron, ...]
@@ -76,6 +89,8 @@ class BlockSet3D:
     box_m: np.ndarray
     excavated: np.ndarray
     planes: Planes | None
+    second_moment_m5: np.ndarray
+    surface_area_m2: np.ndarray
 
     @property
     def link_label(self) -> np.ndarray:
@@ -151,29 +166,94 @@ def cut_box(box_m, *planes: Planes, tunnels: tuple["Tunnel", ...] = (),
     >>> blocks.n_blocks, np.round(blocks.block_volumes_m3(), 12).tolist()[:2]
     (8, [0.125, 0.125])
     """
+    clock = [time.perf_counter()]
     box = np.asarray(box_m, float)
     size = float(np.linalg.norm(box[1] - box[0]))
     tol = TOL_FRACTION * size if tol_m is None else float(tol_m)
     walls = [t.wall_planes(label=-2 - k) for k, t in enumerate(tunnels)]
     all_planes = _join(*planes, *walls) if planes or walls else None
-    pieces = [box_polyhedron(box)]
-    bounds = [box[:1].copy(), box[1:].copy()]
     first_wall = sum(len(p) for p in planes)
-    for j in range(first_wall):
-        _cut_by_plane(pieces, bounds, all_planes, j, tol, inside=None)
-    j = first_wall
-    for tunnel, wall in zip(tunnels, walls):
-        for _ in range(len(wall)):
-            _cut_by_plane(pieces, bounds, all_planes, j, tol, inside=tunnel)
-            j += 1
-    excavated = np.array([any(t.contains(p.vertices_m(), tol) for t in tunnels) for p in pieces], bool)
-    moments = [p.moments() for p in pieces]
-    volume = np.array([m[0] for m in moments])
-    centroid = np.array([m[1] for m in moments]) / volume[:, None]
-    links, area, real = _links(pieces, all_planes, tol * size)
+    if _USE_KERNELS:
+        flat = _cut_flat(box, all_planes, tunnels, first_wall, tol)
+        pieces = _from_flat(*flat)
+    else:
+        pieces = [box_polyhedron(box)]
+        bounds = [box[:1].copy(), box[1:].copy()]
+        for j in range(first_wall):
+            _cut_by_plane(pieces, bounds, all_planes, j, tol, inside=None)
+        j = first_wall
+        for tunnel, wall in zip(tunnels, walls):
+            for _ in range(len(wall)):
+                _cut_by_plane(pieces, bounds, all_planes, j, tol, inside=tunnel)
+                j += 1
+        flat = _to_flat(pieces)
+    excavated = np.zeros(len(pieces), bool)
+    vert_piece = np.repeat(np.repeat(np.arange(len(pieces)), np.diff(flat[3])), np.diff(flat[1]))
+    for tunnel in tunnels:           # Tunnel.contains for every piece at once
+        normal, offset = tunnel.halfspaces
+        outside = ~(flat[0] @ normal.T <= offset + tol).all(axis=1)
+        excavated |= np.bincount(vert_piece, weights=outside, minlength=len(pieces)) == 0
+    clock.append(time.perf_counter())
+    volume, first_moment, second_moment = _volumes(flat)
+    centroid = first_moment / volume[:, None]
+    clock.append(time.perf_counter())
+    links, area, real = _links(flat, all_planes, tol * size, tol)
+    clock.append(time.perf_counter())
     block_id = _components(len(pieces), links, area, real, excavated)
+    clock.append(time.perf_counter())
+    _PHASE_S.update(zip(("cut", "moments", "links", "grouping"), np.diff(clock).tolist()))
     return BlockSet3D(tuple(pieces), volume, centroid, block_id, links, area, real, box, excavated,
-                      all_planes)
+                      all_planes, second_moment, _surface_areas(flat))
+
+
+def _cut_flat(box: np.ndarray, planes: Planes | None, tunnels, n_fractures: int, tol: float):
+    """The box cut by ``planes`` in the numba kernel, as the flat layout (verts, face_start,
+    face_label, piece_start): the first ``n_fractures`` everywhere, then each tunnel's walls only
+    where a piece can reach into that tunnel."""
+    flat = _to_flat([box_polyhedron(box)])
+    if planes is None:
+        return flat
+    from ._polyhedra_kernels import cut_by_planes
+
+    halfspaces = [tunnel.halfspaces for tunnel in tunnels]
+    per_plane = np.r_[np.zeros(n_fractures, np.int64), [len(h[1]) for h in halfspaces for _ in h[1]]]
+    region_start = np.zeros(len(planes) + 1, np.int64)
+    np.cumsum(per_plane, out=region_start[1:])
+    region_normal = np.concatenate([np.zeros((0, 3))] + [h[0] for h in halfspaces for _ in h[1]])
+    region_offset = np.concatenate([np.zeros(0)] + [h[1] for h in halfspaces for _ in h[1]])
+    f64 = np.float64
+    return cut_by_planes(*flat, *(np.ascontiguousarray(a, f64) for a in
+                                  (planes.normal, planes.offset_m, planes.centre_m, planes.radius_m,
+                                   region_normal, region_offset)), region_start, 0, tol)
+
+
+def _volumes(flat) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Volume (n,), first moment ∫x dV (n, 3) and second moment ∫x xᵀ dV (n, 3, 3) of every piece
+    of the flat layout."""
+    n = len(flat[3]) - 1
+    volume, first, second = np.empty(n), np.empty((n, 3)), np.empty((n, 3, 3))
+    if _USE_KERNELS:
+        from ._polyhedra_kernels import piece_moments
+
+        piece_moments(flat[0], flat[1], flat[3], volume, first, second)
+    else:
+        for i, piece in enumerate(_from_flat(*flat)):
+            volume[i], first[i], second[i] = piece.moments()
+    return volume, first, second
+
+
+def _surface_areas(flat) -> np.ndarray:
+    """Σ face areas of every piece: each face's area is half the norm of Σ_i v_i × v_{i+1} over its
+    vertices (the vector area of a planar polygon), for all faces at once."""
+    verts, face_start, _, piece_start = flat
+    if len(verts) == 0:
+        return np.zeros(len(piece_start) - 1)
+    following = np.arange(1, len(verts) + 1)
+    following[face_start[1:] - 1] = face_start[:-1]          # the last vertex of a face wraps
+    cross = np.cross(verts, verts[following])
+    face_area = 0.5 * np.linalg.norm(np.add.reduceat(cross, face_start[:-1], axis=0), axis=1)
+    per_piece = np.add.reduceat(face_area, piece_start[:-1]) if len(face_area) else face_area
+    return per_piece
 
 
 def _cut_by_plane(pieces: list, bounds: list, planes: Planes, j: int, tol: float, inside) -> None:
@@ -205,59 +285,83 @@ def _cut_by_plane(pieces: list, bounds: list, planes: Planes, j: int, tol: float
         bounds[1] = np.vstack([hi] + [p.vertices_m().max(axis=0) for p in new_pieces])
 
 
-def _links(pieces, planes: Planes | None, min_area_m2: float):
+def _links(flat, planes: Planes | None, min_area_m2: float, tol_m: float):
     """Pairs of pieces sharing part of a cut: (a, b, plane index), shared area, real area.
 
     Faces carry the index of the plane that made them; on each plane the faces whose outward normal
-    is +n (their piece lies below) are matched with those facing −n by polygon overlap in the plane.
+    is +n (their piece lies below) are matched with those facing −n: candidate pairs by bounding
+    box (shapely STRtree), shared polygon by clipping one convex face by the other in the plane
+    (numba kernel; exact for convex polygons, and robust where faces only touch along an edge).
+    ``flat`` is the pieces' flat layout (verts, face_start, face_label, piece_start); clipped vertices
+    closer than ``tol_m`` are merged.
     """
-    if planes is None:
-        return np.zeros((0, 3), np.int64), np.zeros(0), np.zeros(0)
-    faces_by_plane: dict[int, list] = {}
-    for p, piece in enumerate(pieces):
-        for face, j in zip(piece.faces, piece.labels):
-            if j >= 0:
-                faces_by_plane.setdefault(j, []).append((p, face))
-    means = [piece.vertices_m().mean(axis=0) for piece in pieces]
-    rows, areas, reals = [], [], []
-    for j, faces in faces_by_plane.items():
-        n, e = planes.normal[j], plane_basis(planes.normal[j])
-        owner = np.array([p for p, _ in faces])
-        polygons = np.array([shapely.Polygon(np.stack([f @ e[0], f @ e[1]], axis=1)) for _, f in faces])
+    empty = np.zeros((0, 3), np.int64), np.zeros(0), np.zeros(0)
+    verts, face_start, face_label, piece_start = flat
+    cut = np.flatnonzero(face_label >= 0)
+    if planes is None or not len(cut):
+        return empty
+    from ._polyhedra_kernels import clip_convex_pairs, disk_overlap, project_faces
+
+    n_pieces = len(piece_start) - 1
+    face_piece = np.repeat(np.arange(n_pieces), np.diff(piece_start))
+    vert_piece = np.repeat(face_piece, np.diff(face_start))
+    means = np.stack([np.bincount(vert_piece, weights=verts[:, c], minlength=n_pieces) for c in range(3)],
+                     axis=1) / np.bincount(vert_piece, minlength=n_pieces)[:, None]
+    # cut faces grouped by plane (stable: piece order within a plane), planes by first appearance
+    cut = cut[np.argsort(face_label[cut], kind="stable")]
+    plane_of = face_label[cut]
+    starts = np.flatnonzero(np.r_[True, plane_of[1:] != plane_of[:-1]])
+    ends = np.r_[starts[1:], len(cut)]
+    e1, e2 = _plane_bases(planes.normal)
+    lengths = np.diff(face_start)[cut]
+    ring_start = np.zeros(len(cut) + 1, np.int64)
+    np.cumsum(lengths, out=ring_start[1:])
+    uv, lo, hi = np.empty((ring_start[-1], 2)), np.empty((len(cut), 2)), np.empty((len(cut), 2))
+    project_faces(verts, face_start, cut, e1[plane_of], e2[plane_of], ring_start, uv, lo, hi)
+    boxes = shapely.box(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1])
+    below = np.einsum("ij,ij->i", means[face_piece[cut]], planes.normal[plane_of]) < planes.offset_m[plane_of]
+    pair_a, pair_b, areas = [], [], []
+    for g in np.argsort(cut[starts], kind="stable"):   # cut[starts]: each plane's first face
         # a piece lies wholly on one side of the plane, so its vertex mean tells the side
-        below = np.array([means[p] @ n for p, _ in faces]) < planes.offset_m[j]
-        lower, upper = np.flatnonzero(below), np.flatnonzero(~below)
+        lower = starts[g] + np.flatnonzero(below[starts[g]:ends[g]])
+        upper = starts[g] + np.flatnonzero(~below[starts[g]:ends[g]])
         if not len(lower) or not len(upper):
             continue
-        pairs = shapely.STRtree(polygons[upper]).query(polygons[lower], predicate="intersects")
+        pairs = shapely.STRtree(boxes[upper]).query(boxes[lower])
+        pairs = pairs[:, np.lexsort((pairs[1], pairs[0]))]
         a, b = lower[pairs[0]], upper[pairs[1]]
-        shared = shapely.intersection(polygons[a], polygons[b])
-        area = shapely.area(shared)
-        keep = area > min_area_m2
-        a, b, shared, area = a[keep], b[keep], shared[keep], area[keep]
-        rows.append(np.stack([owner[a], owner[b], np.full(len(a), j)], axis=1))
-        areas.append(area)
-        if planes.label[j] < 0:      # a tunnel wall: fictitious between rock pieces
-            reals.append(np.zeros(len(area)))
-        else:
-            reals.append(_real_area(shared, area, planes.centre_m[j] @ np.stack(e).T, planes.radius_m[j]))
-    if not rows:
-        return np.zeros((0, 3), np.int64), np.zeros(0), np.zeros(0)
-    return np.concatenate(rows).astype(np.int64), np.concatenate(areas), np.concatenate(reals)
+        shared = np.empty(len(a))
+        clip_convex_pairs(uv, ring_start, a, b, tol_m, shared)
+        keep = shared > min_area_m2
+        pair_a.append(a[keep])
+        pair_b.append(b[keep])
+        areas.append(shared[keep])
+    if not pair_a:
+        return empty
+    a, b, area = np.concatenate(pair_a), np.concatenate(pair_b), np.concatenate(areas)
+    j = plane_of[a]
+    rows = np.stack([face_piece[cut[a]], face_piece[cut[b]], j], axis=1).astype(np.int64)
+    real = np.where(planes.label[j] < 0, 0.0, area)     # a tunnel wall: fictitious between rock pieces
+    disk = np.flatnonzero(np.isfinite(planes.radius_m[j]) & (planes.label[j] >= 0))
+    if len(disk):
+        jd = j[disk]
+        centre_uv = np.stack([np.einsum("ij,ij->i", planes.centre_m[jd], e1[jd]),
+                              np.einsum("ij,ij->i", planes.centre_m[jd], e2[jd])], axis=1)
+        overlap = np.empty(len(disk))
+        disk_overlap(uv, ring_start, a[disk], b[disk], centre_uv, planes.radius_m[jd].astype(np.float64),
+                     DISK_POLYGON_VERTICES, tol_m, overlap)
+        real[disk] = overlap
+    return rows, area, real
 
 
-def _real_area(shared: np.ndarray, area: np.ndarray, centre_uv: np.ndarray, radius: float) -> np.ndarray:
-    """Fractured part of each shared polygon: all of it when every vertex lies within the disk
-    (exact: polygon and disk are convex), else its overlap with a 256-gon of the disk."""
-    real = area.copy()
-    if not math.isfinite(radius):
-        return real
-    xy, owner = shapely.get_coordinates(shared, return_index=True)
-    outside = np.bincount(owner, weights=np.hypot(*(xy - centre_uv).T) > radius, minlength=len(shared)) > 0
-    if outside.any():
-        disk = shapely.Point(centre_uv).buffer(radius, quad_segs=DISK_POLYGON_VERTICES // 4)
-        real[outside] = shapely.area(shapely.intersection(shared[outside], disk))
-    return real
+def _plane_bases(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`~rockmass.blockgen.polyhedra.plane_basis` of every row of ``normal (n, 3)``."""
+    nx, ny, nz = np.asarray(normal, float).T
+    first = np.abs(nx) < 0.9
+    with np.errstate(divide="ignore", invalid="ignore"):
+        e1 = np.where(first[:, None], np.stack([np.zeros_like(nx), -nz, ny], axis=1) / np.hypot(ny, nz)[:, None],
+                      np.stack([nz, np.zeros_like(nx), -nx], axis=1) / np.hypot(nx, nz)[:, None])
+    return e1, np.cross(normal, e1)
 
 
 def _components(n: int, links: np.ndarray, area: np.ndarray, real: np.ndarray,

@@ -192,3 +192,26 @@ def split(block: Polyhedron, normal, offset_m: float, label: int,
     above = Polyhedron(tuple(upper_faces) + (cap[::-1].copy(),), tuple(upper_labels) + (int(label),))
     return below, above, cap
 
+
+
+def _to_flat(pieces) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Polyhedra → the flat layout of :mod:`rockmass.blockgen._polyhedra_kernels`: ``verts (v, 3)``
+    float64, ``face_start (f + 1,)``, ``face_label (f,)`` and ``piece_start (n + 1,)`` int64."""
+    faces = [face for piece in pieces for face in piece.faces]
+    face_start = np.zeros(len(faces) + 1, np.int64)
+    np.cumsum([len(face) for face in faces], out=face_start[1:])
+    piece_start = np.zeros(len(pieces) + 1, np.int64)
+    np.cumsum([len(piece.faces) for piece in pieces], out=piece_start[1:])
+    labels = np.array([label for piece in pieces for label in piece.labels], np.int64)
+    verts = np.ascontiguousarray(np.concatenate(faces) if faces else np.zeros((0, 3)), dtype=np.float64)
+    return verts, face_start, labels, piece_start
+
+
+def _from_flat(verts: np.ndarray, face_start: np.ndarray, face_label: np.ndarray,
+               piece_start: np.ndarray) -> list[Polyhedron]:
+    """The flat layout → polyhedra whose faces are views into ``verts``."""
+    starts = face_start.tolist()
+    faces = [verts[a:b] for a, b in zip(starts[:-1], starts[1:])]
+    labels = face_label.tolist()
+    bounds = piece_start.tolist()
+    return [Polyhedron(tuple(faces[a:b]), tuple(labels[a:b])) for a, b in zip(bounds[:-1], bounds[1:])]
