@@ -6,7 +6,8 @@ for one (from the ``[dfn]`` sets of the same file, in the block box), and builds
 or none: ``blocks3d.vtu`` (every face, with its block, keyblock mode and factor of safety),
 ``blocks.csv`` (one row per in-situ block: volume, area, ellipsoid semi-axes, elongation, flatness,
 sphericity, centroid), ``keyblocks.csv`` (one row per block with a free face), ``summary.json``
-(counts, volume balance, the block volume distribution and keyblock modes) and ``manifest.json``.
+(counts, volume balance, tiny and sliver pieces, the block volume distribution with its
+lognormal fit, keyblock modes) and ``manifest.json``.
 """
 
 from __future__ import annotations
@@ -18,10 +19,6 @@ from .errors import ConfigError, InputError
 from .outputs import output_folder
 
 __all__ = ["compute", "produce", "summary"]
-
-#: quantiles of the in-situ block volume distribution reported in summary.json.
-VOLUME_QUANTILES = (0.1, 0.25, 0.5, 0.75, 0.9)
-
 
 def _network(document, settings, config_path):
     """The DFN realization of ``[dfn]`` in the block box, or None."""
@@ -58,12 +55,16 @@ def compute(args, document=None):
 
 
 def summary(model) -> dict:
-    """Counts, volume balance, block volume distribution and keyblock modes, as plain JSON types."""
+    """Counts, volume balance, piece quality, the block volume distribution (quantiles and lognormal
+    fit) and keyblock modes, as plain JSON types."""
+    from dataclasses import asdict
+
     import numpy as np
 
-    blocks, shapes = model.blocks, model.shapes
+    from .blockgen.block_shapes import piece_quality, volume_distribution
+
+    blocks = model.blocks
     box_volume = float(np.prod(blocks.box_m[1] - blocks.box_m[0]))
-    volumes = shapes.volume_m3
     modes = Counter(k.mode for k in model.keyblocks)
     finite = [k.factor_of_safety for k in model.keyblocks if k.mode in ("slide", "slide2")]
     return {
@@ -71,9 +72,8 @@ def summary(model) -> dict:
         "excavated_pieces": int(blocks.excavated.sum()),
         "excavated_volume_m3": float(blocks.volume_m3[blocks.excavated].sum()),
         "volume_balance": float(abs(blocks.volume_m3.sum() / box_volume - 1.0)),
-        "block_volume_m3": {"total": float(volumes.sum()), "mean": float(volumes.mean()) if len(volumes) else 0.0,
-                            "quantiles": {str(q): float(np.quantile(volumes, q)) for q in VOLUME_QUANTILES}
-                            if len(volumes) else {}},
+        "piece_quality": asdict(piece_quality(blocks)),
+        "block_volume_m3": asdict(volume_distribution(model.shapes.volume_m3)),
         "keyblocks": {"with_free_face": len(model.keyblocks), "modes": dict(sorted(modes.items())),
                       "smallest_sliding_factor_of_safety": min(finite) if finite else None},
     }

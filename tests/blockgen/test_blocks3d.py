@@ -228,3 +228,16 @@ def test_vtu_holds_every_face_with_its_block_and_keyblock_data(tmp_path):
     for b, m in analysed.items():
         assert set(data["keyblock_mode"][data["block"] == b]) == {m}
     assert (data["block"][data["excavated"] == 1] == -1).all()
+
+
+def test_a_thin_slab_is_reported_as_a_sliver_and_tiny_piece():
+    from rockmass.blockgen.block_shapes import piece_quality
+
+    planes = Planes(np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]]), np.array([0.5, 0.501]), np.array([0, 1]),
+                    np.zeros((2, 3)), np.full(2, np.inf))
+    blocks = cut_box(UNIT, planes)
+    quality = piece_quality(blocks, tiny_fraction=1e-2)
+    # the 1 x 1 x 0.001 slab: volume 1e-3 < 1e-2 of the cube, and its thickness semi-axis is
+    # 0.001/1 of its width one (< 0.01); the two halves are neither
+    assert (quality.tiny, quality.slivers) == (1, 1)
+    assert quality.smallest_m3 == pytest.approx(1e-3, rel=1e-9)

@@ -65,6 +65,13 @@ def test_outputs_of_a_cube_of_blocks_around_a_square_tunnel(tmp_path, capsys):
     assert roof and all(float(k["factor_of_safety"]) == 0.0 for k in roof)
     assert doc["keyblocks"]["modes"].get("stable", 0) >= 1
     assert all(k["factor_of_safety"] == "inf" or math.isfinite(float(k["factor_of_safety"])) for k in keyblocks)
+    # volumes of the cells: 1 m³ inside, 0.5 / 0.25 / 0.125 m³ along the faces, edges and corners
+    volumes = doc["block_volume_m3"]
+    assert volumes["count"] == doc["blocks"]
+    assert volumes["quantiles"]["0.1"] == pytest.approx(0.25) and volumes["quantiles"]["0.9"] == pytest.approx(1.0)
+    logs = [math.log(float(r["volume_m3"])) for r in rows]
+    assert volumes["log_mean"] == pytest.approx(sum(logs) / len(logs))
+    assert doc["piece_quality"]["tiny"] == 0 and doc["piece_quality"]["slivers"] == 0
 
 
 @pytest.mark.parametrize("edit, field", [
