@@ -3,7 +3,8 @@
 :func:`compute` loads and validates the config, generates the DFN realization when the section asks
 for one (from the ``[dfn]`` sets of the same file, in the block box), and builds the model
 (:func:`rockmass.blockgen.model3d.build3d`); :func:`produce` also writes, into a folder, all of them
-or none: ``blocks3d.vtu`` (every face, with its block, keyblock mode and factor of safety),
+or none (one folder per realization when ``--realizations`` asks for several): ``blocks3d.vtu``
+(every face, with its block, keyblock mode and factor of safety),
 ``blocks.csv`` (one row per in-situ block: volume, area, ellipsoid semi-axes, elongation, flatness,
 sphericity, centroid), ``keyblocks.csv`` (one row per block with a free face), ``summary.json``
 (counts, volume balance, tiny and sliver pieces, the block volume distribution with its
@@ -38,8 +39,16 @@ def _network(document, settings, config_path):
         raise InputError(f"{config_path}: blocks3d.dfn_realization: {exc}") from exc
 
 
+#: the most realizations one command builds (each is a full block model).
+MAX_REALIZATIONS = 1000
+
+
 def compute(args, document=None):
-    """Load (unless given), validate, generate and build; return (document, model, timings)."""
+    """Load (unless given), validate, generate and build; return (document, models, timings) with
+    one model per realization (``args.realizations``, default 1: realizations ``dfn_realization``,
+    ``dfn_realization + 1``, …)."""
+    import dataclasses
+
     from .blockgen.model3d import build3d
     from .config import load_config, required_section
 
@@ -47,11 +56,24 @@ def compute(args, document=None):
     if document is None:
         document = load_config(args.config)
     settings = required_section(document, "blocks3d", args.config).to_library()
-    network = _network(document, settings, args.config)
-    t1 = time.perf_counter()
-    model = build3d(settings, network)
-    t2 = time.perf_counter()
-    return document, model, {"load_and_dfn_s": t1 - t0, "build_s": t2 - t1}
+    t_loaded = time.perf_counter()
+    count = getattr(args, "realizations", None) or 1
+    if not 1 <= count <= MAX_REALIZATIONS:
+        raise InputError(f"--realizations must be in 1..{MAX_REALIZATIONS}, got {count}")
+    if count > 1 and settings.dfn_realization is None:
+        raise ConfigError(args.config, [("blocks3d.dfn_realization", f"--realizations {count} needs "
+                                         "a DFN: set the first realization here")])
+    models, t_dfn, t_build = [], 0.0, 0.0
+    for k in range(count):
+        t1 = time.perf_counter()
+        one = (settings if settings.dfn_realization is None else
+               dataclasses.replace(settings, dfn_realization=settings.dfn_realization + k))
+        network = _network(document, one, args.config)
+        t2 = time.perf_counter()
+        models.append(build3d(one, network))
+        t_dfn += t2 - t1
+        t_build += time.perf_counter() - t2
+    return document, models, {"load_s": t_loaded - t0, "dfn_s": t_dfn, "build_s": t_build}
 
 
 def summary(model) -> dict:
@@ -101,28 +123,87 @@ def _keyblocks_csv(model) -> str:
                        "planes", "dx", "dy", "dz"])
 
 
+#: the per-realization numbers compared across realizations (summary.json "across").
+_ACROSS = {"blocks": ("blocks",), "median_block_m3": ("block_volume_m3", "quantiles", "0.5"),
+           "log_mean": ("block_volume_m3", "log_mean"), "log_sd": ("block_volume_m3", "log_sd"),
+           "blocks_on_openings": ("keyblocks", "with_free_face")}
+
+
+def _across(docs: list[dict]) -> dict:
+    """Mean, standard deviation, min and max over realizations of each number in :data:`_ACROSS`,
+    and of the count of each keyblock mode."""
+    import numpy as np
+
+    def pick(doc, path):
+        for key in path:
+            doc = doc[key]
+        return doc
+
+    columns = {name: [float(pick(d, path)) for d in docs] for name, path in _ACROSS.items()}
+    modes = sorted({m for d in docs for m in d["keyblocks"]["modes"]})
+    columns.update({f"mode_{m}": [float(d["keyblocks"]["modes"].get(m, 0)) for d in docs] for m in modes})
+    return {name: {"mean": float(np.mean(v)), "sd": float(np.std(v, ddof=1)) if len(v) > 1 else 0.0,
+                   "min": float(np.min(v)), "max": float(np.max(v))} for name, v in columns.items()}
+
+
+def _model_files(model, doc: dict) -> dict:
+    """name -> writer(path) of one model's files."""
+    from .atomic import atomic_write_json, atomic_write_text
+    from .blockgen.blocks3d_io import write_blocks3d_vtu
+
+    return {"blocks3d.vtu": lambda path: write_blocks3d_vtu(model.blocks, path, model.keyblocks),
+            "blocks.csv": lambda path: atomic_write_text(path, _blocks_csv(model)),
+            "keyblocks.csv": lambda path: atomic_write_text(path, _keyblocks_csv(model)),
+            "summary.json": lambda path: atomic_write_json(path, doc)}
+
+
 def produce(args, out_dir, document=None):
-    """Build (:func:`compute`) and write every output into ``out_dir``; return what :func:`compute`
-    returns plus the summary."""
+    """Build (:func:`compute`) and write every output into ``out_dir``, all of them or none; return
+    ``(document, models, summary document)``.
+
+    One realization: ``blocks3d.vtu``, ``blocks.csv``, ``keyblocks.csv``, ``summary.json``,
+    ``manifest.json``. Several: ``realization_NNNN/`` with the first four for each,
+    ``realizations.csv`` (one row per realization) and ``summary.json`` with each realization's
+    summary and their spread (``across``), and ``manifest.json``.
+    """
     from contextlib import ExitStack
 
     from .atomic import atomic_path, atomic_write_json, atomic_write_text
-    from .blockgen.blocks3d_io import write_blocks3d_vtu
     from .manifest import build_manifest
 
-    document, model, timings = compute(args, document)
-    doc = summary(model)
+    document, models, timings = compute(args, document)
+    docs = [summary(m) for m in models]
+    first = document.blocks3d.dfn_realization
+    if len(models) == 1:
+        files = _model_files(models[0], docs[0])
+        doc = docs[0]
+    else:
+        files = {}
+        for k, (model, one) in enumerate(zip(models, docs)):
+            files.update({f"realization_{first + k:04d}/{name}": write
+                          for name, write in _model_files(model, one).items()})
+        doc = {"realizations": [{"realization": first + k, **d} for k, d in enumerate(docs)],
+               "across": _across(docs)}
+        files["realizations.csv"] = lambda path: atomic_write_text(path, _realizations_csv(first, docs))
+        files["summary.json"] = lambda path: atomic_write_json(path, doc)
     with output_folder(out_dir) as out, ExitStack() as stack:
-        paths = {name: stack.enter_context(atomic_path(out / name)) for name in
-                 ("blocks3d.vtu", "blocks.csv", "keyblocks.csv", "summary.json", "manifest.json")}
-        write_blocks3d_vtu(model.blocks, paths["blocks3d.vtu"], model.keyblocks)
-        atomic_write_text(paths["blocks.csv"], _blocks_csv(model))
-        atomic_write_text(paths["keyblocks.csv"], _keyblocks_csv(model))
-        atomic_write_json(paths["summary.json"], doc)
+        paths = {name: stack.enter_context(atomic_path(out / name)) for name in [*files, "manifest.json"]}
+        for name, write in files.items():
+            write(paths[name])
         seeds = None
-        if document.blocks3d.dfn_realization is not None:
-            seeds = {"dfn.seed": document.dfn.seed, "realization": document.blocks3d.dfn_realization}
+        if first is not None:
+            seeds = {"dfn.seed": document.dfn.seed, "realizations": list(range(first, first + len(models)))}
         manifest = build_manifest(command=args.argv, config=document, inputs=[args.config], seeds=seeds,
                                   timings_s=timings)
         atomic_write_json(paths["manifest.json"], manifest)
-    return document, model, doc
+    return document, models, doc
+
+
+def _realizations_csv(first: int, docs: list[dict]) -> str:
+    modes = sorted({m for d in docs for m in d["keyblocks"]["modes"]})
+    rows = [[first + k, d["pieces"], d["blocks"], d["block_volume_m3"]["quantiles"].get("0.5", 0.0),
+             d["block_volume_m3"]["log_mean"], d["block_volume_m3"]["log_sd"], d["volume_balance"],
+             d["keyblocks"]["with_free_face"], *(d["keyblocks"]["modes"].get(m, 0) for m in modes)]
+            for k, d in enumerate(docs)]
+    return _csv(rows, ["realization", "pieces", "blocks", "median_block_m3", "log_mean", "log_sd",
+                       "volume_balance", "blocks_on_openings", *(f"mode_{m}" for m in modes)])

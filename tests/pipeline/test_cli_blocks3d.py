@@ -90,3 +90,65 @@ def test_bad_config_exits_2_naming_the_key_and_writes_nothing(tmp_path, capsys, 
     err = capsys.readouterr().err
     assert "c.toml" in err and field in err
     assert not out.exists()
+
+
+DFN_CONFIG = """
+[dfn]
+seed = 5
+realizations = 1
+
+[dfn.domain]
+min_m = [0.0, 0.0, 0.0]
+max_m = [6.0, 6.0, 6.0]
+
+[[dfn.sets]]
+name = "flat"
+orientation = { distribution = "fisher", dip_deg = 10.0, dip_direction_deg = 90.0, kappa = 30.0 }
+size = { distribution = "power_law", r_min_m = 1.0, r_max_m = 10.0, alpha = 2.5 }
+intensity = { measure = "P32", value = 0.5 }
+
+[[dfn.sets]]
+name = "steep"
+orientation = { distribution = "fisher", dip_deg = 80.0, dip_direction_deg = 0.0, kappa = 30.0 }
+size = { distribution = "power_law", r_min_m = 1.0, r_max_m = 10.0, alpha = 2.5 }
+intensity = { measure = "P32", value = 0.5 }
+
+[blocks3d]
+box_min_m = [0.0, 0.0, 0.0]
+box_max_m = [6.0, 6.0, 6.0]
+dfn_realization = REALIZATION
+
+[[blocks3d.tunnels]]
+shape = "circle"
+centre_m = [3.0, 0.0, 3.0]
+radius_m = 1.0
+"""
+
+
+def test_realizations_are_the_same_alone_or_in_a_batch(tmp_path, capsys):
+    batch, alone = tmp_path / "batch.toml", tmp_path / "alone.toml"
+    batch.write_text(DFN_CONFIG.replace("REALIZATION", "2"))
+    alone.write_text(DFN_CONFIG.replace("REALIZATION", "3"))
+    assert main(["blocks3d", str(batch), "--out", str(tmp_path / "b"), "--realizations", "3"]) == 0
+    assert main(["blocks3d", str(alone), "--out", str(tmp_path / "a")]) == 0
+    capsys.readouterr()
+    assert sorted(p.name for p in (tmp_path / "b").iterdir()) == [
+        "manifest.json", "realization_0002", "realization_0003", "realization_0004",
+        "realizations.csv", "summary.json"]
+    for name in ("blocks.csv", "keyblocks.csv", "summary.json"):
+        assert (tmp_path / "b" / "realization_0003" / name).read_text() == (tmp_path / "a" / name).read_text()
+    doc = json.loads((tmp_path / "b" / "summary.json").read_text())
+    rows = list(csv.DictReader((tmp_path / "b" / "realizations.csv").open()))
+    assert [int(r["realization"]) for r in rows] == [2, 3, 4]
+    blocks = [d["blocks"] for d in doc["realizations"]]
+    assert [int(r["blocks"]) for r in rows] == blocks
+    assert doc["across"]["blocks"]["mean"] == pytest.approx(sum(blocks) / 3)
+    assert doc["across"]["blocks"]["min"] == min(blocks) and doc["across"]["blocks"]["max"] == max(blocks)
+
+
+def test_several_realizations_need_a_dfn(tmp_path, capsys):
+    config = tmp_path / "c.toml"
+    config.write_text(CONFIG)
+    assert main(["blocks3d", str(config), "--out", str(tmp_path / "out"), "--realizations", "2"]) == 2
+    assert "blocks3d.dfn_realization" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
