@@ -67,7 +67,7 @@ def poisson_case(lam: float, seed: int) -> dict:
             "blocks_per_s": blocks.n_blocks / seconds}
 
 
-def seed001_network(side: float, p32: float):
+def seed001_network(side: float, p32: float, realization: int = 0):
     """The seed-001 orientations (Fisher κ = 20) with power-law radii at total P32 in a cube."""
     import numpy as np
 
@@ -77,7 +77,7 @@ def seed001_network(side: float, p32: float):
     sets = [FractureSetSpec(FisherOrientation(d, dd, 20.0), PowerLawSize(r, 40.0, 2.5), IntensityP32(p32 / 3))
             for d, dd, r in ((50, 270, 3.53), (80, 10, 2.51), (70, 150, 2.84))]
     box = np.array([[0.0, 0.0, 0.0], [side, side, side]])
-    return box, generate(sets, box, seed=1)
+    return box, generate(sets, box, seed=1, realization=realization)
 
 
 def dfn_case(side: float, p32: float) -> dict:
@@ -101,6 +101,30 @@ def dfn_case(side: float, p32: float) -> dict:
             "blocks": blocks.n_blocks, "fall": modes["fall"], "slide": modes["slide"] + modes["slide2"],
             "cut_s": t1 - t0, "keyblocks_s": t2 - t1, "shapes_s": t3 - t2,
             "volume_error": abs(blocks.volume_m3.sum() / side ** 3 - 1.0)}
+
+
+def p32_case(p32: float, realizations: int, side: float = 15.0) -> dict:
+    """In-situ block size against intensity: the seed-001 sets in a cube without openings, over
+    ``realizations`` realizations; median block volume and lognormal log-mean (mean ± sd)."""
+    import numpy as np
+
+    from rockmass.blockgen.block_shapes import volume_distribution
+    from rockmass.blockgen.blocks3d import cut_box, disk_planes
+
+    medians, log_means, counts, seconds = [], [], [], 0.0
+    for r in range(realizations):
+        box, network = seed001_network(side, p32, r)
+        t0 = time.perf_counter()
+        blocks = cut_box(box, disk_planes(network))
+        seconds += time.perf_counter() - t0
+        dist = volume_distribution(blocks.block_volumes_m3())
+        medians.append(dist.quantiles["0.5"])
+        log_means.append(dist.log_mean)
+        counts.append(blocks.n_blocks)
+    return {"p32": p32, "realizations": realizations, "blocks_per_m3": float(np.mean(counts)) / side ** 3,
+            "median_m3": float(np.mean(medians)), "median_sd_m3": float(np.std(medians, ddof=1)),
+            "log_mean": float(np.mean(log_means)), "log_mean_sd": float(np.std(log_means, ddof=1)),
+            "cut_s_per_realization": seconds / realizations}
 
 
 #: Table 3 cases: (kind, parameter, nominal blocks). orthogonal: λ per axis; oblique: planes per unit
@@ -189,6 +213,11 @@ def main() -> None:
     print(table(dfn_rows, [("side_m", ".0f"), ("p32", ".1f"), ("disks", "d"), ("pieces", "d"),
                            ("blocks", "d"), ("fall", "d"), ("slide", "d"), ("cut_s", ".2f"),
                            ("keyblocks_s", ".2f"), ("shapes_s", ".2f"), ("volume_error", ".1e")]))
+    sweep = [p32_case(p32, 3 if quick else 5) for p32 in ((0.5, 1.0, 2.0) if quick else (0.5, 1.0, 2.0, 4.0))]
+    print("\nTable 2b - in-situ block size against P32 (seed-001 sets, 15 m cube, mean ± sd over realizations)")
+    print(table(sweep, [("p32", ".1f"), ("realizations", "d"), ("blocks_per_m3", ".3f"), ("median_m3", ".3g"),
+                        ("median_sd_m3", ".2g"), ("log_mean", ".2f"), ("log_mean_sd", ".2f"),
+                        ("cut_s_per_realization", ".2f")]))
     scale_rows = [in_fresh_process(["--case", kind, str(parameter), *reference])
                   for kind, parameter, nominal in SCALE_CASES if not (quick and nominal == "1e5")]
     print("\nTable 3 - scaling (fresh process per row; peak_mb = peak RSS growth during cut_box)")
@@ -200,7 +229,8 @@ def main() -> None:
         cold = in_fresh_process(["--case", "compile", "0"], env={"NUMBA_CACHE_DIR": cache})
     print(f"\ncold numba compile (empty cache): first small cut {cold['first_s']:.2f} s, "
           f"second {cold['second_s']:.3f} s, compile ~{cold['compile_s']:.2f} s")
-    save("bench_blocks3d", {"poisson": rows, "dfn": dfn_rows, "scale": scale_rows, "cold_compile": cold,
+    save("bench_blocks3d", {"poisson": rows, "dfn": dfn_rows, "p32_sweep": sweep, "scale": scale_rows,
+                            "cold_compile": cold,
                             "reference_path": bool(reference)})
 
 
