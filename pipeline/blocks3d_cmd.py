@@ -1,7 +1,7 @@
 """``rockmass blocks3d CONFIG --out DIR``: 3D blocks, keyblocks and block sizes from ``[blocks3d]``.
 
-Writes under ``--out``: ``blocks3d.vtu``, ``blocks.csv``, ``keyblocks.csv``, ``summary.json`` and
-``manifest.json`` — all of them or none (:mod:`rockmass.blocks3d_stage`); with ``--realizations K``
+Writes under ``--out``: ``blocks3d.vtu``, ``blocks.csv``, ``keyblocks.csv``, ``keyblocks.png``,
+``summary.json`` and ``manifest.json`` — all of them or none (:mod:`rockmass.blocks3d_stage`); with ``--realizations K``
 one ``realization_NNNN/`` folder each, ``realizations.csv`` and the spread in ``summary.json``.
 ``--json`` prints the summary.
 """
@@ -24,7 +24,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                     "realization, excavate tunnels, and analyse block sizes and keyblocks.")
     p.add_argument("config", help="TOML file with a [blocks3d] section (and [dfn] for a DFN)")
     p.add_argument("--out", required=True, help="write blocks3d.vtu, blocks.csv, keyblocks.csv, "
-                                                "summary.json and manifest.json here")
+                                                "keyblocks.png, summary.json and manifest.json here")
     p.add_argument("--realizations", type=int, default=1, metavar="K",
                    help="build DFN realizations dfn_realization .. dfn_realization + K - 1, each in "
                         "realization_NNNN/, with realizations.csv and their spread in summary.json "

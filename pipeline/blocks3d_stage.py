@@ -6,7 +6,8 @@ for one (from the ``[dfn]`` sets of the same file, in the block box), and builds
 or none (one folder per realization when ``--realizations`` asks for several): ``blocks3d.vtu``
 (every face, with its block, keyblock mode and factor of safety),
 ``blocks.csv`` (one row per in-situ block: volume, area, ellipsoid semi-axes, elongation, flatness,
-sphericity, centroid), ``keyblocks.csv`` (one row per block with a free face), ``summary.json``
+sphericity, centroid), ``keyblocks.csv`` (one row per block with a free face), ``keyblocks.png`` (the blocks that can
+fall or slide, in 3D), ``summary.json``
 (counts, volume balance, tiny and sliver pieces, the block volume distribution with its
 lognormal fit, keyblock modes) and ``manifest.json``.
 """
@@ -151,7 +152,10 @@ def _model_files(model, doc: dict) -> dict:
     from .atomic import atomic_write_json, atomic_write_text
     from .blockgen.blocks3d_io import write_blocks3d_vtu
 
+    from .blockgen.plots3d import plot_keyblocks
+
     return {"blocks3d.vtu": lambda path: write_blocks3d_vtu(model.blocks, path, model.keyblocks),
+            "keyblocks.png": lambda path: plot_keyblocks(model.blocks, model.keyblocks, path),
             "blocks.csv": lambda path: atomic_write_text(path, _blocks_csv(model)),
             "keyblocks.csv": lambda path: atomic_write_text(path, _keyblocks_csv(model)),
             "summary.json": lambda path: atomic_write_json(path, doc)}
@@ -161,8 +165,8 @@ def produce(args, out_dir, document=None):
     """Build (:func:`compute`) and write every output into ``out_dir``, all of them or none; return
     ``(document, models, summary document)``.
 
-    One realization: ``blocks3d.vtu``, ``blocks.csv``, ``keyblocks.csv``, ``summary.json``,
-    ``manifest.json``. Several: ``realization_NNNN/`` with the first four for each,
+    One realization: ``blocks3d.vtu``, ``blocks.csv``, ``keyblocks.csv``, ``keyblocks.png``,
+    ``summary.json``, ``manifest.json``. Several: ``realization_NNNN/`` with the first five for each,
     ``realizations.csv`` (one row per realization) and ``summary.json`` with each realization's
     summary and their spread (``across``), and ``manifest.json``.
     """

@@ -47,7 +47,7 @@ def test_outputs_of_a_cube_of_blocks_around_a_square_tunnel(tmp_path, capsys):
     assert main(["blocks3d", str(config), "--out", str(out), "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert sorted(p.name for p in out.iterdir()) == ["blocks.csv", "blocks3d.vtu", "keyblocks.csv",
-                                                       "manifest.json", "summary.json"]
+                                                       "keyblocks.png", "manifest.json", "summary.json"]
     assert json.loads((out / "summary.json").read_text()) == doc
     # planes at 0.5, 1.5, 2.5, 3.5 on each axis: 5³ cells; the 1 m square tunnel (x 1.5–2.5,
     # z 1.5–2.5) is exactly the row of 5 cells along y, excavated whole
