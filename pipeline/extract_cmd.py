@@ -51,7 +51,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "skimage's brick photo), or recessed joints split into their two bright rims")
     p.add_argument("--sets", type=int, dest="n_sets", help="number of joint sets (default: by BIC)")
     p.add_argument("--config", help="TOML file; its [imaging] section sets scale, width and params")
-    p.add_argument("--debug", action="store_true", help="also write the intermediate images")
+    # its own destination: ``rockmass --debug`` (tracebacks) is the global flag of the same name
+    p.add_argument("--debug", "--debug-images", dest="debug_images", action="store_true",
+                   help="also write the intermediate images")
     p.add_argument("--json", action="store_true", help="print summary.json on stdout")
     p.set_defaults(handler=run)
     return p

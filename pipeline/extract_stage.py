@@ -84,7 +84,7 @@ def compute(args, document=None):
                              joint_width_px=settings["joint_width_px"], roi=roi,
                              face_dip_deg=settings["face_dip_deg"],
                              face_dip_direction_deg=settings["face_dip_direction_deg"],
-                             params=ExtractParams(**settings["params"]), debug=args.debug,
+                             params=ExtractParams(**settings["params"]), debug=args.debug_images,
                              progress=bar)
         except ValueError as exc:
             raise InputError(f"{path}: {exc}") from None

@@ -12,6 +12,7 @@ The command (:mod:`rockmass.solve_cmd`) parses the arguments, calls :func:`produ
 
 from __future__ import annotations
 
+import re
 import time
 from pathlib import Path
 
@@ -245,4 +246,18 @@ def produce(args, out_dir, document=None, model=None, progress=None):
                                   extra={"status": result.status, "diagnostic": result.diagnostic,
                                          "blocks_source": inputs["source"]})
         atomic_write_json(paths["manifest.json"], manifest)
+    _remove_stale_frames(Path(out_dir), set(files))
     return result, doc
+
+
+#: the frame files of ``rockmass solve`` (``blocks_0000.vtu`` …), as :func:`build_outputs` names them.
+_FRAME_NAME = re.compile(r"blocks_\d{4,}\.vtu")
+
+
+def _remove_stale_frames(folder: Path, written: set[str]) -> None:
+    """Remove frame files an earlier solve left in ``folder`` that the new set does not have: a
+    ParaView series must not mix two runs (issue 18). Runs after the new set is complete."""
+    for path in folder.iterdir():
+        if _FRAME_NAME.fullmatch(path.name) and path.name not in written and path.is_file() \
+                and not path.is_symlink():
+            path.unlink()

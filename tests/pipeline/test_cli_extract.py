@@ -101,3 +101,13 @@ def test_unknown_imaging_param_in_config_names_the_key(face_png, tmp_path, capsy
     assert main(["extract", str(path), "--config", str(config), "--out", str(tmp_path / "c")]) == 2
     err = capsys.readouterr().err
     assert "c.toml" in err and "imaging.params" in err and "low_kk" in err
+
+
+def test_extract_debug_images_do_not_switch_on_tracebacks(tmp_path, capsys):
+    """``extract --debug`` writes the intermediate images; it is not the global ``--debug``: a bad
+    photo still exits 2 with a message, not 1 with a traceback (issue 18)."""
+    bad = tmp_path / "face.png"
+    bad.write_bytes(b"not a png at all")
+    assert main(["extract", str(bad), "--m-per-px", "0.02", "--out", str(tmp_path / "out"), "--debug"]) == 2
+    err = capsys.readouterr().err
+    assert "face.png" in err and "Traceback" not in err

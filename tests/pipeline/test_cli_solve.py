@@ -373,3 +373,21 @@ def test_cli_start_up_does_not_import_numpy():
             "print('numpy' in sys.modules, 'numba' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.split() == ["False", "False"]
+
+
+def test_a_new_run_leaves_no_frame_of_an_earlier_run(tiny_run, tmp_path, capsys):
+    """Frames of an earlier run with more frames would join the new ParaView series (issue 18)."""
+    import shutil
+
+    path, out, _ = tiny_run
+    again = tmp_path / "out"
+    shutil.copytree(out, again)
+    stale = again / "blocks_0099.vtu"
+    shutil.copy(again / "blocks_0000.vtu", stale)
+    (again / "notes.txt").write_text("the user's own file")
+    assert main(["solve", str(path), "--out", str(again)]) == 0
+    capsys.readouterr()
+    result = _no_nan((again / "result.json").read_text())
+    frames = sorted(p.name for p in again.glob("blocks_*.vtu"))
+    assert frames == [f["file"] for f in result["frames"]] and not stale.exists()
+    assert (again / "notes.txt").read_text() == "the user's own file"
