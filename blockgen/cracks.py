@@ -41,19 +41,24 @@ Reproducibility: the seed points and the lattice origin are drawn from one gener
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from typing import Annotated, Literal, Optional
 
 import numpy as np
 import shapely
+from pydantic import Field, model_validator
+
+from ..dfn.specs import Bool, Float, field_error, spec
 
 __all__ = ["Cracks", "CRACK_PATTERNS", "crack_segments", "select_parents"]
 
 CRACK_PATTERNS = ("voronoi", "triangular")
+_Point = Annotated[tuple[Annotated[Float, Field(ge=-1e7, le=1e7)], Annotated[Float, Field(ge=-1e7, le=1e7)]],
+                   Field(strict=False)]
 #: a union of two pieces is convex when its convex hull is larger by at most this fraction of its area
 _HULL_RTOL = 1e-9
 
 
-@dataclass(frozen=True)
+@spec(key="cracks.")
 class Cracks:
     """Settings of the potential-crack subdivision (see the module docstring).
 
@@ -74,34 +79,30 @@ class Cracks:
         Subdivide the blocks of excavation stages too (they are removed by the solver later).
     """
 
-    size_m: float
-    pattern: str = "voronoi"
-    jitter: float = 0.3
-    angle_deg: float = 0.0
-    within_m: float | None = None
-    zone_xy_m: tuple | None = field(default=None)
-    include_excavated: bool = False
+    size_m: Annotated[Float, Field(gt=0, le=1e6, description="target sub-block size: pieces of area ≈ "
+                                                            "size_m²")]
+    pattern: Annotated[Literal["voronoi", "triangular"], Field(
+        description="Voronoi cells of a jittered hexagonal lattice, or triangles")] = "voronoi"
+    jitter: Annotated[Float, Field(ge=0, le=0.5, description="Voronoi seed displacement / lattice "
+                                                             "spacing")] = 0.3
+    angle_deg: Annotated[Float, Field(ge=-360, le=360, description="orientation of the seed lattice or "
+                                                                   "of the triangles")] = 0.0
+    within_m: Annotated[Optional[Float], Field(ge=0, le=1e6, description="only blocks within this "
+                                               "distance of an excavation outline")] = None
+    zone_xy_m: Annotated[Optional[tuple[_Point, ...]], Field(
+        strict=False, min_length=3, max_length=10000,
+        description="only blocks whose representative point lies inside this polygon")] = None
+    include_excavated: Annotated[Bool, Field(description="subdivide the blocks of excavation stages "
+                                                         "too")] = False
 
-    def __post_init__(self):
-        if not (isinstance(self.size_m, (int, float)) and math.isfinite(self.size_m)
-                and self.size_m > 0):
-            raise ValueError(f"cracks.size_m must be > 0 and finite, got {self.size_m!r}")
-        if self.pattern not in CRACK_PATTERNS:
-            raise ValueError(f"cracks.pattern must be one of {CRACK_PATTERNS}, got {self.pattern!r}")
-        if not (math.isfinite(self.jitter) and 0 <= self.jitter <= 0.5):
-            raise ValueError(f"cracks.jitter must be within [0, 0.5], got {self.jitter!r}")
-        if not math.isfinite(self.angle_deg):
-            raise ValueError(f"cracks.angle_deg must be finite, got {self.angle_deg!r}")
-        if self.within_m is not None and not (math.isfinite(self.within_m) and self.within_m >= 0):
-            raise ValueError(f"cracks.within_m must be >= 0 and finite, got {self.within_m!r}")
+    @model_validator(mode="after")
+    def _simple_zone(self) -> Cracks:
         if self.zone_xy_m is not None:
-            zone = np.asarray(self.zone_xy_m, dtype=float)
-            if zone.ndim != 2 or zone.shape[1] != 2 or len(zone) < 3 or not np.isfinite(zone).all():
-                raise ValueError("cracks.zone_xy_m must be >= 3 finite (x, y) points")
-            poly = shapely.Polygon(zone)
+            poly = shapely.Polygon(self.zone_xy_m)
             if not poly.is_valid or poly.area <= 0:
-                raise ValueError("cracks.zone_xy_m must be a simple polygon with positive area")
-            object.__setattr__(self, "zone_xy_m", tuple(map(tuple, zone.tolist())))
+                raise field_error(self, "zone_xy_m", "must be a simple polygon with positive area",
+                                  [list(p) for p in self.zone_xy_m])
+        return self
 
 
 def select_parents(faces, region, cracks: Cracks, excavations) -> np.ndarray:

@@ -4,7 +4,10 @@ A fracture set is a :class:`FractureSetSpec`: an orientation model (:class:`Fish
 :class:`UniformOrientation`, :class:`BootstrapOrientation`), a size distribution of disk radii
 (:mod:`rockmass.dfn.sizes`) and an intensity (:class:`IntensityP32`, or :class:`IntensityP10` along a
 line, or :class:`IntensityP21` on a plane, converted to P32 with the set's C13 / C23,
-:mod:`rockmass.dfn.stereology`).
+:mod:`rockmass.dfn.stereology`). These are spec dataclasses (:func:`rockmass.dfn.specs.spec`) that
+declare each parameter's range and description once, for Python calls and for the ``[[dfn.sets]]``
+tables; :class:`BootstrapOrientation` (poles as an array) is a plain dataclass, given in a config
+as planes (``rockmass.dfn_config.BootstrapConfig``).
 
 Algorithm (docs/fractures.md §11.1)
 -----------------------------------
@@ -32,15 +35,17 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
+from typing import Annotated, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
+from pydantic import Field, InstanceOf, Strict
 
 from .fisher import sample_fisher
 from .network import DiskNetwork, as_box, clipped_disk_areas
-from .orientation import _as_angle_range, _as_float_array, _as_scalar, _as_vectors, pole_from_dip, \
-    vector_from_trend_plunge
-from .sizes import ConstantSize, _check_size
+from .orientation import _as_vectors, pole_from_dip, vector_from_trend_plunge
+from .sizes import ConstantSize, SizeDistribution, _check_size
+from .specs import Float, Int, spec
 from .stereology import c13, c23
 
 __all__ = [
@@ -67,7 +72,7 @@ TAIL_PROBABILITY = 1e-9
 # -- orientation models ------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
+@spec
 class FisherOrientation:
     """Fisher-distributed poles about the pole of a mean plane (dip / dip direction, degrees).
 
@@ -81,15 +86,11 @@ class FisherOrientation:
         Fisher concentration κ >= 0 (0: uniform).
     """
 
-    dip_deg: float
-    dip_direction_deg: float
-    kappa: float
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "dip_deg", float(_as_angle_range(self.dip_deg, "dip_deg", 0, 90, "mean dip")))
-        object.__setattr__(self, "dip_direction_deg", float(_as_angle_range(
-            self.dip_direction_deg, "dip_direction_deg", 0, 360, "mean dip direction")))
-        object.__setattr__(self, "kappa", _as_scalar(self.kappa, "kappa", low=0.0, what="Fisher concentration"))
+    dip_deg: Annotated[Float, Field(ge=0, le=90, description="dip of the mean plane")]
+    dip_direction_deg: Annotated[Float, Field(ge=0, le=360, description="dip direction of the mean plane")]
+    kappa: Annotated[Float, Field(ge=0, description="Fisher concentration κ (0: uniform)")]
+    distribution: Annotated[Literal["fisher"], Field(
+        description="orientation law: Fisher about a mean pole")] = "fisher"
 
     @property
     def mean_pole(self) -> np.ndarray:
@@ -107,9 +108,12 @@ class FisherOrientation:
         return float(c23(plane_normal, self.mean_pole, self.kappa))
 
 
-@dataclass(frozen=True)
+@spec
 class UniformOrientation:
     """Isotropic normals (uniform on the sphere): C13 = 2, C23 = 4/π."""
+
+    distribution: Annotated[Literal["uniform"], Field(
+        description="orientation law: uniform on the sphere")] = "uniform"
 
     def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
         return sample_fisher(rng, [0.0, 0.0, 1.0], 0.0, n)
@@ -167,56 +171,60 @@ Orientation = FisherOrientation | UniformOrientation | BootstrapOrientation
 # -- intensities -------------------------------------------------------------------------------
 
 
-def _positive(value: float, name: str, what: str) -> float:
-    return _as_scalar(value, name, low=0.0, low_open=True, what=what)
+Angle360 = Annotated[Float, Field(ge=0, le=360)]
+Dip = Annotated[Float, Field(ge=0, le=90)]
 
 
-@dataclass(frozen=True)
-class IntensityP32:
+def _value(what: str):
+    """The intensity itself: > 0; its config key is ``value`` (the ``measure`` says which)."""
+    return Annotated[Float, Field(gt=0, alias="value", description=what)]
+
+
+class _Intensity:
+    """Shared by the intensities: ``value`` is the intensity in its measure's unit, as the config
+    key ``value`` gives it (the field named after the ``measure``)."""
+
+    @property
+    def value(self) -> float:
+        return getattr(self, self.measure.lower())
+
+
+@spec
+class IntensityP32(_Intensity):
     """One-sided fracture area per volume P32 > 0 (m²/m³)."""
 
-    p32: float
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "p32", _positive(self.p32, "p32", "one-sided fracture area per volume, m²/m³"))
+    p32: _value("P32, m²/m³")
+    measure: Annotated[Literal["P32"], Field(
+        description="intensity given as P32 (fracture area per volume)")] = "P32"
 
     def to_p32(self, orientation: Orientation) -> float:
         return self.p32
 
 
-@dataclass(frozen=True)
-class IntensityP10:
+@spec
+class IntensityP10(_Intensity):
     """P10 > 0 (1/m) along a scanline of trend / plunge (degrees); P32 = P10 · C13."""
 
-    p10: float
-    trend_deg: float
-    plunge_deg: float
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "p10", _positive(self.p10, "p10", "intersections per metre of scanline"))
-        object.__setattr__(self, "trend_deg", float(_as_float_array(self.trend_deg, "trend_deg")))
-        object.__setattr__(self, "plunge_deg", float(_as_angle_range(self.plunge_deg, "plunge_deg", -90, 90,
-                                                                     "scanline plunge")))
+    p10: _value("P10, 1/m")
+    trend_deg: Annotated[Angle360, Field(description="trend of the line")]
+    plunge_deg: Annotated[Float, Field(ge=-90, le=90, description="plunge of the line (down positive)")]
+    measure: Annotated[Literal["P10"], Field(
+        description="intensity given as P10 (fractures per metre of a line)")] = "P10"
 
     def to_p32(self, orientation: Orientation) -> float:
         line = vector_from_trend_plunge(self.trend_deg, self.plunge_deg)
         return self.p10 * orientation.c13(line)
 
 
-@dataclass(frozen=True)
-class IntensityP21:
+@spec
+class IntensityP21(_Intensity):
     """P21 > 0 (m/m²) on a sampling plane of dip / dip direction (degrees); P32 = P21 · C23."""
 
-    p21: float
-    dip_deg: float
-    dip_direction_deg: float
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "p21", _positive(self.p21, "p21", "trace length per area, m/m²"))
-        object.__setattr__(self, "dip_deg", float(_as_angle_range(self.dip_deg, "dip_deg", 0, 90,
-                                                                  "sampling plane dip")))
-        object.__setattr__(self, "dip_direction_deg", float(_as_float_array(self.dip_direction_deg,
-                                                                            "dip_direction_deg")))
+    p21: _value("P21, m/m²")
+    dip_deg: Annotated[Dip, Field(description="dip of the plane")]
+    dip_direction_deg: Annotated[Angle360, Field(description="dip direction of the plane")]
+    measure: Annotated[Literal["P21"], Field(
+        description="intensity given as P21 (trace length per area of a plane)")] = "P21"
 
     def to_p32(self, orientation: Orientation) -> float:
         return self.p21 * orientation.c23(pole_from_dip(self.dip_deg, self.dip_direction_deg))
@@ -225,7 +233,7 @@ class IntensityP21:
 Intensity = IntensityP32 | IntensityP10 | IntensityP21
 
 
-@dataclass(frozen=True)
+@spec
 class FractureSetSpec:
     """One fracture set: orientation, disk radius distribution, intensity and shape.
 
@@ -243,26 +251,17 @@ class FractureSetSpec:
         Vertices of the polygon that stands for a disk in mesh export, 3-1024.
     """
 
-    orientation: Orientation
-    size: object
-    intensity: Intensity
-    name: str = ""
-    shape: str = "disk"
-    n_vertices: int = 16
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.orientation, (FisherOrientation, UniformOrientation, BootstrapOrientation)):
-            raise TypeError(f"orientation must be FisherOrientation, UniformOrientation or "
-                            f"BootstrapOrientation, got {type(self.orientation).__name__}")
-        _check_size(self.size)
-        if not isinstance(self.intensity, (IntensityP32, IntensityP10, IntensityP21)):
-            raise TypeError(f"intensity must be IntensityP32, IntensityP10 or IntensityP21, got "
-                            f"{type(self.intensity).__name__}")
-        if self.shape != "disk":
-            raise ValueError(f"shape must be 'disk' (the only shape generated), got {self.shape!r}")
-        if isinstance(self.n_vertices, bool) or not isinstance(self.n_vertices, (int, np.integer)) \
-                or not 3 <= self.n_vertices <= 1024:
-            raise ValueError(f"n_vertices must be an integer in [3, 1024], got {self.n_vertices!r}")
+    orientation: Annotated[FisherOrientation | UniformOrientation | InstanceOf[BootstrapOrientation], Field(
+        description="orientation law (distribution = fisher, uniform or bootstrap)")]
+    size: Annotated[SizeDistribution, Field(
+        discriminator="distribution",
+        description="radius law (distribution = constant, power_law, lognormal or exponential)")]
+    intensity: Annotated[Intensity, Field(discriminator="measure",
+                                          description="intensity (measure = P32, P10 or P21)")]
+    name: Annotated[str, Strict(), Field(max_length=64, description="label in outputs")] = ""
+    shape: Annotated[Literal["disk"], Field(description="fracture shape")] = "disk"
+    n_vertices: Annotated[Int, Field(ge=3, le=1024,
+                                     description="vertices of the polygon that stands for a disk")] = 16
 
     @property
     def p32(self) -> float:

@@ -1,6 +1,8 @@
 """Fracture size distributions (disk radii) and the relations between radii, traces and intensities.
 
-Each distribution is a small frozen dataclass with the same methods::
+Each distribution is a small frozen spec dataclass (:func:`rockmass.dfn.specs.spec`: its annotations
+carry each parameter's range and description, and a ``distribution`` tag, so that the size table of a
+``[[dfn.sets]]`` entry is the class itself) with the same methods::
 
     sample(rng, n) -> (n,) float64     radii in metres, drawn with a caller-owned numpy Generator
     moment(k)      -> float            E[r^k] in m^k, closed form
@@ -30,13 +32,15 @@ References
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
+from pydantic import BeforeValidator, Field, PlainSerializer, model_validator
 from scipy.special import exprel, gamma, gammainc, gammaincc, ndtr, ndtri
 
 from .orientation import _as_float_array, _as_nonnegative as _nonnegative, _as_scalar
+from .specs import Float, FloatOrInf, field_error, spec
 from .stereology import _as_constant
 
 __all__ = [
@@ -70,21 +74,30 @@ def _check_sample_args(rng: np.random.Generator, n: int) -> None:
         raise ValueError(f"n must be >= 0 (number of radii), got {n}")
 
 
-def _set(instance: object, name: str, value: float) -> None:
-    """Store a validated, normalised field on a frozen dataclass."""
-    object.__setattr__(instance, name, value)
+def _unbounded(value: Any) -> Any:
+    """None (how a config dump writes "no upper truncation") as +inf."""
+    return np.inf if value is None else value
 
 
-def _check_bounds(instance: object, low: float, high: float, *, low_open: bool) -> None:
-    """Validate and store the truncation bounds r_min_m, r_max_m (r_max may be infinite)."""
-    r_min = _as_scalar(low, "r_min_m", low=0.0, low_open=low_open, what="smallest radius in metres")
-    if np.ndim(high) != 0 or np.asarray(high).dtype.kind not in "iuf":
-        raise TypeError(f"r_max_m must be a real scalar, got {high!r}")
-    r_max = float(high)
-    if not r_max > r_min:  # also catches NaN; +inf is allowed here
-        raise ValueError(f"r_max_m must be > r_min_m = {r_min} (largest radius in metres), got {r_max}")
-    _set(instance, "r_min_m", r_min)
-    _set(instance, "r_max_m", r_max)
+def _no_limit_as_none(value: float) -> float | None:
+    return None if value == np.inf else value
+
+
+# the parameters of the size laws, declared once for Python calls and the [dfn] TOML tables
+Radius = Annotated[Float, Field(gt=0)]
+#: lower truncation radius, >= 0
+RMin = Annotated[Float, Field(ge=0, description="lower truncation")]
+#: upper truncation radius, > 0; +inf (written as none / omitted in a config) for no limit
+RMax = Annotated[FloatOrInf, BeforeValidator(_unbounded), Field(gt=0),
+                 PlainSerializer(_no_limit_as_none, when_used="json")]
+
+
+def _check_truncation(size: Any) -> Any:
+    """r_min_m < r_max_m (reported on r_min_m, as a config key path names it)."""
+    if not size.r_min_m < size.r_max_m:
+        raise field_error(size, "r_min_m", f"must be < r_max_m ({size.r_max_m}), got {size.r_min_m}",
+                          size.r_min_m)
+    return size
 
 
 def _check_k(k: float) -> float:
@@ -99,7 +112,7 @@ class _Size:
         return self.moment(1.0)  # type: ignore[attr-defined]
 
 
-@dataclass(frozen=True)
+@spec(type_errors=True)
 class ConstantSize(_Size):
     """Every fracture has the same radius.
 
@@ -115,11 +128,8 @@ class ConstantSize(_Size):
     (4.0, 2.0)
     """
 
-    radius_m: float
-
-    def __post_init__(self) -> None:
-        _set(self, "radius_m", _as_scalar(self.radius_m, "radius_m", low=0.0, low_open=True,
-                                          what="radius in metres"))
+    radius_m: Annotated[Radius, Field(description="disk radius")]
+    distribution: Annotated[Literal["constant"], Field(description="size law: one radius")] = "constant"
 
     def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
         """``n`` copies of the radius (draws nothing from ``rng``)."""
@@ -155,7 +165,7 @@ def _log1p_over(y: np.ndarray) -> np.ndarray:
     return np.where(tiny, 1.0 - y / 2.0 + y * y / 3.0, np.log1p(safe) / safe)
 
 
-@dataclass(frozen=True)
+@spec(type_errors=True)
 class PowerLawSize(_Size):
     """Truncated power law of radii: density ∝ r^-(α+1) on [r_min, r_max].
 
@@ -191,16 +201,18 @@ class PowerLawSize(_Size):
     1.718282
     """
 
-    r_min_m: float
-    r_max_m: float
-    alpha: float
+    r_min_m: Annotated[Radius, Field(description="smallest radius")]
+    r_max_m: Annotated[FloatOrInf, Field(gt=0, description="largest radius")]
+    alpha: Annotated[Float, Field(ge=0, description="exponent α of the radius density r^-(α+1)")]
+    distribution: Annotated[Literal["power_law"], Field(
+        description="size law: truncated power law of radii")] = "power_law"
 
-    def __post_init__(self) -> None:
-        _check_bounds(self, self.r_min_m, self.r_max_m, low_open=True)
+    @model_validator(mode="after")
+    def _truncated(self) -> PowerLawSize:
         if not np.isfinite(self.r_max_m):
-            raise ValueError(f"r_max_m must be finite for a truncated power law, got {self.r_max_m}")
-        _set(self, "alpha", _as_scalar(self.alpha, "alpha", low=0.0,
-                                       what="power-law exponent, density ∝ r^-(alpha+1)"))
+            raise field_error(self, "r_max_m", f"must be finite for a truncated power law, got "
+                              f"{self.r_max_m}", self.r_max_m)
+        return _check_truncation(self)
 
     @property
     def density_exponent(self) -> float:
@@ -252,7 +264,7 @@ def _normal_mass(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.where(a > 0, ndtr(-a) - ndtr(-b), ndtr(b) - ndtr(a))
 
 
-@dataclass(frozen=True)
+@spec(type_errors=True)
 class LognormalSize(_Size):
     """Lognormal radii given by their mean and standard deviation, optionally truncated.
 
@@ -282,21 +294,22 @@ class LognormalSize(_Size):
     (2.0, 1.0)
     """
 
-    mean_m: float
-    sd_m: float
-    r_min_m: float = 0.0
-    r_max_m: float = np.inf
+    mean_m: Annotated[Radius, Field(description="mean radius")]
+    sd_m: Annotated[Radius, Field(description="standard deviation of the radius")]
+    r_min_m: RMin = 0.0
+    r_max_m: Annotated[RMax, Field(description="upper truncation; none: no limit")] = np.inf
+    distribution: Annotated[Literal["lognormal"], Field(description="size law: lognormal radii")] = \
+        "lognormal"
 
-    def __post_init__(self) -> None:
-        _set(self, "mean_m", _as_scalar(self.mean_m, "mean_m", low=0.0, low_open=True,
-                                        what="mean radius in metres"))
-        _set(self, "sd_m", _as_scalar(self.sd_m, "sd_m", low=0.0, low_open=True,
-                                      what="standard deviation of the radius in metres"))
-        _check_bounds(self, self.r_min_m, self.r_max_m, low_open=False)
+    @model_validator(mode="after")
+    def _mass_left(self) -> LognormalSize:
+        _check_truncation(self)
         mass = float(_normal_mass(*self._bounds_z()))
         if not mass >= _MIN_MASS:
-            raise ValueError(f"r_min_m, r_max_m = [{self.r_min_m}, {self.r_max_m}] hold {mass:.3g} of the "
-                             f"lognormal probability (< {_MIN_MASS:g}): widen the truncation interval")
+            raise field_error(self, "r_min_m", f"and r_max_m [{self.r_min_m}, {self.r_max_m}] hold {mass:.3g} "
+                              f"of the lognormal probability (< {_MIN_MASS:g}): widen the truncation "
+                              f"interval", self.r_min_m)
+        return self
 
     @property
     def _sigma(self) -> float:
@@ -354,7 +367,7 @@ class LognormalSize(_Size):
         return np.clip(_normal_mass(a, np.maximum(self._z(r), a)) / _normal_mass(a, b), 0.0, 1.0)
 
 
-@dataclass(frozen=True)
+@spec(type_errors=True)
 class ExponentialSize(_Size):
     """Exponential radii, optionally truncated to [r_min, r_max].
 
@@ -389,18 +402,20 @@ class ExponentialSize(_Size):
     3.0
     """
 
-    scale_m: float
-    r_min_m: float = 0.0
-    r_max_m: float = np.inf
+    scale_m: Annotated[Radius, Field(description="mean of the untruncated law")]
+    r_min_m: RMin = 0.0
+    r_max_m: Annotated[RMax, Field(description="upper truncation; none: no limit")] = np.inf
+    distribution: Annotated[Literal["exponential"], Field(
+        description="size law: exponential radii")] = "exponential"
 
-    def __post_init__(self) -> None:
-        _set(self, "scale_m", _as_scalar(self.scale_m, "scale_m", low=0.0, low_open=True,
-                                         what="mean of the untruncated exponential in metres"))
-        _check_bounds(self, self.r_min_m, self.r_max_m, low_open=False)
+    @model_validator(mode="after")
+    def _normalisable(self) -> ExponentialSize:
+        _check_truncation(self)
         if self.r_min_m > _MAX_EXPONENTIAL_SHIFT * self.scale_m:
-            raise ValueError(f"r_min_m must be <= {_MAX_EXPONENTIAL_SHIFT:g} * scale_m = "
-                             f"{_MAX_EXPONENTIAL_SHIFT * self.scale_m:g} (the truncated exponential's "
-                             f"normalising constant underflows), got {self.r_min_m}")
+            raise field_error(self, "r_min_m", f"must be <= {_MAX_EXPONENTIAL_SHIFT:g} * scale_m = "
+                              f"{_MAX_EXPONENTIAL_SHIFT * self.scale_m:g} (the truncated exponential's "
+                              f"normalising constant underflows), got {self.r_min_m}", self.r_min_m)
+        return self
 
     @property
     def _width(self) -> float:

@@ -15,21 +15,26 @@ import functools
 import numbers
 from typing import Annotated, Any
 
-from pydantic import BeforeValidator, ConfigDict, Strict, ValidationError
+from pydantic import BeforeValidator, ConfigDict, Field, Strict, ValidationError
 from pydantic.dataclasses import dataclass
 from pydantic_core import InitErrorDetails, PydanticCustomError
 
-__all__ = ["SPEC_CONFIG", "spec", "field_error", "Float", "Int", "Bool"]
+__all__ = ["SPEC_CONFIG", "spec", "field_error", "Float", "FloatOrInf", "Int", "Bool"]
 
 #: Validation of every spec: unknown keys refused, defaults checked like values, no NaN or
 #: infinity (a field may allow infinity itself with ``Field(allow_inf_nan=True)``). Scalars are
 #: made strict per field (``Annotated[float, Strict()]``), so that sequences still accept lists.
-SPEC_CONFIG = ConfigDict(extra="forbid", validate_default=True, allow_inf_nan=False)
+#: A field whose config key differs from its Python name has that key as ``alias``: tables and
+#: dumps use the key, Python calls the name (:func:`spec` translates).
+SPEC_CONFIG = ConfigDict(extra="forbid", validate_default=True, allow_inf_nan=False,
+                         serialize_by_alias=True)
 
 
 def _plain_number(value: Any) -> Any:
     """numpy scalars as Python numbers (strict fields refuse ``np.float32`` or ``np.int64``); numpy
     registers its scalar types with :mod:`numbers`, so no numpy import is needed to see them."""
+    if getattr(value, "shape", None) == () and hasattr(value, "item"):
+        value = value.item()          # a 0-d array
     if type(value) in (bool, int, float) or not isinstance(value, numbers.Real):
         return value
     return int(value) if isinstance(value, numbers.Integral) else float(value)
@@ -40,17 +45,36 @@ def _plain_number(value: Any) -> Any:
 Float = Annotated[float, BeforeValidator(_plain_number), Strict()]
 Int = Annotated[int, BeforeValidator(_plain_number), Strict()]
 Bool = Annotated[bool, Strict()]
+#: a Float that may be infinite (e.g. "no upper limit"); NaN passes too, so its rule must refuse it
+FloatOrInf = Annotated[float, Field(allow_inf_nan=True), BeforeValidator(_plain_number), Strict()]
 
 
-def spec(cls: type) -> type:
+def spec(cls: type | None = None, *, key: str = "", type_errors: bool = False) -> Any:
     """Make ``cls`` a frozen pydantic dataclass with :data:`SPEC_CONFIG`.
 
     Positional arguments are passed on by name, so that an error names the field
     (``JointSet(0, -1.0)``: ``spacing_m``) where pydantic would name the argument's index.
     Pickling, :func:`dataclasses.replace` and validation from a mapping are unchanged.
+
+    A Python call that fails raises the ``ValidationError`` with each problem restated on its
+    first line as ``key + field`` and the message (``Cracks: cracks.size_m Input should be
+    greater than 0``), so that a message can be matched on ``field must ...`` whatever pydantic's
+    layout. Validation inside a config section does not go through ``__init__`` and keeps its
+    ``file: section.key: message`` form.
+
+    Parameters
+    ----------
+    key : str, default ""
+        Prefix of the field names in those first lines (``"cracks."``).
+    type_errors : bool, default False
+        Raise ``TypeError`` (naming the field) when every problem is a value of the wrong type,
+        for library types whose callers rely on that convention (the size distributions).
     """
+    if cls is None:
+        return functools.partial(spec, key=key, type_errors=type_errors)
     cls = dataclass(frozen=True, config=SPEC_CONFIG)(cls)
     names = [name for name, info in cls.__pydantic_fields__.items() if info.init is not False]
+    keys = {name: info.alias for name, info in cls.__pydantic_fields__.items() if info.alias}
     validate = cls.__init__
 
     @functools.wraps(validate)
@@ -62,10 +86,36 @@ def spec(cls: type) -> type:
             if name in kwargs:
                 raise TypeError(f"{cls.__name__} got two values for {name!r}")
             kwargs[name] = value
-        validate(self, **kwargs)
+        for name, alias in keys.items():
+            if name in kwargs:
+                if alias in kwargs:
+                    raise TypeError(f"{cls.__name__} got two values for {name!r}")
+                kwargs[alias] = kwargs.pop(name)
+        try:
+            validate(self, **kwargs)
+        except ValidationError as exc:
+            raise _restated(exc, cls.__name__, key, type_errors,
+                            {alias: name for name, alias in keys.items()}) from None
 
     cls.__init__ = __init__
     return cls
+
+
+def _restated(exc: ValidationError, title: str, key: str, type_errors: bool,
+              names: dict[str, str]) -> Exception:
+    """``exc`` with every problem also stated as ``key + field message`` in its title line, and
+    located at the Python names of fields that have a config alias (``names``: alias to name)."""
+    errors = exc.errors(include_url=False)
+    for e in errors:
+        if e["loc"] and e["loc"][0] in names:
+            e["loc"] = (names[e["loc"][0]], *e["loc"][1:])
+    lines = "; ".join(f"{key}{'.'.join(map(str, e['loc']))} {e['msg']}" for e in errors)
+    if type_errors and all(e["type"].endswith("_type") for e in errors):
+        return TypeError(f"{title}: {lines}, got {', '.join(repr(e['input']) for e in errors)}")
+    details = [InitErrorDetails(
+        type=PydanticCustomError(e["type"], "{message}", {"message": e["msg"]}),
+        loc=e["loc"], input=e["input"]) for e in errors]
+    return ValidationError.from_exception_data(f"{title}: {lines}", details)
 
 
 def field_error(owner: Any, field: str, message: str, value: Any) -> ValidationError:

@@ -21,7 +21,7 @@ Example::
 descriptions declared there once).
 
 ``[blocks.cracks]`` (``size_m``, ``pattern`` = "voronoi" or "triangular", ...) subdivides intact
-blocks by potential cracks (:class:`CracksConfig`).
+blocks by potential cracks: the table is :class:`rockmass.blockgen.Cracks` itself.
 
 ``[blocks.dfn_section]`` (``section``, ``realization``) takes the traces of a ``[[dfn.sections]]``
 plane of the same file's ``[dfn]`` section (:class:`DfnSectionConfig`).
@@ -39,23 +39,18 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
+from .blockgen.cracks import Cracks
+from .blockgen.excavations import ExcavationSpec
 from .blockgen.joints import JointSet
 from .strict import ConfigFile, StrictModel, config_file, field_problem
 
 __all__ = ["BlocksConfig", "BlocksDocument", "DomainSection", "JointSetConfig", "TwoSetsConfig",
-           "CracksConfig", "DfnSectionConfig",
-           "CircleConfig", "HorseshoeConfig", "ArchedCavernConfig", "RectangleConfig",
-           "PolygonConfig"]
+           "DfnSectionConfig"]
 
 Coord = Annotated[float, Field(ge=-1e7, le=1e7)]
 Point = Annotated[tuple[Coord, Coord], Field(strict=False)]
 Length = Annotated[float, Field(gt=0, le=1e6)]
-Angle = Annotated[float, Field(ge=-360, le=360)]
 Name = Annotated[str, Field(min_length=1, max_length=64)]
-Sides = Annotated[int, Field(ge=8, le=4096)]
-StageName = Annotated[Name, Field(description="excavation stage name, unique; stages are removed in "
-                                              "the order of the tables")]
-ArcSides = Annotated[Sides, Field(description="sides of the polygon that stands for the arcs")]
 
 
 class DomainSection(StrictModel):
@@ -97,8 +92,9 @@ JointSetConfig = JointSet
 
 
 class TwoSetsConfig(StrictModel):
-    """``[blocks.two_sets]``: seed 000's two sets, set 1 at ``alpha_deg`` from the horizontal and set
-    2 at ``alpha_deg + theta_deg`` (0 < θ <= 90), spacings ``spacing_m = [s1, s2]``."""
+    """``[blocks.two_sets]``: the two sets of Jiang et al. (docs/sources.md §1), set 1 at
+    ``alpha_deg`` from the horizontal and set 2 at ``alpha_deg + theta_deg`` (0 < θ <= 90), spacings
+    ``spacing_m = [s1, s2]``."""
 
     alpha_deg: Annotated[float, Field(ge=0, lt=180, description="angle α of set 1 from the horizontal")]
     theta_deg: Annotated[float, Field(gt=0, le=90, description="angle θ from set 1 to set 2")]
@@ -115,124 +111,6 @@ class TwoSetsConfig(StrictModel):
         return [JointSet(self.alpha_deg, self.spacing_m[0], name="set 1 (alpha)", **extra),
                 JointSet(self.alpha_deg + self.theta_deg, self.spacing_m[1],
                          name="set 2 (alpha + theta)", **extra)]
-
-
-class CircleConfig(StrictModel):
-    shape: Annotated[Literal["circle"], Field(description="excavation shape: \"circle\"")]
-    name: StageName
-    center_xy_m: Annotated[Point, Field(description="centre")]
-    radius_m: Annotated[Length, Field(description="radius")]
-    n_sides: ArcSides = 36
-
-    def to_excavation(self):
-        from .blockgen import circle
-
-        return circle(self.center_xy_m, self.radius_m, self.name, self.n_sides)
-
-
-class HorseshoeConfig(StrictModel):
-    shape: Annotated[Literal["horseshoe"], Field(description="excavation shape: \"horseshoe\"")]
-    name: StageName
-    center_xy_m: Annotated[Point, Field(description="middle of the invert")]
-    span_m: Annotated[Length, Field(description="width")]
-    wall_height_m: Annotated[Length, Field(
-        description="height of the vertical walls below the semicircular roof")]
-    n_sides: ArcSides = 36
-
-    def to_excavation(self):
-        from .blockgen import horseshoe
-
-        return horseshoe(self.center_xy_m, self.span_m, self.wall_height_m, self.name, self.n_sides)
-
-
-class ArchedCavernConfig(StrictModel):
-    shape: Annotated[Literal["arched_cavern"], Field(
-        description="excavation shape: \"arched_cavern\"")]
-    name: StageName
-    center_xy_m: Annotated[Point, Field(description="middle of the floor")]
-    span_m: Annotated[Length, Field(description="width")]
-    wall_height_m: Annotated[Length, Field(description="height of the vertical walls")]
-    arch_rise_m: Annotated[Length, Field(
-        description="rise of the roof arch above the walls, <= span_m / 2")]
-    n_sides: ArcSides = 36
-
-    @model_validator(mode="after")
-    def _rise(self):
-        if self.arch_rise_m > self.span_m / 2:
-            raise field_problem(self, "arch_rise_m", f"must be <= span_m / 2 ({self.span_m / 2:g}), "
-                                f"got {self.arch_rise_m:g}", self.arch_rise_m)
-        return self
-
-    def to_excavation(self):
-        from .blockgen import arched_cavern
-
-        return arched_cavern(self.center_xy_m, self.span_m, self.wall_height_m, self.arch_rise_m,
-                             self.name, self.n_sides)
-
-
-class RectangleConfig(StrictModel):
-    shape: Annotated[Literal["rectangle"], Field(description="excavation shape: \"rectangle\"")]
-    name: StageName
-    center_xy_m: Annotated[Point, Field(description="centre")]
-    width_m: Annotated[Length, Field(description="width")]
-    height_m: Annotated[Length, Field(description="height")]
-
-    def to_excavation(self):
-        from .blockgen import rectangle
-
-        return rectangle(self.center_xy_m, self.width_m, self.height_m, self.name)
-
-
-class PolygonConfig(StrictModel):
-    shape: Annotated[Literal["polygon"], Field(description="excavation shape: \"polygon\"")]
-    name: StageName
-    xy_m: Annotated[list[Point], Field(min_length=3, max_length=10000, description="outline vertices")]
-
-    def to_excavation(self):
-        from .blockgen import polygon_excavation
-
-        return polygon_excavation([tuple(p) for p in self.xy_m], self.name)
-
-
-class CracksConfig(StrictModel):
-    """``[blocks.cracks]``: potential cracks (:class:`rockmass.blockgen.Cracks`, same field names).
-
-    Intact blocks are subdivided into convex sub-blocks of area ≈ ``size_m²`` whose internal edges
-    are glued contacts (``contact_source`` -3) with intact-rock strength (seed 000, expanded DEM).
-
-    Parameters
-    ----------
-    size_m : float
-        Target sub-block size (> 0).
-    pattern : {"voronoi", "triangular"}, default "voronoi"
-        Voronoi cells of a jittered hexagonal lattice, or triangles.
-    jitter : float, default 0.3
-        Voronoi seed displacement / lattice spacing, 0 <= jitter <= 0.5.
-    angle_deg : float, default 0
-        Orientation of the seed lattice or of the triangles.
-    within_m : float, optional
-        Only blocks within this distance of an excavation outline (>= 0).
-    zone_xy_m : list of [x, y], optional
-        Only blocks whose representative point lies inside this polygon.
-    include_excavated : bool, default false
-        Subdivide the blocks of excavation stages too.
-    """
-
-    size_m: Length
-    pattern: Literal["voronoi", "triangular"] = "voronoi"
-    jitter: float = Field(0.3, ge=0, le=0.5)
-    angle_deg: Angle = 0.0
-    within_m: float | None = Field(None, ge=0, le=1e6)
-    zone_xy_m: Annotated[list[Point], Field(min_length=3, max_length=10000)] | None = None
-    include_excavated: bool = False
-
-    def to_cracks(self):
-        from .blockgen import Cracks
-
-        zone = None if self.zone_xy_m is None else [tuple(p) for p in self.zone_xy_m]
-        return Cracks(size_m=self.size_m, pattern=self.pattern, jitter=self.jitter,
-                      angle_deg=self.angle_deg, within_m=self.within_m, zone_xy_m=zone,
-                      include_excavated=self.include_excavated)
 
 
 class DfnSectionConfig(StrictModel):
@@ -255,10 +133,6 @@ class DfnSectionConfig(StrictModel):
 
     section: Name
     realization: int = Field(0, ge=0, le=10000)
-
-
-ExcavationConfig = Annotated[CircleConfig | HorseshoeConfig | ArchedCavernConfig | RectangleConfig
-                             | PolygonConfig, Field(discriminator="shape")]
 
 
 class BlocksConfig(StrictModel):
@@ -287,7 +161,7 @@ class BlocksConfig(StrictModel):
         Solver corner rounding d and minimum edge (defaults: 1 % of the median edge, 2d).
     merge_slivers, convex, snap_edges : bool, default true
         Merge slivers, split concave blocks, collapse edges shorter than the minimum edge.
-    cracks : CracksConfig, optional
+    cracks : Cracks, optional
         ``[blocks.cracks]``: subdivide intact blocks by potential cracks (needs ``convex``).
     """
 
@@ -296,7 +170,7 @@ class BlocksConfig(StrictModel):
     two_sets: TwoSetsConfig | None = None
     traces: ConfigFile | None = None
     dfn_section: DfnSectionConfig | None = None
-    excavations: Annotated[list[ExcavationConfig], Field(max_length=64)] = Field(default_factory=list)
+    excavations: Annotated[list[ExcavationSpec], Field(max_length=64)] = Field(default_factory=list)
     dangling: Literal["glued", "joint", "drop"] = "glued"
     seed: int = Field(0, ge=0, lt=2 ** 63)
     rounding_m: Length | None = None
@@ -304,7 +178,7 @@ class BlocksConfig(StrictModel):
     merge_slivers: bool = True
     convex: bool = True
     snap_edges: bool = True
-    cracks: CracksConfig | None = None
+    cracks: Cracks | None = None
 
     @model_validator(mode="after")
     def _something_cuts(self):

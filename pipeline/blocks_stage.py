@@ -95,7 +95,7 @@ def compute(args, document=None, section=None):
         model = build(domain_xy, joint_sets, traces, excavations, dangling=cfg.dangling,
                       seed=cfg.seed, rounding_m=cfg.rounding_m, min_edge_m=cfg.min_edge_m,
                       merge_slivers=cfg.merge_slivers, convex=cfg.convex, snap_edges=cfg.snap_edges,
-                      cracks=None if cfg.cracks is None else cfg.cracks.to_cracks())
+                      cracks=cfg.cracks)
     except InputError:
         raise
     except ValueError as exc:

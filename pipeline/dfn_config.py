@@ -53,9 +53,13 @@ from pathlib import Path
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import AfterValidator, Field, model_validator
 
-from .strict import ConfigFile, StrictModel, config_file, field_problem
+from .dfn.generation import BootstrapOrientation, FisherOrientation, FractureSetSpec, IntensityP10, \
+    IntensityP21, IntensityP32, UniformOrientation
+from .dfn.orientation import pole_from_dip
+from .dfn.sizes import ConstantSize, ExponentialSize, LognormalSize, PowerLawSize
+from .strict import ConfigFile, StrictModel, config_file, field_problem, library_section
 
 __all__ = ["DFNConfig", "DFNDocument", "DomainConfig", "FaceConfig", "FitConfig", "FractureSetConfig"]
 
@@ -81,172 +85,66 @@ class DomainConfig(StrictModel):
         return self
 
 
-# -- orientation ---------------------------------------------------------------------------------
+# -- orientation and size: the library's parameter types (rockmass.dfn.generation, rockmass.dfn.sizes)
 
 
-class FisherConfig(StrictModel):
-    distribution: Annotated[Literal["fisher"], Field(
-        description="orientation law: Fisher about a mean pole")]
-    dip_deg: Annotated[Dip, Field(description="dip of the mean plane")]
-    dip_direction_deg: Annotated[Azimuth, Field(description="dip direction of the mean plane")]
-    kappa: float = Field(ge=0, le=1e6, description="Fisher concentration κ (0: uniform)")
+def _config_limits(**highs: float):
+    """An after-validator refusing values above ``highs`` (per field): bounds a config keeps on the
+    library's wider ranges, so that a typo in a file (a radius in mm) stops at the key."""
 
+    def check(value):
+        for name, high in highs.items():
+            number = getattr(value, name, None)
+            if number is not None and number != float("inf") and number > high:
+                key = type(value).__pydantic_fields__[name].alias or name
+                raise field_problem(value, key, f"must be <= {high:g} in a config, got {number}", number)
+        return value
 
-class UniformConfig(StrictModel):
-    distribution: Annotated[Literal["uniform"], Field(
-        description="orientation law: uniform on the sphere")]
+    return AfterValidator(check)
 
 
 class BootstrapConfig(StrictModel):
+    """``distribution = "bootstrap"``: the TOML form of :class:`rockmass.dfn.generation.BootstrapOrientation`,
+    which takes poles as an array; the table gives planes as [dip, dip direction] pairs."""
+
     distribution: Annotated[Literal["bootstrap"], Field(
         description="orientation law: resample measured planes")]
     planes_deg: Annotated[list[Annotated[tuple[Dip, Azimuth], Field(strict=False)]], Field(
         min_length=1, description="measured planes as [dip, dip direction]")]
 
-
-# -- size ------------------------------------------------------------------------------------------
-
-
-class ConstantConfig(StrictModel):
-    distribution: Annotated[Literal["constant"], Field(description="size law: one radius")]
-    radius_m: Annotated[Length, Field(description="disk radius")]
+    def to_library(self) -> BootstrapOrientation:
+        planes = np.array(self.planes_deg, dtype=float)
+        return BootstrapOrientation(pole_from_dip(planes[:, 0], planes[:, 1]))
 
 
-class PowerLawConfig(StrictModel):
-    distribution: Annotated[Literal["power_law"], Field(
-        description="size law: truncated power law of radii")]
-    r_min_m: Annotated[Length, Field(description="smallest radius")]
-    r_max_m: Annotated[Length, Field(description="largest radius")]
-    alpha: float = Field(ge=0, le=20, description="exponent α of the radius density r^-(α+1)")
-
-    @model_validator(mode="after")
-    def _range(self) -> PowerLawConfig:
-        if not self.r_min_m < self.r_max_m:
-            raise field_problem(self, "r_min_m", f"must be < r_max_m ({self.r_max_m}), got {self.r_min_m}",
-                                self.r_min_m)
-        return self
+OrientationTable = Annotated[FisherOrientation | UniformOrientation | BootstrapConfig, Field(
+    discriminator="distribution"), _config_limits(kappa=1e6)]
+SizeTable = Annotated[ConstantSize | PowerLawSize | LognormalSize | ExponentialSize,
+                      Field(discriminator="distribution"),
+                      _config_limits(radius_m=1e6, r_min_m=1e6, r_max_m=1e6, mean_m=1e6, sd_m=1e6,
+                                     scale_m=1e6, alpha=20)]
 
 
-def _truncation(model, r_min: float, r_max: float | None):
-    if r_max is not None and not r_min < r_max:
-        raise field_problem(model, "r_min_m", f"must be < r_max_m ({r_max}), got {r_min}", r_min)
-    return model
+IntensityTable = Annotated[IntensityP32 | IntensityP10 | IntensityP21, Field(discriminator="measure"),
+                          _config_limits(p32=1e4, p10=1e4, p21=1e4)]
 
 
-class LognormalConfig(StrictModel):
-    distribution: Annotated[Literal["lognormal"], Field(description="size law: lognormal radii")]
-    mean_m: Annotated[Length, Field(description="mean radius")]
-    sd_m: Annotated[Length, Field(description="standard deviation of the radius")]
-    r_min_m: float = Field(0.0, ge=0, le=1e6, description="lower truncation")
-    r_max_m: Annotated[Length | None, Field(description="upper truncation; none: no limit")] = None
-
-    @model_validator(mode="after")
-    def _range(self) -> LognormalConfig:
-        return _truncation(self, self.r_min_m, self.r_max_m)
-
-
-class ExponentialConfig(StrictModel):
-    distribution: Annotated[Literal["exponential"], Field(
-        description="size law: exponential radii")]
-    scale_m: Annotated[Length, Field(description="mean of the untruncated law")]
-    r_min_m: float = Field(0.0, ge=0, le=1e6, description="lower truncation")
-    r_max_m: Annotated[Length | None, Field(description="upper truncation; none: no limit")] = None
-
-    @model_validator(mode="after")
-    def _range(self) -> ExponentialConfig:
-        return _truncation(self, self.r_min_m, self.r_max_m)
-
-
-SizeTable = Annotated[ConstantConfig | PowerLawConfig | LognormalConfig | ExponentialConfig,
-                      Field(discriminator="distribution")]
-
-
-def size_from_config(s):
-    """The :mod:`rockmass.dfn.sizes` distribution of a size table."""
-    from .dfn import ConstantSize, ExponentialSize, LognormalSize, PowerLawSize
-
-    if isinstance(s, ConstantConfig):
-        return ConstantSize(s.radius_m)
-    if isinstance(s, PowerLawConfig):
-        return PowerLawSize(s.r_min_m, s.r_max_m, s.alpha)
-    if isinstance(s, LognormalConfig):
-        return LognormalSize(s.mean_m, s.sd_m, s.r_min_m, np.inf if s.r_max_m is None else s.r_max_m)
-    return ExponentialSize(s.scale_m, s.r_min_m, np.inf if s.r_max_m is None else s.r_max_m)
-
-
-# -- intensity -----------------------------------------------------------------------------------
-
-Intensity = Annotated[float, Field(gt=0, le=1e4)]
-
-
-class P32Config(StrictModel):
-    measure: Annotated[Literal["P32"], Field(
-        description="intensity given as P32 (fracture area per volume)")]
-    value: Annotated[Intensity, Field(description="P32, m²/m³")]
-
-
-class P10Config(StrictModel):
-    measure: Annotated[Literal["P10"], Field(
-        description="intensity given as P10 (fractures per metre of a line)")]
-    value: Annotated[Intensity, Field(description="P10, 1/m")]
-    trend_deg: Annotated[Azimuth, Field(description="trend of the line")]
-    plunge_deg: float = Field(ge=-90, le=90, description="plunge of the line (down positive)")
-
-
-class P21Config(StrictModel):
-    measure: Annotated[Literal["P21"], Field(
-        description="intensity given as P21 (trace length per area of a plane)")]
-    value: Annotated[Intensity, Field(description="P21, m/m²")]
-    dip_deg: Annotated[Dip, Field(description="dip of the plane")]
-    dip_direction_deg: Annotated[Azimuth, Field(description="dip direction of the plane")]
-
-
-class FractureSetConfig(StrictModel):
-    """One ``[[dfn.sets]]`` entry: ``orientation``, ``size`` and ``intensity`` tables."""
-
-    name: str = Field("", max_length=64, description="label in outputs")
-    orientation: Annotated[FisherConfig | UniformConfig | BootstrapConfig, Field(
-        discriminator="distribution",
-        description="orientation law (distribution = fisher, uniform or bootstrap)")]
-    size: Annotated[SizeTable, Field(
-        description="radius law (distribution = constant, power_law, lognormal or exponential)")]
-    intensity: Annotated[P32Config | P10Config | P21Config, Field(
-        discriminator="measure", description="intensity (measure = P32, P10 or P21)")]
-    shape: Annotated[Literal["disk"], Field(description="fracture shape")] = "disk"
-    n_vertices: int = Field(16, ge=3, le=1024,
-                            description="vertices of the polygon that stands for a disk")
+class FractureSetConfig(library_section(
+        FractureSetSpec,
+        orientation=(OrientationTable, Field(
+            description="orientation law (distribution = fisher, uniform or bootstrap); kappa <= 1e6")),
+        size=(SizeTable, Field(
+            description="radius law (distribution = constant, power_law, lognormal or exponential); "
+                        "radii <= 1e6 m, alpha <= 20")),
+        intensity=(IntensityTable, Field(
+            description="intensity (measure = P32, P10 or P21); value <= 1e4")))):
+    """One ``[[dfn.sets]]`` entry: :class:`rockmass.dfn.generation.FractureSetSpec`, with the
+    config's bounds on its tables and bootstrap planes given as [dip, dip direction]."""
 
     def to_spec(self):
-        """The :class:`rockmass.dfn.generation.FractureSetSpec` (imports numpy-level code lazily)."""
-        from .dfn import pole_from_dip
-        from .dfn.generation import (
-            BootstrapOrientation,
-            FisherOrientation,
-            FractureSetSpec,
-            IntensityP10,
-            IntensityP21,
-            IntensityP32,
-            UniformOrientation,
-        )
-
+        """The :class:`rockmass.dfn.generation.FractureSetSpec`."""
         o = self.orientation
-        if isinstance(o, FisherConfig):
-            orientation = FisherOrientation(o.dip_deg, o.dip_direction_deg, o.kappa)
-        elif isinstance(o, UniformConfig):
-            orientation = UniformOrientation()
-        else:
-            planes = np.array(o.planes_deg, dtype=float)
-            orientation = BootstrapOrientation(pole_from_dip(planes[:, 0], planes[:, 1]))
-        size = size_from_config(self.size)
-        i = self.intensity
-        if isinstance(i, P32Config):
-            intensity = IntensityP32(i.value)
-        elif isinstance(i, P10Config):
-            intensity = IntensityP10(i.value, i.trend_deg, i.plunge_deg)
-        else:
-            intensity = IntensityP21(i.value, i.dip_deg, i.dip_direction_deg)
-        return FractureSetSpec(orientation, size, intensity, name=self.name, shape=self.shape,
-                               n_vertices=self.n_vertices)
+        return self.to_library(orientation=o.to_library() if isinstance(o, BootstrapConfig) else o)
 
 
 class FaceConfig(StrictModel):
@@ -338,7 +236,7 @@ class DFNConfig(StrictModel):
     domain : DomainConfig
         ``[dfn.domain]``: the box the fractures are generated in.
     seed : int, default 0
-        Root seed, 0 <= seed < 2**63 (DESIGN.md §3 seeding rule).
+        Root seed, 0 <= seed < 2**63 (docs/design.md §3.5 seeding rule).
     realizations : int, default 1
         Number of realizations, 1-10000 (indices 0..K-1).
     max_fractures : int, default 5,000,000

@@ -81,7 +81,6 @@ def _read_field_data(config_path, fit_cfg):
 def _fit_sets(config_path, cfg):
     """(specs, FieldFit, scanlines, faces) from ``[dfn.fit]``."""
     from .dfn.field_fit import fit_field
-    from .dfn_config import size_from_config
 
     fit_cfg = cfg.fit
     scanlines, faces = _read_field_data(config_path, fit_cfg)
@@ -90,7 +89,7 @@ def _fit_sets(config_path, cfg):
                         r_max_m=fit_cfg.r_max_m, tolerance_m=fit_cfg.boundary_tolerance_m, seed=cfg.seed)
     except ValueError as exc:
         raise InputError(f"{config_path}: dfn.fit: {exc}") from exc
-    size = None if fit_cfg.size is None else size_from_config(fit_cfg.size)
+    size = fit_cfg.size
     try:
         specs = fit.specs([size] * len(fit.sets), orientation=fit_cfg.orientation)
     except ValueError as exc:
