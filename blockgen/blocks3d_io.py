@@ -18,7 +18,7 @@ import numpy as np
 from .blockio import polygon_cells
 from .keyblocks import MODES
 
-__all__ = ["write_blocks3d_vtu"]
+__all__ = ["write_blocks3d_vtu", "block_mesh", "export_blocks", "piece_triangles"]
 
 #: stands for an infinite factor of safety in the VTU (VTK readers do not all accept inf).
 INFINITE_FS = 1e30
@@ -57,4 +57,38 @@ def write_blocks3d_vtu(blocks, path, keyblocks=None) -> Path:
     path = Path(path)
     with atomic_path(path) as tmp:
         meshio.write(tmp, mesh, file_format="vtu")
+    return path
+
+
+def piece_triangles(piece) -> np.ndarray:
+    """The fan triangles ``(t, 3, 3)`` of a convex polyhedron's faces (outward, counter-clockwise)."""
+    return np.concatenate([np.stack([np.broadcast_to(f[0], (len(f) - 2, 3)), f[1:-1], f[2:]], axis=1)
+                           for f in piece.faces])
+
+
+def block_mesh(blocks, block: int):
+    """The in-situ block ``block`` as one :class:`trimesh.Trimesh`: the closed surfaces of its convex
+    pieces together (the glued faces between them are inside the block, one copy per piece), so its
+    volume, centre of mass and inertia are the block's."""
+    import trimesh
+
+    members = np.flatnonzero(blocks.block_id == block)
+    if not len(members):
+        raise ValueError(f"no in-situ block {block} (blocks: 0..{blocks.n_blocks - 1})")
+    triangles = np.concatenate([piece_triangles(blocks.pieces[p]) for p in members])
+    return trimesh.Trimesh(**trimesh.triangles.to_kwargs(triangles))
+
+
+def export_blocks(blocks, path, which=None) -> Path:
+    """Write in-situ blocks (``which``: block ids, default all) as one mesh file in any format
+    trimesh writes, chosen by the suffix (``.ply``, ``.stl``, ``.obj``, ``.glb``), atomically."""
+    import trimesh
+
+    from rockmass.dfn.atomic import atomic_path
+
+    ids = range(blocks.n_blocks) if which is None else which
+    scene = trimesh.util.concatenate([block_mesh(blocks, int(b)) for b in ids])
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        scene.export(tmp, file_type=path.suffix.lstrip(".").lower())
     return path

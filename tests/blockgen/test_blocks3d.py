@@ -241,3 +241,21 @@ def test_a_thin_slab_is_reported_as_a_sliver_and_tiny_piece():
     # 0.001/1 of its width one (< 0.01); the two halves are neither
     assert (quality.tiny, quality.slivers) == (1, 1)
     assert quality.smallest_m3 == pytest.approx(1e-3, rel=1e-9)
+
+
+def test_block_meshes_for_trimesh_and_export(tmp_path):
+    import trimesh
+
+    from rockmass.blockgen.block_shapes import block_shapes
+    from rockmass.blockgen.blocks3d_io import block_mesh, export_blocks
+
+    box = np.array([[0.0, 0.0, 0.0], [2.0, 1.5, 1.0]])
+    blocks = cut_box(box, *_orthogonal_sets(box, 0.6, origin=(0.1, 0.2, 0.3)),
+                     _disk([0.2, 0.1, 1.0], [1.0, 0.7, 0.55], 0.3, label=3))
+    shapes = block_shapes(blocks)
+    for b in range(blocks.n_blocks):
+        mesh = block_mesh(blocks, b)
+        assert mesh.volume == pytest.approx(shapes.volume_m3[b], rel=1e-9)
+        np.testing.assert_allclose(mesh.center_mass, shapes.centroid_m[b], atol=1e-9)
+    path = export_blocks(blocks, tmp_path / "blocks.ply")
+    assert trimesh.load(path).volume == pytest.approx(np.prod(box[1] - box[0]), rel=1e-6)
