@@ -1,17 +1,19 @@
-"""All trace-map statistics in one JSON-ready summary, keyed by names a fractopo user recognises.
+"""All trace-map statistics in one typed summary, written out under names a fractopo user recognises.
 
 :func:`trace_map_statistics` resolves the sampling window once and runs, on the traces that reach it:
 joint sets (:mod:`~rockmass.dfn.sets2d`), P20 / P21 / mean length and scanline spacing
 (:mod:`~rockmass.dfn.intensity`), Mauldon's estimators on the window when it is a circle, else on
 disjoint circles placed inside it (:mod:`~rockmass.dfn.mauldon`), and the I-Y-X-E topology
-(:mod:`~rockmass.dfn.topology`). Each parameter is ``{"value": number or None, "unit": str}``, with a ``"reason"`` when the value is None;
-the names and units follow fractopo's ``Param`` (Ovaskainen et al. 2022). No NaN or infinity is ever
-returned, so ``json.dumps(result, allow_nan=False)`` always succeeds.
+(:mod:`~rockmass.dfn.topology`). It returns a frozen
+:class:`~rockmass.dfn.trace_summary.TraceMapStatistics`; each parameter is a
+:class:`~rockmass.dfn.trace_summary.Parameter` (value or None, unit, and a reason when the value is
+None). Its ``to_dict()`` is the JSON document, with the names and units of fractopo's ``Param``
+(Ovaskainen et al. 2022); no NaN or infinity ever reaches it, so
+``json.dumps(result.to_dict(), allow_nan=False)`` always succeeds.
 """
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -37,6 +39,21 @@ from .mauldon import (
 )
 from .sets2d import RESOLUTION_DEG, JointSets2D, fit_sets_2d, trace_angles_deg
 from .topology import trace_topology
+from .trace_summary import (
+    Diagnostics,
+    IntensityParameters,
+    MauldonCircleSet,
+    MauldonParameters,
+    NodeCounts,
+    Parameter,
+    SetSelection,
+    SetSummary,
+    StatisticsSettings,
+    TraceMapStatistics,
+    TraceTable,
+    WindowSummary,
+    _number,
+)
 from .tracemap import TraceMap, _require_trace_map
 
 __all__ = ["trace_map_statistics"]
@@ -60,7 +77,7 @@ def trace_map_statistics(
     mauldon_in_window: bool = True,
     seed: int = 0,
     length_unit: str = "m",
-) -> dict:
+) -> TraceMapStatistics:
     """Summarise a trace map: intensity, sets, Mauldon estimators, topology and trace lengths.
 
     Parameters
@@ -70,7 +87,7 @@ def trace_map_statistics(
         (counted under ``diagnostics``).
     window : array_like, shapely.Polygon or SamplingWindow, optional
         Sampling window; default None: the map's window, else the traces' bounding box
-        (``result["window"]["source"]`` says which).
+        (``result.window.source`` says which).
     n_sets : int, optional
         Number of joint sets; default None: chosen by BIC over 1..5.
     snap_tolerance_m : float, optional
@@ -90,28 +107,30 @@ def trace_map_statistics(
     mauldon_in_window : bool, default True
         When the window is not a circle, evaluate Mauldon's estimators on disjoint circles placed
         fully inside it (:func:`~rockmass.dfn.mauldon.inscribed_circles`, counts pooled by
-        :func:`~rockmass.dfn.mauldon.mauldon_circles`); ``result["window"]["mauldon_circles"]``
+        :func:`~rockmass.dfn.mauldon.mauldon_circles`); ``result.window.mauldon_circles``
         lists them. False: leave them undefined with a reason, as fractopo does.
     length_unit : str, default "m"
         Unit label of the map's coordinates (``"px"`` for a photo without scale); only the labels change.
 
     Returns
     -------
-    dict
-        JSON-ready. Parameters ``{"value", "unit"[, "reason"]}`` under their fractopo names:
-        ``"Number of Traces"``, ``"Area"``, ``"Areal Frequency P20"``, ``"Fracture Intensity P21"``,
-        ``"Trace Mean Length"``, ``"Trace Min Length"``, ``"Trace Max Length"``,
-        ``"Dimensionless Intensity P22"``, ``"Number of Branches"``, ``"Connections per Trace"``,
-        ``"Connections per Branch"``, ``"Connection Frequency"``, ``"Number of Censored Traces"``,
-        ``"Fracture Intensity (Mauldon)"``, ``"Fracture Density (Mauldon)"``,
-        ``"Trace Mean Length (Mauldon)"``; and
+    TraceMapStatistics
+        Frozen, typed (:mod:`~rockmass.dfn.trace_summary`, documented field by field). Its
+        ``to_dict()`` is JSON-ready, with parameters ``{"value", "unit"[, "reason"]}`` under their
+        fractopo names: ``"Number of Traces"``, ``"Area"``, ``"Areal Frequency P20"``,
+        ``"Fracture Intensity P21"``, ``"Trace Mean Length"``, ``"Trace Min Length"``,
+        ``"Trace Max Length"``, ``"Dimensionless Intensity P22"``, ``"Number of Branches"``,
+        ``"Connections per Trace"``, ``"Connections per Branch"``, ``"Connection Frequency"``,
+        ``"Number of Censored Traces"``, ``"Fracture Intensity (Mauldon)"``,
+        ``"Fracture Density (Mauldon)"``, ``"Trace Mean Length (Mauldon)"``; and
 
-        - ``"Node Counts"``: ``{"I", "Y", "X", "E"}`` integers;
+        - ``"Node Counts"``: ``{"I", "Y", "X", "E"}`` integers (``node_counts``);
         - ``"sets"``: one dict per joint set (mean angle, spread, κ, weight, count, P20, P21, mean
-          length raw and Mauldon, mean spacing and P10 along scanlines normal to the set);
+          length raw and Mauldon, mean spacing and P10 along scanlines normal to the set; ``sets``);
         - ``"set_selection"``: ``{"method": "bic" | "given", "bic": {k: value or None}}``;
         - ``"traces"``: per trace ``id``, clipped ``length``, ``censored``, ``set``, ``angle_deg``,
-          ``connections`` and ``end_class`` (the trace-length distribution with censoring marked);
+          ``connections`` and ``end_class`` (the trace-length distribution with censoring marked;
+          ``traces`` holds them as arrays);
         - ``"window"``: source, area, whether it is a circle (centre, radius), and the circles the
           Mauldon values were counted in when it is not (``"mauldon_circles"``: count, radius,
           centres; None when the window is a circle or ``mauldon_in_window`` is False);
@@ -139,8 +158,11 @@ def trace_map_statistics(
     --------
     >>> tm = TraceMap.from_segments([[1, 5, 9, 5], [5, 1, 5, 9]], window=[(0, 0), (10, 0), (10, 10), (0, 10)])
     >>> s = trace_map_statistics(tm)
-    >>> s["Fracture Intensity P21"], s["Node Counts"], s["Connections per Trace"]["value"]
-    ({'value': 0.16, 'unit': 'm/m²'}, {'I': 4, 'Y': 0, 'X': 1, 'E': 0}, 1.0)
+    >>> s.intensity.p21, s.connections_per_trace.value
+    (Parameter(value=0.16, unit='m/m²', reason=None), 1.0)
+    >>> d = s.to_dict()
+    >>> d["Fracture Intensity P21"], d["Node Counts"]
+    ({'value': 0.16, 'unit': 'm/m²'}, {'I': 4, 'Y': 0, 'X': 1, 'E': 0})
     """
     _require_trace_map(trace_map)
     if trace_map.n_traces == 0:
@@ -175,78 +197,72 @@ def trace_map_statistics(
     angles = trace_angles_deg(traces, method=angle_method)
     sets = _fit_sets(traces, angles, lengths, n_sets, angle_method, resolution_deg, seed)
     u = _Units(length_unit)
-
-    result: dict[str, Any] = {
-        "Number of Traces": _quantity(traces.n_traces, "-"),
-        "Area": _quantity(overall.area_m2, u.area),
-        **_intensity_block(overall, lengths, u),
-        "Dimensionless Intensity P22": _quantity(overall.p21_per_m * overall.mean_length_m, "-"),
-        "Number of Branches": _quantity(topology.n_branches, "-"),
-        "Connections per Trace": _quantity(
-            topology.connections_per_line, "-", "no I or Y node: every trace end is censored (E)"
-        ),
-        "Connections per Branch": _quantity(topology.connections_per_branch, "-", "no branch (no I, Y or X node)"),
-        "Connection Frequency": _quantity((topology.n_y + topology.n_x) / overall.area_m2, u.per_area),
-        "Number of Censored Traces": _quantity(int(topology.censored.sum()), "-"),
-        **_mauldon_block(traces, circle, circles, tolerance, u),
-        "Node Counts": {"I": topology.n_i, "Y": topology.n_y, "X": topology.n_x, "E": topology.n_e},
-        "sets": [],
-        "set_selection": None,
-    }
-    membership = np.full(traces.n_traces, -1, dtype=np.int64)
     if isinstance(sets, JointSets2D):
         membership = sets.membership
-        result["sets"] = [
-            _set_block(traces, sets, s, resolved, p20_rule, tolerance, scanline_spacing_m, circle, circles, u)
+        set_summaries = tuple(
+            _set_summary(traces, sets, s, resolved, p20_rule, tolerance, scanline_spacing_m, circle, circles, u)
             for s in range(sets.n_sets)
-        ]
-        result["set_selection"] = {
-            "method": sets.selected_by,
-            "bic": {str(k): _number(v) for k, v in sets.bic.items()},
-        }
+        )
+        selection = SetSelection(sets.selected_by, {str(k): _number(v) for k, v in sets.bic.items()})
     else:
-        result["set_selection"] = {"method": None, "bic": {}, "reason": sets}
-    result["traces"] = {
-        "id": traces.attributes["id"].tolist(),
-        "length": [float(v) for v in lengths],
-        "unit": u.length,
-        "censored": topology.censored.tolist(),
-        "set": membership.tolist(),
-        "angle_deg": [_number(v) for v in angles],
-        "connections": topology.connections.tolist(),
-        "end_class": topology.end_class.tolist(),
-    }
-    result["window"] = {
-        "source": resolved.source,
-        "area": overall.area_m2,
-        "unit": u.length,
-        "is_circle": circle.is_circle,
-        "centre_xy": list(circle.centre_xy_m) if circle.is_circle else None,
-        "radius": circle.radius_m if circle.is_circle else None,
-        "circle_deviation": _number(circle.max_rel_deviation),
-        "mauldon_circles": None if circles is None else {
-            "count": circles.n_circles,
-            "radius": circles.radius_m,
-            "centres_xy": circles.centres_xy_m.tolist(),
-        },
-    }
-    result["settings"] = {
-        "snap_tolerance": _quantity(topology.snap_tolerance_m, u.length),
-        "p20_rule": p20_rule,
-        "angle_method": angle_method,
-        "n_sets": _number(n_sets),
-        "resolution_deg": resolution_deg,
-        "mauldon_in_window": bool(mauldon_in_window),
-        "seed": _number(seed),
-        "scanline_spacing": None if scanline_spacing_m is None else _quantity(scanline_spacing_m, u.length),
-    }
-    result["diagnostics"] = {
-        "traces_outside_window": int(trace_map.n_traces - traces.n_traces),
-        "zero_length_traces": int(np.count_nonzero(traces.degenerate_traces())),
-        "end_contacts": int(topology.end_contact.sum()),
-        "overlapping_pairs": topology.n_overlapping_pairs,
-    }
-    return result
+        membership = np.full(traces.n_traces, -1, dtype=np.int64)
+        set_summaries = ()
+        selection = SetSelection(None, {}, sets)
+    return TraceMapStatistics(
+        n_traces=Parameter.of(traces.n_traces, "-"),
+        area=Parameter.of(overall.area_m2, u.area),
+        intensity=_intensity_parameters(overall, lengths, u),
+        p22=Parameter.of(overall.p21_per_m * overall.mean_length_m, "-"),
+        n_branches=Parameter.of(topology.n_branches, "-"),
+        connections_per_trace=Parameter.of(
+            topology.connections_per_line, "-", "no I or Y node: every trace end is censored (E)"
+        ),
+        connections_per_branch=Parameter.of(topology.connections_per_branch, "-", "no branch (no I, Y or X node)"),
+        connection_frequency=Parameter.of((topology.n_y + topology.n_x) / overall.area_m2, u.per_area),
+        n_censored=Parameter.of(int(topology.censored.sum()), "-"),
+        mauldon=_mauldon_parameters(traces, circle, circles, tolerance, u),
+        node_counts=NodeCounts(topology.n_i, topology.n_y, topology.n_x, topology.n_e),
+        sets=set_summaries,
+        set_selection=selection,
+        traces=TraceTable(
+            id=traces.attributes["id"].copy(),
+            length=lengths,
+            unit=u.length,
+            censored=topology.censored,
+            set_id=membership,
+            angle_deg=angles,
+            connections=topology.connections,
+            end_class=topology.end_class,
+        ),
+        window=WindowSummary(
+            source=resolved.source,
+            area=overall.area_m2,
+            unit=u.length,
+            is_circle=circle.is_circle,
+            centre_xy=tuple(circle.centre_xy_m) if circle.is_circle else None,
+            radius=circle.radius_m if circle.is_circle else None,
+            circle_deviation=_number(circle.max_rel_deviation),
+            mauldon_circles=None if circles is None else MauldonCircleSet(
+                circles.n_circles, circles.radius_m, circles.centres_xy_m
+            ),
+        ),
+        settings=StatisticsSettings(
+            snap_tolerance=Parameter.of(topology.snap_tolerance_m, u.length),
+            p20_rule=p20_rule,
+            angle_method=angle_method,
+            n_sets=_number(n_sets),
+            resolution_deg=resolution_deg,
+            mauldon_in_window=bool(mauldon_in_window),
+            seed=_number(seed),
+            scanline_spacing=None if scanline_spacing_m is None else Parameter.of(scanline_spacing_m, u.length),
+        ),
+        diagnostics=Diagnostics(
+            traces_outside_window=int(trace_map.n_traces - traces.n_traces),
+            zero_length_traces=int(np.count_nonzero(traces.degenerate_traces())),
+            end_contacts=int(topology.end_contact.sum()),
+            overlapping_pairs=topology.n_overlapping_pairs,
+        ),
+    )
 
 
 class _Units:
@@ -260,26 +276,6 @@ class _Units:
         self.per_length = f"1/{length}"
 
 
-def _number(value: Any) -> float | int | None:
-    """A JSON number, or None for NaN and infinities."""
-    if value is None:
-        return None
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
-    if isinstance(value, (int, np.integer)):
-        return int(value)
-    value = float(value)
-    return value if math.isfinite(value) else None
-
-
-def _quantity(value: Any, unit: str, reason: str = "") -> dict:
-    number = _number(value)
-    out: dict[str, Any] = {"value": number, "unit": unit}
-    if number is None:
-        out["reason"] = reason or "undefined"
-    return out
-
-
 def _fit_sets(traces, angles, lengths, n_sets, angle_method, resolution_deg, seed) -> JointSets2D | str:
     """The set fit, or the reason there is none (no trace with a direction inside the window)."""
     if not np.any(np.isfinite(angles) & (lengths > 0.0)):
@@ -289,52 +285,54 @@ def _fit_sets(traces, angles, lengths, n_sets, angle_method, resolution_deg, see
     )
 
 
-def _intensity_block(intensity, lengths: np.ndarray, u: _Units) -> dict:
+def _intensity_parameters(intensity, lengths: np.ndarray, u: _Units) -> IntensityParameters:
     reaching = lengths[lengths > 0.0]
     none = "no trace has a positive length inside the window"
-    return {
-        "Areal Frequency P20": _quantity(intensity.p20_per_m2, u.per_area),
-        "Fracture Intensity P21": _quantity(intensity.p21_per_m, u.intensity),
-        "Trace Mean Length": _quantity(intensity.mean_length_m, u.length, none),
-        "Trace Min Length": _quantity(reaching.min() if reaching.size else None, u.length, none),
-        "Trace Max Length": _quantity(reaching.max() if reaching.size else None, u.length, none),
-    }
+    return IntensityParameters(
+        p20=Parameter.of(intensity.p20_per_m2, u.per_area),
+        p21=Parameter.of(intensity.p21_per_m, u.intensity),
+        mean_length=Parameter.of(intensity.mean_length_m, u.length, none),
+        min_length=Parameter.of(reaching.min() if reaching.size else None, u.length, none),
+        max_length=Parameter.of(reaching.max() if reaching.size else None, u.length, none),
+    )
 
 
-def _mauldon_block(traces: TraceMap, circle, circles: InscribedCircles | None, tolerance: float, u: _Units) -> dict:
+def _mauldon_parameters(
+    traces: TraceMap, circle, circles: InscribedCircles | None, tolerance: float, u: _Units
+) -> MauldonParameters:
     """Mauldon's values on the window when it is a circle, else pooled over ``circles`` (if any)."""
-    names = ("Fracture Intensity (Mauldon)", "Fracture Density (Mauldon)", "Trace Mean Length (Mauldon)")
     units = (u.intensity, u.per_area, u.length)
     if circle.is_circle:
         estimate: MauldonEstimate = mauldon_circle(traces, circle.centre_xy_m, circle.radius_m, tolerance_m=tolerance)
     elif circles is not None:
         estimate = mauldon_circles(traces, circles, tolerance_m=tolerance)
     else:
-        return {name: _quantity(None, unit, circle.reason) for name, unit in zip(names, units)}
+        return MauldonParameters(*(Parameter.of(None, unit, circle.reason) for unit in units))
     values = (estimate.p21_per_m, estimate.p20_per_m2, estimate.mean_length_m)
-    return {name: _quantity(v, unit, estimate.reason) for name, v, unit in zip(names, values, units)}
+    return MauldonParameters(*(Parameter.of(v, unit, estimate.reason) for v, unit in zip(values, units)))
 
 
-def _set_block(traces, sets: JointSets2D, s: int, window, p20_rule, tolerance, spacing, circle, circles, u) -> dict:
+def _set_summary(
+    traces, sets: JointSets2D, s: int, window, p20_rule, tolerance, spacing, circle, circles, u
+) -> SetSummary:
     members = traces.subset(sets.membership == s)
     intensity = trace_intensity(members, window=window, p20_rule=p20_rule, edge_tolerance_m=tolerance)
     survey = scanline_survey(members, float(sets.mean_angle_deg[s]), window=window, line_spacing_m=spacing)
     lengths = clipped_lengths_m(members, window)
-    block = {
-        "Set": s,
-        "Mean Angle": _quantity(sets.mean_angle_deg[s], "deg"),
-        "Circular Spread": _quantity(sets.spread_deg[s], "deg", "the set has no preferred direction"),
-        "Concentration (von Mises kappa)": _quantity(sets.kappa[s], "-"),
-        "Concentration Capped": bool(sets.kappa_capped[s]),
-        "Weight": _quantity(sets.weight[s], "-"),
-        "Number of Traces": _quantity(int(sets.count[s]), "-"),
-        **_intensity_block(intensity, lengths, u),
-        **_mauldon_block(members, circle, circles, tolerance, u),
-        "Mean Spacing": _quantity(survey.mean_spacing_m, u.length, survey.reason),
-        "Scanline P10": _quantity(survey.p10_per_m, u.per_length, "the scanlines have zero length"),
-        "Scanline Angle": _quantity(survey.scanline_angle_deg, "deg"),
-        "Scanline Count": _quantity(int(survey.offsets_m.size), "-"),
-        "Scanline Length": _quantity(survey.total_length_m, u.length),
-        "Scanline Intersections": _quantity(survey.total_intersections, "-"),
-    }
-    return block
+    return SetSummary(
+        index=s,
+        mean_angle=Parameter.of(sets.mean_angle_deg[s], "deg"),
+        circular_spread=Parameter.of(sets.spread_deg[s], "deg", "the set has no preferred direction"),
+        kappa=Parameter.of(sets.kappa[s], "-"),
+        kappa_capped=bool(sets.kappa_capped[s]),
+        weight=Parameter.of(sets.weight[s], "-"),
+        n_traces=Parameter.of(int(sets.count[s]), "-"),
+        intensity=_intensity_parameters(intensity, lengths, u),
+        mauldon=_mauldon_parameters(members, circle, circles, tolerance, u),
+        mean_spacing=Parameter.of(survey.mean_spacing_m, u.length, survey.reason),
+        scanline_p10=Parameter.of(survey.p10_per_m, u.per_length, "the scanlines have zero length"),
+        scanline_angle=Parameter.of(survey.scanline_angle_deg, "deg"),
+        scanline_count=Parameter.of(int(survey.offsets_m.size), "-"),
+        scanline_length=Parameter.of(survey.total_length_m, u.length),
+        scanline_intersections=Parameter.of(survey.total_intersections, "-"),
+    )

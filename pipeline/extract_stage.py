@@ -96,10 +96,9 @@ def compute(args, document=None):
     set_ids = np.full(traces.n_traces, -1, dtype=np.int64)
     if traces.n_traces >= 1:
         stats = trace_map_statistics(traces, n_sets=args.n_sets, length_unit=unit)
-        set_ids = np.asarray(stats["traces"]["set"], dtype=np.int64)
+        set_ids = np.array(stats.traces.set_id, dtype=np.int64)
         dimension = box_count(traces)
-        stats["Box-counting Dimension"] = dimension_entry(dimension)
-        summary["statistics"] = stats
+        summary["statistics"] = {**stats.to_dict(), "Box-counting Dimension": dimension_entry(dimension)}
     else:
         summary["statistics"] = None
         summary["extraction"]["warnings"].append("no trace was found: nothing to analyse")

@@ -41,7 +41,7 @@ def compute(args):
         trace_map = trace_map.with_window(window)
     t1 = time.perf_counter()
     summary = trace_map_statistics(trace_map, n_sets=args.n_sets,
-                                   snap_tolerance_m=args.snap_tolerance_m)
+                                   snap_tolerance_m=args.snap_tolerance_m).to_dict()
     t2 = time.perf_counter()
     dimension = box_count(trace_map)  # the map's window (if any) is the face mask
     t3 = time.perf_counter()

@@ -60,21 +60,21 @@ def walk(value):
 
 @pytest.mark.parametrize("make", [intensity_square, grid_map, circle_map, CATALOGUE["single_trace"].build])
 def test_summary_is_strict_json_with_no_nan(make):
-    result = trace_map_statistics(make())
+    result = trace_map_statistics(make()).to_dict()
     text = json.dumps(result, allow_nan=False)
     assert json.loads(text) == result
     assert not any(isinstance(v, float) and not math.isfinite(v) for v in walk(result))
 
 
 def test_fractopo_parameters_are_present_with_their_units():
-    result = trace_map_statistics(intensity_square())
+    result = trace_map_statistics(intensity_square()).to_dict()
     for name, unit in FRACTOPO_PARAMETERS.items():
         assert result[name]["unit"] == unit, name
         assert "reason" in result[name] or result[name]["value"] is not None, name
 
 
 def test_hand_counted_square_gives_exact_intensities():
-    result = trace_map_statistics(intensity_square())
+    result = trace_map_statistics(intensity_square()).to_dict()
     assert result["Number of Traces"]["value"] == 4
     assert result["Area"]["value"] == 100.0
     assert result["Fracture Intensity P21"]["value"] == pytest.approx(0.19, rel=1e-12)
@@ -87,7 +87,7 @@ def test_hand_counted_square_gives_exact_intensities():
 
 def test_edge_censored_network_gives_hand_counted_topology():
     case = TOPOLOGY_CASES["edge_censored"]
-    result = trace_map_statistics(case.build(), snap_tolerance_m=case.tolerance_m)
+    result = trace_map_statistics(case.build(), snap_tolerance_m=case.tolerance_m).to_dict()
     assert result["Node Counts"] == {"I": 1, "Y": 0, "X": 1, "E": 3}
     assert result["Number of Branches"]["value"] == 2.5  # (1 + 4) / 2
     assert result["Connections per Trace"]["value"] == 4.0  # 2 x 1 / ((1 + 0) / 2)
@@ -97,7 +97,7 @@ def test_edge_censored_network_gives_hand_counted_topology():
 
 
 def test_square_window_leaves_mauldon_undefined_with_a_reason_when_asked_to():
-    result = trace_map_statistics(intensity_square(), mauldon_in_window=False)
+    result = trace_map_statistics(intensity_square(), mauldon_in_window=False).to_dict()
     for name in ("Fracture Intensity (Mauldon)", "Fracture Density (Mauldon)", "Trace Mean Length (Mauldon)"):
         assert result[name]["value"] is None and "not a circle" in result[name]["reason"]
     assert result["window"]["is_circle"] is False and result["window"]["mauldon_circles"] is None
@@ -106,7 +106,7 @@ def test_square_window_leaves_mauldon_undefined_with_a_reason_when_asked_to():
 def test_square_window_gets_hand_counted_mauldon_values_on_its_inscribed_circle():
     # circle of radius 4.5 (0.9 x the inscribed 5) at (5, 5); the traces give
     # n = 1 + 0 + 0 + 1 = 2 crossings and m = 1 + 2 + 2 + 1 = 6 ends inside
-    result = trace_map_statistics(intensity_square())
+    result = trace_map_statistics(intensity_square()).to_dict()
     circles = result["window"]["mauldon_circles"]
     assert circles["count"] == 1 and circles["radius"] == pytest.approx(4.5)
     np.testing.assert_allclose(circles["centres_xy"], [[5.0, 5.0]])
@@ -118,7 +118,7 @@ def test_square_window_gets_hand_counted_mauldon_values_on_its_inscribed_circle(
 
 def test_circular_window_gives_hand_counted_mauldon_values():
     # n = 2 + 1 + 0 = 3 crossings, m = 0 + 1 + 2 = 3 ends inside, r = 5
-    result = trace_map_statistics(circle_map())
+    result = trace_map_statistics(circle_map()).to_dict()
     assert result["window"]["is_circle"] and result["window"]["radius"] == pytest.approx(5.0)
     assert result["Fracture Intensity (Mauldon)"]["value"] == pytest.approx(3 / 20)
     assert result["Fracture Density (Mauldon)"]["value"] == pytest.approx(3 / (2 * math.pi * 25))
@@ -129,12 +129,12 @@ def test_circular_window_mauldon_agrees_with_the_direct_estimator():
     tm = circle_map()
     c = circle_window(tm.window_xy_m)
     direct = mauldon_circle(tm, c.centre_xy_m, c.radius_m)
-    result = trace_map_statistics(tm)
+    result = trace_map_statistics(tm).to_dict()
     assert result["Fracture Intensity (Mauldon)"]["value"] == direct.p21_per_m
 
 
 def test_grid_gives_two_sets_with_their_spacings():
-    result = trace_map_statistics(grid_map())
+    result = trace_map_statistics(grid_map()).to_dict()
     sets = result["sets"]
     assert [s["Mean Angle"]["value"] for s in sets] == pytest.approx([0.0, 90.0], abs=1e-9)
     assert [s["Number of Traces"]["value"] for s in sets] == [5, 4]
@@ -147,7 +147,7 @@ def test_grid_gives_two_sets_with_their_spacings():
 
 
 def test_fully_censored_grid_has_no_connections_per_trace_and_says_why():
-    result = trace_map_statistics(grid_map())
+    result = trace_map_statistics(grid_map()).to_dict()
     assert result["Node Counts"] == {"I": 0, "Y": 0, "X": 20, "E": 18}
     assert result["Number of Branches"]["value"] == 40.0
     entry = result["Connections per Trace"]
@@ -155,7 +155,7 @@ def test_fully_censored_grid_has_no_connections_per_trace_and_says_why():
 
 
 def test_given_number_of_sets_is_used():
-    result = trace_map_statistics(grid_map(), n_sets=1)
+    result = trace_map_statistics(grid_map(), n_sets=1).to_dict()
     assert len(result["sets"]) == 1 and result["set_selection"]["method"] == "given"
 
 
@@ -165,7 +165,7 @@ def test_too_many_sets_is_a_clear_error():
 
 
 def test_pixel_maps_are_labelled_in_pixels():
-    result = trace_map_statistics(intensity_square(), length_unit="px")
+    result = trace_map_statistics(intensity_square(), length_unit="px").to_dict()
     assert result["Fracture Intensity P21"]["unit"] == "px/px²"
     assert result["Areal Frequency P20"]["unit"] == "1/px²"
     assert result["traces"]["unit"] == "px"
@@ -173,7 +173,7 @@ def test_pixel_maps_are_labelled_in_pixels():
 
 def test_traces_outside_the_window_are_left_out_and_counted():
     tm = TraceMap.from_segments([[1, 1, 4, 5], [20, 20, 30, 30]], {"id": ["in", "out"]}, window=SQUARE_10)
-    result = trace_map_statistics(tm)
+    result = trace_map_statistics(tm).to_dict()
     assert result["Number of Traces"]["value"] == 1
     assert result["traces"]["id"] == ["in"]
     assert result["diagnostics"]["traces_outside_window"] == 1
@@ -181,24 +181,24 @@ def test_traces_outside_the_window_are_left_out_and_counted():
 
 def test_window_source_and_default_snap_tolerance_are_reported():
     tm = TraceMap.from_segments([[0, 0, 10, 10], [0, 10, 10, 0]])  # no window: the 10 m bounding box
-    result = trace_map_statistics(tm)
+    result = trace_map_statistics(tm).to_dict()
     assert result["window"]["source"] == "bounding_box"
     assert result["settings"]["snap_tolerance"]["value"] == pytest.approx(1e-4 * math.sqrt(200))
 
 
 def test_explicit_window_argument_wins():
-    result = trace_map_statistics(intensity_square(), window=[(0, 0), (20, 0), (20, 20), (0, 20)])
+    result = trace_map_statistics(intensity_square(), window=[(0, 0), (20, 0), (20, 20), (0, 20)]).to_dict()
     assert result["window"]["source"] == "argument" and result["Area"]["value"] == 400.0
 
 
 def test_midpoint_rule_passes_through():
-    result = trace_map_statistics(intensity_square(), p20_rule="midpoints")
+    result = trace_map_statistics(intensity_square(), p20_rule="midpoints").to_dict()
     assert result["Areal Frequency P20"]["value"] == pytest.approx(0.04)
     assert result["settings"]["p20_rule"] == "midpoints"
 
 
 def test_zero_length_traces_are_reported_and_get_no_set():
-    result = trace_map_statistics(CATALOGUE["zero_length_trace"].build(), window=SQUARE_10)
+    result = trace_map_statistics(CATALOGUE["zero_length_trace"].build(), window=SQUARE_10).to_dict()
     assert result["diagnostics"]["zero_length_traces"] == 1
     assert result["traces"]["set"][0] == -1 and result["traces"]["angle_deg"][0] is None
 
@@ -238,7 +238,7 @@ def test_window_argument_is_not_modified():
 
 @pytest.mark.parametrize("make", [grid_map, intensity_square])
 def test_set_intensities_add_up_to_the_whole_map(make):
-    result = trace_map_statistics(make())
+    result = trace_map_statistics(make()).to_dict()
     assert sum(s["Fracture Intensity P21"]["value"] for s in result["sets"]) == pytest.approx(
         result["Fracture Intensity P21"]["value"], rel=1e-12
     )

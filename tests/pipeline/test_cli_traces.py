@@ -41,7 +41,7 @@ def test_outputs_match_the_api(grid_map, tmp_path):
         assert (out / name).stat().st_size > 0
     written = json.loads((out / "summary.json").read_text())
     trace_map = read_traces(grid_map)
-    api = trace_map_statistics(trace_map)
+    api = trace_map_statistics(trace_map).to_dict()
     assert written["Fracture Intensity P21"] == api["Fracture Intensity P21"]
     assert written["Box-counting Dimension"]["value"] == box_count(trace_map).dimension
 

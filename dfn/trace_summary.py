@@ -1,0 +1,491 @@
+"""The typed result of :func:`~rockmass.dfn.trace_stats.trace_map_statistics`.
+
+:class:`TraceMapStatistics` is a frozen dataclass built of small frozen parts: a :class:`Parameter`
+(value, unit and, when the value is undefined, the reason) for each fractopo parameter, the node
+counts, one :class:`SetSummary` per joint set, the per-trace table, the window, the settings and the
+diagnostics. Code reads the attributes (``stats.intensity.p21.value``, ``stats.traces.length``);
+:meth:`TraceMapStatistics.to_dict` writes the JSON document keyed by fractopo's parameter names
+(Ovaskainen et al. 2022) that ``summary.json`` holds. No NaN or infinity reaches that document, so
+``json.dumps(stats.to_dict(), allow_nan=False)`` always succeeds.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "Diagnostics",
+    "IntensityParameters",
+    "MauldonCircleSet",
+    "MauldonParameters",
+    "NodeCounts",
+    "Parameter",
+    "SetSelection",
+    "SetSummary",
+    "StatisticsSettings",
+    "TraceMapStatistics",
+    "TraceTable",
+    "WindowSummary",
+]
+
+
+def _number(value: Any) -> float | int | bool | None:
+    """A JSON number, or None for NaN and infinities."""
+    if value is None:
+        return None
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def _by_field_name(part: Any) -> dict:
+    """A part's JSON form when its keys are its field names: nested parts by their own ``to_dict()``."""
+    values = ((f.name, getattr(part, f.name)) for f in fields(part))
+    return {name: value.to_dict() if hasattr(value, "to_dict") else value for name, value in values}
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One named quantity: a finite number with its unit, or None with the reason it is undefined.
+
+    Attributes
+    ----------
+    value : float, int or None
+        The value; None when it is undefined (NaN and infinities become None).
+    unit : str
+        Unit label, built from the map's length unit (``"m/m²"``, ``"px"``) or ``"-"``, ``"deg"``.
+    reason : str or None
+        Why ``value`` is None; None whenever ``value`` is a number.
+    """
+
+    value: float | int | None
+    unit: str
+    reason: str | None = None
+
+    @classmethod
+    def of(cls, value: Any, unit: str, reason: str = "") -> Parameter:
+        """``value`` as a JSON number (NaN and infinities → None), with ``reason`` (default
+        ``"undefined"``) kept only when the value is None."""
+        number = _number(value)
+        return cls(number, unit, (reason or "undefined") if number is None else None)
+
+    def to_dict(self) -> dict:
+        """``{"value", "unit"}``, plus ``"reason"`` when the value is None."""
+        out: dict[str, Any] = {"value": self.value, "unit": self.unit}
+        if self.value is None:
+            out["reason"] = self.reason
+        return out
+
+
+@dataclass(frozen=True)
+class IntensityParameters:
+    """Counts and lengths inside the window, for the whole map or one set.
+
+    Attributes
+    ----------
+    p20 : Parameter
+        "Areal Frequency P20", traces per unit area (1/length²).
+    p21 : Parameter
+        "Fracture Intensity P21", trace length per unit area (length/length²).
+    mean_length, min_length, max_length : Parameter
+        "Trace Mean Length", "Trace Min Length", "Trace Max Length" of the clipped traces of positive
+        length.
+    """
+
+    p20: Parameter
+    p21: Parameter
+    mean_length: Parameter
+    min_length: Parameter
+    max_length: Parameter
+
+    def to_dict(self) -> dict:
+        return {
+            "Areal Frequency P20": self.p20.to_dict(),
+            "Fracture Intensity P21": self.p21.to_dict(),
+            "Trace Mean Length": self.mean_length.to_dict(),
+            "Trace Min Length": self.min_length.to_dict(),
+            "Trace Max Length": self.max_length.to_dict(),
+        }
+
+
+@dataclass(frozen=True)
+class MauldonParameters:
+    """Mauldon's circle estimators, on the window when it is a circle, else pooled over inscribed circles.
+
+    Attributes
+    ----------
+    p21 : Parameter
+        "Fracture Intensity (Mauldon)" (length/length²).
+    p20 : Parameter
+        "Fracture Density (Mauldon)" (1/length²).
+    mean_length : Parameter
+        "Trace Mean Length (Mauldon)".
+    """
+
+    p21: Parameter
+    p20: Parameter
+    mean_length: Parameter
+
+    def to_dict(self) -> dict:
+        return {
+            "Fracture Intensity (Mauldon)": self.p21.to_dict(),
+            "Fracture Density (Mauldon)": self.p20.to_dict(),
+            "Trace Mean Length (Mauldon)": self.mean_length.to_dict(),
+        }
+
+
+@dataclass(frozen=True)
+class NodeCounts:
+    """Topological node counts: isolated ends (I), abutments (Y), crossings (X), censored ends (E)."""
+
+    i: int
+    y: int
+    x: int
+    e: int
+
+    def to_dict(self) -> dict:
+        return {"I": self.i, "Y": self.y, "X": self.x, "E": self.e}
+
+
+@dataclass(frozen=True)
+class SetSummary:
+    """One joint set of the trace map.
+
+    Attributes
+    ----------
+    index : int
+        The set's number, as in :attr:`TraceTable.set_id`.
+    mean_angle, circular_spread : Parameter
+        Mean trace angle and circular spread, deg.
+    kappa : Parameter
+        von Mises concentration of the fitted axial mixture.
+    kappa_capped : bool
+        True when the fit reached the concentration cap.
+    weight : Parameter
+        Mixture weight (share of the length-weighted traces).
+    n_traces : Parameter
+        Traces assigned to the set.
+    intensity : IntensityParameters
+        P20, P21 and lengths of the set's traces in the window.
+    mauldon : MauldonParameters
+        Mauldon's estimators on the set's traces.
+    mean_spacing, scanline_p10, scanline_angle, scanline_count, scanline_length, scanline_intersections : Parameter
+        The survey along scanlines laid normal to the set (:func:`~rockmass.dfn.intensity.scanline_survey`).
+    """
+
+    index: int
+    mean_angle: Parameter
+    circular_spread: Parameter
+    kappa: Parameter
+    kappa_capped: bool
+    weight: Parameter
+    n_traces: Parameter
+    intensity: IntensityParameters
+    mauldon: MauldonParameters
+    mean_spacing: Parameter
+    scanline_p10: Parameter
+    scanline_angle: Parameter
+    scanline_count: Parameter
+    scanline_length: Parameter
+    scanline_intersections: Parameter
+
+    def to_dict(self) -> dict:
+        return {
+            "Set": self.index,
+            "Mean Angle": self.mean_angle.to_dict(),
+            "Circular Spread": self.circular_spread.to_dict(),
+            "Concentration (von Mises kappa)": self.kappa.to_dict(),
+            "Concentration Capped": self.kappa_capped,
+            "Weight": self.weight.to_dict(),
+            "Number of Traces": self.n_traces.to_dict(),
+            **self.intensity.to_dict(),
+            **self.mauldon.to_dict(),
+            "Mean Spacing": self.mean_spacing.to_dict(),
+            "Scanline P10": self.scanline_p10.to_dict(),
+            "Scanline Angle": self.scanline_angle.to_dict(),
+            "Scanline Count": self.scanline_count.to_dict(),
+            "Scanline Length": self.scanline_length.to_dict(),
+            "Scanline Intersections": self.scanline_intersections.to_dict(),
+        }
+
+
+@dataclass(frozen=True)
+class SetSelection:
+    """How the number of sets was chosen.
+
+    Attributes
+    ----------
+    method : str or None
+        ``"bic"`` or ``"given"``; None when no set was fitted.
+    bic : dict of str to float or None
+        BIC per tried number of sets (keys are the numbers as strings, as in the JSON document).
+    reason : str or None
+        Why no set was fitted; None when sets were fitted.
+    """
+
+    method: str | None
+    bic: dict[str, float | None]
+    reason: str | None = None
+
+    def to_dict(self) -> dict:
+        out: dict[str, Any] = {"method": self.method, "bic": dict(self.bic)}
+        if self.reason is not None:
+            out["reason"] = self.reason
+        return out
+
+
+@dataclass(frozen=True)
+class TraceTable:
+    """Per-trace values, one entry per trace reaching the window (structure of arrays).
+
+    Attributes
+    ----------
+    id : (N,) ndarray
+        The traces' ``id`` attribute.
+    length : (N,) float ndarray
+        Length inside the window, in ``unit``.
+    unit : str
+        The map's length unit.
+    censored : (N,) bool ndarray
+        True when an end of the trace is censored by the window edge.
+    set_id : (N,) int ndarray
+        Index of the trace's set, -1 when it has none.
+    angle_deg : (N,) float ndarray
+        Trace angle, deg; NaN for a trace without direction (None in the JSON document).
+    connections : (N,) int ndarray
+        Y and X nodes on the trace.
+    end_class : (N,) ndarray
+        Topological class of the trace's ends.
+    """
+
+    id: np.ndarray
+    length: np.ndarray
+    unit: str
+    censored: np.ndarray
+    set_id: np.ndarray
+    angle_deg: np.ndarray
+    connections: np.ndarray
+    end_class: np.ndarray
+
+    def to_dict(self) -> dict:
+        return {
+            "id": self.id.tolist(),
+            "length": [float(v) for v in self.length],
+            "unit": self.unit,
+            "censored": self.censored.tolist(),
+            "set": self.set_id.tolist(),
+            "angle_deg": [_number(v) for v in self.angle_deg],
+            "connections": self.connections.tolist(),
+            "end_class": self.end_class.tolist(),
+        }
+
+
+@dataclass(frozen=True)
+class MauldonCircleSet:
+    """Disjoint circles inside a non-circular window in which Mauldon's counts were pooled.
+
+    Attributes
+    ----------
+    count : int
+        Number of circles.
+    radius : float
+        Their common radius, in the map's length unit.
+    centres_xy : (count, 2) float ndarray
+        Their centres.
+    """
+
+    count: int
+    radius: float
+    centres_xy: np.ndarray
+
+    def to_dict(self) -> dict:
+        return {"count": self.count, "radius": self.radius, "centres_xy": self.centres_xy.tolist()}
+
+
+@dataclass(frozen=True)
+class WindowSummary:
+    """The sampling window the statistics were computed on.
+
+    Attributes
+    ----------
+    source : str
+        Where it came from: ``"argument"``, ``"map"`` or ``"bounding_box"``.
+    area : float
+        Its area, in ``unit`` squared.
+    unit : str
+        The map's length unit.
+    is_circle : bool
+        True when it is close enough to a circle for Mauldon's estimators on the window itself.
+    centre_xy : tuple of float or None
+        The circle's centre; None when it is not a circle.
+    radius : float or None
+        The circle's radius; None when it is not a circle.
+    circle_deviation : float or None
+        Largest relative deviation of the boundary from the fitted circle.
+    mauldon_circles : MauldonCircleSet or None
+        The inscribed circles of Mauldon's values; None when the window is a circle or they were not
+        asked for.
+    """
+
+    source: str
+    area: float
+    unit: str
+    is_circle: bool
+    centre_xy: tuple[float, float] | None
+    radius: float | None
+    circle_deviation: float | None
+    mauldon_circles: MauldonCircleSet | None
+
+    def to_dict(self) -> dict:
+        centre = None if self.centre_xy is None else list(self.centre_xy)
+        return {**_by_field_name(self), "centre_xy": centre}
+
+
+@dataclass(frozen=True)
+class StatisticsSettings:
+    """The settings the statistics were computed with (defaults resolved).
+
+    Attributes
+    ----------
+    snap_tolerance : Parameter
+        Topology snap distance, in the map's length unit.
+    p20_rule, angle_method : str
+        As passed to :func:`~rockmass.dfn.trace_stats.trace_map_statistics`.
+    n_sets : int or None
+        The requested number of sets; None when chosen by BIC.
+    resolution_deg : float
+        Angular resolution of the set fit.
+    mauldon_in_window : bool
+        Whether Mauldon's estimators were evaluated on circles inside a non-circular window.
+    seed : int or None
+        Seed of the set fit.
+    scanline_spacing : Parameter or None
+        Requested scanline spacing; None for the default of 10 scanlines per set.
+    """
+
+    snap_tolerance: Parameter
+    p20_rule: str
+    angle_method: str
+    n_sets: int | None
+    resolution_deg: float
+    mauldon_in_window: bool
+    seed: int | None
+    scanline_spacing: Parameter | None
+
+    def to_dict(self) -> dict:
+        return _by_field_name(self)
+
+
+@dataclass(frozen=True)
+class Diagnostics:
+    """Counts that flag suspicious input.
+
+    Attributes
+    ----------
+    traces_outside_window : int
+        Traces of the map left out because they miss the window.
+    zero_length_traces : int
+        Degenerate traces (all vertices coincide).
+    end_contacts : int
+        Trace ends that touch another trace's end.
+    overlapping_pairs : int
+        Pairs of traces that overlap along a stretch.
+    """
+
+    traces_outside_window: int
+    zero_length_traces: int
+    end_contacts: int
+    overlapping_pairs: int
+
+    def to_dict(self) -> dict:
+        return _by_field_name(self)
+
+
+@dataclass(frozen=True)
+class TraceMapStatistics:
+    """All statistics of a trace map (see :func:`~rockmass.dfn.trace_stats.trace_map_statistics`).
+
+    Attributes
+    ----------
+    n_traces : Parameter
+        "Number of Traces": traces reaching the window.
+    area : Parameter
+        "Area" of the window.
+    intensity : IntensityParameters
+        P20, P21 and trace lengths of all traces.
+    p22 : Parameter
+        "Dimensionless Intensity P22" (P21 × mean length).
+    n_branches : Parameter
+        "Number of Branches".
+    connections_per_trace, connections_per_branch : Parameter
+        "Connections per Trace" (Sanderson & Nixon's node count) and "Connections per Branch".
+    connection_frequency : Parameter
+        "Connection Frequency": Y and X nodes per unit area.
+    n_censored : Parameter
+        "Number of Censored Traces".
+    mauldon : MauldonParameters
+        Mauldon's estimators on all traces.
+    node_counts : NodeCounts
+        "Node Counts".
+    sets : tuple of SetSummary
+        One per joint set, in set order; empty when no set was fitted.
+    set_selection : SetSelection
+        How the number of sets was chosen.
+    traces : TraceTable
+        The per-trace table.
+    window : WindowSummary
+        The sampling window.
+    settings : StatisticsSettings
+        The settings used.
+    diagnostics : Diagnostics
+        Counts that flag suspicious input.
+    """
+
+    n_traces: Parameter
+    area: Parameter
+    intensity: IntensityParameters
+    p22: Parameter
+    n_branches: Parameter
+    connections_per_trace: Parameter
+    connections_per_branch: Parameter
+    connection_frequency: Parameter
+    n_censored: Parameter
+    mauldon: MauldonParameters
+    node_counts: NodeCounts
+    sets: tuple[SetSummary, ...]
+    set_selection: SetSelection
+    traces: TraceTable
+    window: WindowSummary
+    settings: StatisticsSettings
+    diagnostics: Diagnostics
+
+    def to_dict(self) -> dict:
+        """The JSON document: parameters under their fractopo names, then ``"Node Counts"``,
+        ``"sets"``, ``"set_selection"``, ``"traces"``, ``"window"``, ``"settings"`` and
+        ``"diagnostics"`` (a new dict on each call)."""
+        return {
+            "Number of Traces": self.n_traces.to_dict(),
+            "Area": self.area.to_dict(),
+            **self.intensity.to_dict(),
+            "Dimensionless Intensity P22": self.p22.to_dict(),
+            "Number of Branches": self.n_branches.to_dict(),
+            "Connections per Trace": self.connections_per_trace.to_dict(),
+            "Connections per Branch": self.connections_per_branch.to_dict(),
+            "Connection Frequency": self.connection_frequency.to_dict(),
+            "Number of Censored Traces": self.n_censored.to_dict(),
+            **self.mauldon.to_dict(),
+            "Node Counts": self.node_counts.to_dict(),
+            "sets": [s.to_dict() for s in self.sets],
+            "set_selection": self.set_selection.to_dict(),
+            "traces": self.traces.to_dict(),
+            "window": self.window.to_dict(),
+            "settings": self.settings.to_dict(),
+            "diagnostics": self.diagnostics.to_dict(),
+        }
