@@ -77,6 +77,20 @@ def _overlap_diagnostic(eng: Engine, pair: int, overlap: float, dt: float) -> st
             + "; ".join(causes))
 
 
+def _require_in_domain(model, name: str, xy) -> None:
+    """A monitor point must lie in the model's domain (a point far outside would silently follow the
+    nearest block)."""
+    import shapely
+
+    domain = shapely.Polygon(model.domain_xy_m)
+    point = shapely.Point(float(xy[0]), float(xy[1]))
+    if not domain.covers(point):
+        lo, hi = model.domain_xy_m.min(axis=0), model.domain_xy_m.max(axis=0)
+        raise ValueError(f"monitor {name!r}: point_xy_m ({xy[0]:g}, {xy[1]:g}) lies "
+                         f"{domain.exterior.distance(point):.3g} m outside the model domain "
+                         f"(x {lo[0]:g}..{hi[0]:g}, y {lo[1]:g}..{hi[1]:g} m)")
+
+
 class _Recorder:
     """Histories of monitored blocks, frames and peak block velocities."""
 
@@ -84,6 +98,8 @@ class _Recorder:
         self.eng = eng
         self.monitors = []
         for m in settings.monitors:
+            if m.block is None:
+                _require_in_domain(eng.model, m.name, m.point_xy_m)
             block = m.block if m.block is not None else block_at_point(eng.model, m.point_xy_m)
             if not 0 <= block < eng.nb:
                 raise ValueError(f"monitor {m.name!r}: block {block} out of range")

@@ -391,3 +391,13 @@ def test_a_new_run_leaves_no_frame_of_an_earlier_run(tiny_run, tmp_path, capsys)
     frames = sorted(p.name for p in again.glob("blocks_*.vtu"))
     assert frames == [f["file"] for f in result["frames"]] and not stale.exists()
     assert (again / "notes.txt").read_text() == "the user's own file"
+
+
+def test_monitor_point_outside_the_domain_exits_2_naming_it(tmp_path, capsys):
+    """A point 480 m away used to follow the nearest block silently (issue 18)."""
+    path = _tiny(tmp_path)
+    path.write_text(path.read_text().replace("point_xy_m = [0.6, 0.4]", "point_xy_m = [480.6, 0.4]"))
+    assert main(["solve", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "c.toml" in err and "monitor 'top'" in err and "outside the model domain" in err
+    assert not (tmp_path / "out").exists()
