@@ -131,7 +131,7 @@ def p32_case(p32: float, realizations: int, side: float = 15.0) -> dict:
 #: length of each set; dfn: P32 (m²/m³) in a 20 m cube.
 SCALE_CASES = (("orthogonal", 9.0, "1e3"), ("orthogonal", 21.0, "1e4"), ("orthogonal", 45.0, "1e5"),
                ("oblique", 17.0, "1e3"), ("oblique", 40.0, "1e4"), ("oblique", 92.0, "1e5"),
-               ("dfn", 2.0, "1e3"), ("dfn", 6.0, "1e4"))
+               ("dfn", 2.0, "1e3"), ("dfn", 6.0, "1e4"), ("dfn", 7.5, "1e5"))
 
 
 def scale_planes(kind: str, parameter: float):
@@ -168,7 +168,7 @@ def scale_case(kind: str, parameter: float, reference: bool) -> dict:
     seconds = time.perf_counter() - t0
     rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     return {"case": kind, "param": parameter, "planes": sum(len(p) for p in planes), "pieces": len(blocks.pieces),
-            "blocks": blocks.n_blocks, **{f"{k}_s": v for k, v in blocks3d._PHASE_S.items()}, "total_s": seconds,
+            "blocks": blocks.n_blocks, **{f"{k}_s": v for k, v in blocks.timings_s.items()}, "total_s": seconds,
             "blocks_per_s": blocks.n_blocks / seconds, "peak_mb": (rss1 - rss0) / 1024,
             "count_error": None if exact is None else blocks.n_blocks - exact,
             "volume_error": abs(blocks.volume_m3.sum() / np.prod(box[1] - box[0]) - 1.0)}
@@ -221,7 +221,7 @@ def main() -> None:
     scale_rows = [in_fresh_process(["--case", kind, str(parameter), *reference])
                   for kind, parameter, nominal in SCALE_CASES if not (quick and nominal == "1e5")]
     print("\nTable 3 - scaling (fresh process per row; peak_mb = peak RSS growth during cut_box)")
-    print(table(scale_rows, [("case", "s"), ("param", ".0f"), ("planes", "d"), ("pieces", "d"), ("blocks", "d"),
+    print(table(scale_rows, [("case", "s"), ("param", "g"), ("planes", "d"), ("pieces", "d"), ("blocks", "d"),
                              ("cut_s", ".2f"), ("moments_s", ".3f"), ("links_s", ".2f"), ("grouping_s", ".3f"),
                              ("total_s", ".2f"), ("blocks_per_s", ".0f"), ("peak_mb", ".0f"),
                              ("count_error", "d"), ("volume_error", ".1e")]))

@@ -46,8 +46,6 @@ DISK_POLYGON_VERTICES = 256
 TOL_FRACTION = 1e-10
 #: cut and integrate in the numba kernels (False: the reference numpy path through ``split``).
 _USE_KERNELS = True
-#: seconds spent by the last :func:`cut_box` call in each phase (read by benchmarks/bench_blocks3d.py).
-_PHASE_S: dict[str, float] = {}
 
 
 @dataclass(frozen=True)
@@ -76,7 +74,8 @@ class BlockSet3D:
     ``planes`` are all the cutting planes (fractures first, then tunnel walls, labelled −2 − k);
     ``box_m`` is the domain; ``excavated (n,)`` marks the pieces inside a tunnel (``block_id`` −1).
     ``second_moment_m5 (n, 3, 3)``: ∫x xᵀ dV of each piece about the origin; ``surface_area_m2
-    (n,)``: the area of each piece's faces.
+    (n,)``: the area of each piece's faces; ``timings_s``: seconds spent cutting, on moments, on links
+    and on grouping.
     """
 
     pieces: tuple[Polyhedron, ...]
@@ -91,6 +90,7 @@ class BlockSet3D:
     planes: Planes | None
     second_moment_m5: np.ndarray
     surface_area_m2: np.ndarray
+    timings_s: dict
 
     @property
     def link_label(self) -> np.ndarray:
@@ -201,9 +201,9 @@ def cut_box(box_m, *planes: Planes, tunnels: tuple["Tunnel", ...] = (),
     clock.append(time.perf_counter())
     block_id = _components(len(pieces), links, area, real, excavated)
     clock.append(time.perf_counter())
-    _PHASE_S.update(zip(("cut", "moments", "links", "grouping"), np.diff(clock).tolist()))
     return BlockSet3D(tuple(pieces), volume, centroid, block_id, links, area, real, box, excavated,
-                      all_planes, second_moment, _surface_areas(flat))
+                      all_planes, second_moment, _surface_areas(flat),
+                      dict(zip(("cut", "moments", "links", "grouping"), np.diff(clock).tolist())))
 
 
 def _cut_flat(box: np.ndarray, planes: Planes | None, tunnels, n_fractures: int, tol: float):

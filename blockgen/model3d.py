@@ -20,7 +20,7 @@ from ..dfn.specs import Float, Int, field_error, spec
 from .block_shapes import BlockShapes, block_shapes
 from .blocks3d import BlockSet3D, Planes, cut_box, disk_planes, persistent_set_planes
 from .keyblocks import Keyblock, keyblocks
-from .openings3d import Tunnel, circle_section, horseshoe_section
+from .openings3d import Tunnel, circle_section, horseshoe_section, rectangle_section
 
 __all__ = ["JointSet3D", "TunnelSpec", "Blocks3DSettings", "Model3D", "build3d"]
 
@@ -78,8 +78,7 @@ class TunnelSpec:
         elif self.shape == "horseshoe":
             section = horseshoe_section(self.width_m, self.wall_height_m, max(self.n_sides // 2, 4))
         else:
-            w, h = self.width_m / 2, self.height_m
-            section = np.array([[-w, 0.0], [w, 0.0], [w, h], [-w, h]])
+            section = rectangle_section(self.width_m, self.height_m)
         return Tunnel(section, centre_m=tuple(self.centre_m), trend_deg=self.trend_deg)
 
 

@@ -17,24 +17,31 @@ from functools import cached_property
 import numpy as np
 
 from .blocks3d import Planes
+from .excavations import CircleSpec, HorseshoeSpec, RectangleSpec
 
-__all__ = ["Tunnel", "circle_section", "horseshoe_section"]
+__all__ = ["Tunnel", "circle_section", "horseshoe_section", "rectangle_section"]
 
 
 def circle_section(radius_m: float, n_sides: int = 24) -> np.ndarray:
-    """A regular ``n_sides``-gon inscribed in the circle of ``radius_m``, counter-clockwise, turned so
-    that the invert is a horizontal edge."""
-    angles = -math.pi / 2 + (np.arange(n_sides) + 0.5) * 2 * math.pi / n_sides
-    return radius_m * np.stack([np.cos(angles), np.sin(angles)], axis=1)
+    """A regular ``n_sides``-gon inscribed in the circle of ``radius_m`` about the origin,
+    counter-clockwise: the outline of the 2D circular excavation (:class:`CircleSpec`)."""
+    return CircleSpec(name="section", center_xy_m=(0.0, 0.0), radius_m=radius_m,
+                      n_sides=n_sides).to_excavation().xy_m
 
 
 def horseshoe_section(width_m: float, wall_height_m: float, n_arc: int = 12) -> np.ndarray:
     """Flat invert of ``width_m`` at v = 0, vertical walls of ``wall_height_m``, a semicircular roof
-    of radius width/2 drawn with ``n_arc`` edges; counter-clockwise."""
-    r = width_m / 2
-    arc = np.linspace(0.0, math.pi, n_arc + 1)
-    roof = np.stack([r * np.cos(arc), wall_height_m + r * np.sin(arc)], axis=1)
-    return np.vstack([[[-r, 0.0], [r, 0.0]], roof])
+    of radius width/2 drawn with ``n_arc`` edges, counter-clockwise: the outline of the 2D horseshoe
+    excavation (:class:`HorseshoeSpec`, whose ``n_sides`` is that of the full circle)."""
+    return HorseshoeSpec(name="section", center_xy_m=(0.0, 0.0), span_m=width_m,
+                         wall_height_m=wall_height_m, n_sides=2 * n_arc).to_excavation().xy_m
+
+
+def rectangle_section(width_m: float, height_m: float) -> np.ndarray:
+    """A ``width_m`` × ``height_m`` rectangle standing on the origin (the middle of its floor),
+    counter-clockwise: the outline of the 2D rectangular excavation (:class:`RectangleSpec`)."""
+    return RectangleSpec(name="section", center_xy_m=(0.0, height_m / 2), width_m=width_m,
+                         height_m=height_m).to_excavation().xy_m
 
 
 @dataclass(frozen=True)

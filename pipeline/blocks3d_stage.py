@@ -18,7 +18,7 @@ import time
 from collections import Counter
 
 from .errors import ConfigError, InputError
-from .outputs import output_folder
+from .outputs import csv_text, output_folder
 
 __all__ = ["compute", "produce", "summary"]
 
@@ -102,26 +102,29 @@ def summary(model) -> dict:
     }
 
 
-def _csv(rows: list[list], header: list[str]) -> str:
-    return "\n".join([",".join(header)] + [",".join(format(v, ".6g") if isinstance(v, float) else str(v)
-                                                    for v in row) for row in rows]) + "\n"
-
-
 def _blocks_csv(model) -> str:
+    import numpy as np
+
     s = model.shapes
-    rows = [[b, s.volume_m3[b], s.surface_area_m2[b], *s.semi_axes_m[b], s.elongation[b], s.flatness[b],
-             s.sphericity[b], *s.centroid_m[b]] for b in range(len(s.volume_m3))]
-    return _csv([[int(r[0]), *map(float, r[1:])] for r in rows],
-                ["block", "volume_m3", "surface_area_m2", "a_m", "b_m", "c_m", "elongation", "flatness",
-                 "sphericity", "x_m", "y_m", "z_m"])
+    a, b, c = s.semi_axes_m.T
+    x, y, z = s.centroid_m.T
+    return csv_text({"block": np.arange(len(s.volume_m3)), "volume_m3": s.volume_m3,
+                     "surface_area_m2": s.surface_area_m2, "a_m": a, "b_m": b, "c_m": c,
+                     "elongation": s.elongation, "flatness": s.flatness, "sphericity": s.sphericity,
+                     "x_m": x, "y_m": y, "z_m": z})
 
 
 def _keyblocks_csv(model) -> str:
-    rows = [[k.block, k.mode, k.volume_m3, k.free_area_m2, k.apex_height_m,
-             "inf" if k.factor_of_safety == float("inf") else float(k.factor_of_safety),
-             " ".join(map(str, k.planes)), *map(float, k.direction)] for k in model.keyblocks]
-    return _csv(rows, ["block", "mode", "volume_m3", "free_area_m2", "apex_height_m", "factor_of_safety",
-                       "planes", "dx", "dy", "dz"])
+    import numpy as np
+
+    k = model.keyblocks
+    direction = np.array([r.direction for r in k]).reshape(-1, 3)
+    return csv_text({"block": [r.block for r in k], "mode": [r.mode for r in k],
+                     "volume_m3": [r.volume_m3 for r in k], "free_area_m2": [r.free_area_m2 for r in k],
+                     "apex_height_m": [r.apex_height_m for r in k],
+                     "factor_of_safety": [r.factor_of_safety for r in k],
+                     "planes": [" ".join(map(str, r.planes)) for r in k],
+                     "dx": direction[:, 0], "dy": direction[:, 1], "dz": direction[:, 2]})
 
 
 #: the per-realization numbers compared across realizations (summary.json "across").
@@ -205,9 +208,11 @@ def produce(args, out_dir, document=None):
 
 def _realizations_csv(first: int, docs: list[dict]) -> str:
     modes = sorted({m for d in docs for m in d["keyblocks"]["modes"]})
-    rows = [[first + k, d["pieces"], d["blocks"], d["block_volume_m3"]["quantiles"].get("0.5", 0.0),
-             d["block_volume_m3"]["log_mean"], d["block_volume_m3"]["log_sd"], d["volume_balance"],
-             d["keyblocks"]["with_free_face"], *(d["keyblocks"]["modes"].get(m, 0) for m in modes)]
-            for k, d in enumerate(docs)]
-    return _csv(rows, ["realization", "pieces", "blocks", "median_block_m3", "log_mean", "log_sd",
-                       "volume_balance", "blocks_on_openings", *(f"mode_{m}" for m in modes)])
+    volumes = [d["block_volume_m3"] for d in docs]
+    return csv_text({"realization": [first + k for k in range(len(docs))],
+                     "pieces": [d["pieces"] for d in docs], "blocks": [d["blocks"] for d in docs],
+                     "median_block_m3": [v["quantiles"].get("0.5", 0.0) for v in volumes],
+                     "log_mean": [v["log_mean"] for v in volumes], "log_sd": [v["log_sd"] for v in volumes],
+                     "volume_balance": [d["volume_balance"] for d in docs],
+                     "blocks_on_openings": [d["keyblocks"]["with_free_face"] for d in docs],
+                     **{f"mode_{m}": [d["keyblocks"]["modes"].get(m, 0) for d in docs] for m in modes}})

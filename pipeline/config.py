@@ -217,6 +217,11 @@ SolveSection = Stage("solve_config", "SolveConfig")
 Blocks3DSection = Stage("blocks3d_config", "Blocks3DConfig")
 
 
+#: Sections added after config hashes were first recorded: dumped (and hashed) only when present,
+#: so that adding one changes no existing config's hash and studies keep resuming.
+SECTIONS_ADDED_LATER = ("blocks3d",)
+
+
 class RockmassConfig(StrictModel):
     """The whole configuration document. Every section is optional: a stage runs only if asked for.
 
@@ -256,8 +261,10 @@ class RockmassConfig(StrictModel):
     @model_serializer(mode="wrap")
     def _sections_added_later_only_when_present(self, handler):
         dumped = handler(self)
-        if isinstance(dumped, dict) and dumped.get("blocks3d", 0) is None:
-            del dumped["blocks3d"]
+        if isinstance(dumped, dict):
+            for name in SECTIONS_ADDED_LATER:
+                if name in dumped and dumped[name] is None:
+                    del dumped[name]
         return dumped
 
 

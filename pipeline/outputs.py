@@ -15,7 +15,7 @@ from pathlib import Path
 
 from .errors import RunError
 
-__all__ = ["output_folder", "print_json", "print_summary"]
+__all__ = ["output_folder", "print_json", "print_summary", "csv_text"]
 
 
 @contextlib.contextmanager
@@ -49,3 +49,32 @@ def print_summary(document, as_json: bool, text) -> None:
         print_json(document)
     else:
         print(text(document))
+
+
+def csv_text(columns: dict) -> str:
+    """CSV of equal-length columns (name -> values): numbers with 17 significant digits (``inf`` as
+    ``inf``), booleans as 0/1, strings quoted if needed. The one CSV table writer of the commands."""
+    import csv
+    import io
+
+    import numpy as np
+
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    names = list(columns)
+    w.writerow(names)
+    cols = [np.asarray(columns[n]) for n in names]
+    n = len(cols[0]) if cols else 0
+
+    def fmt(v):
+        if isinstance(v, (bool, np.bool_)):
+            return int(v)
+        if isinstance(v, (float, np.floating)):
+            return repr(float(v))
+        if isinstance(v, (np.integer,)):
+            return int(v)
+        return v
+
+    for i in range(n):
+        w.writerow([fmt(c[i]) for c in cols])
+    return buf.getvalue()

@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 
 from .errors import ConfigError, InputError, RunError
-from .outputs import output_folder
+from .outputs import csv_text, output_folder
 
 __all__ = ["prepare", "solve", "build_outputs", "produce"]
 
@@ -138,32 +138,6 @@ def _monitor_summary(result, model, settings) -> dict:
     return out
 
 
-def _csv_text(columns: dict) -> str:
-    """CSV of equal-length columns (numbers with 17 significant digits, strings quoted if needed)."""
-    import csv
-    import io
-
-    import numpy as np
-
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    names = list(columns)
-    w.writerow(names)
-    cols = [np.asarray(columns[n]) for n in names]
-    n = len(cols[0]) if cols else 0
-
-    def fmt(v):
-        if isinstance(v, (bool, np.bool_)):
-            return int(v)
-        if isinstance(v, (float, np.floating)):
-            return repr(float(v))
-        if isinstance(v, (np.integer,)):
-            return int(v)
-        return v
-
-    for i in range(n):
-        w.writerow([fmt(c[i]) for c in cols])
-    return buf.getvalue()
 
 
 def build_outputs(model, settings, result, timings) -> dict:
@@ -182,15 +156,15 @@ def build_outputs(model, settings, result, timings) -> dict:
         pvd.append((float(fr.time_s), name))
     files["blocks.pvd"] = pvd_text(pvd)
     history = result.history or {"time_s": np.zeros(0), "stage": np.zeros(0, str)}
-    files["history.csv"] = _csv_text(history)
+    files["history.csv"] = csv_text(history)
     be = result.block_energy
-    files["block_energy.csv"] = _csv_text({
+    files["block_energy.csv"] = csv_text({
         "block_id": np.arange(model.n_blocks), "region": model.region,
         "volume_m3": be["volume_m3"], "mass_kg": be["mass_kg"],
         "peak_velocity_m_s": be["peak_velocity_m_s"],
         "peak_kinetic_energy_j": be["peak_kinetic_energy_j"]})
     contacts = result.contacts or {}
-    files["contacts.csv"] = _csv_text(contacts) if contacts else "block_a,block_b\n"
+    files["contacts.csv"] = csv_text(contacts) if contacts else "block_a,block_b\n"
     doc = result.to_json_dict()
     doc["monitors"] = _monitor_summary(result, model, settings)
     doc["model"] = {"blocks": int(model.n_blocks), "contacts": int(model.n_contacts),
