@@ -65,7 +65,7 @@ from pydantic import Field, Strict
 
 from .solver.settings import (BoundaryStress, ContinuouslyYielding, Coulomb, Fix, InSituStress,
                               Material, Monitor, QuietBoundary, Ricker, Settings, Sine, Stage,
-                              VelocityInput)
+                              TableSine, VelocityInput)
 from .strict import ConfigFile, StrictModel, config_file, in_folder, library_section
 
 __all__ = ["SolveConfig", "SolveDocument", "MaterialConfig", "CoulombConfig", "CYConfig",
@@ -105,7 +105,7 @@ class CsvHistoryConfig(StrictModel):
         return read_history_csv(self.path(base), self.kind, self.scale, where)
 
 
-HistoryConfig = Annotated[Sine | Ricker | CsvHistoryConfig, Field(discriminator="type")]
+HistoryConfig = Annotated[Sine | TableSine | Ricker | CsvHistoryConfig, Field(discriminator="type")]
 
 
 def read_history_csv(path: Path, kind: str, scale: float, where: str):
@@ -171,9 +171,11 @@ class StageClock:
 
 
 class VelocityInputConfig(library_section(VelocityInput, history=(HistoryConfig, Field(
-        description="velocity history: a table with type = \"sine\", \"ricker\" or \"csv\"")))):
+        description="velocity history: a table with type = \"sine\", \"table_sine\", \"ricker\" or "
+                    "\"csv\"")))):
     """``[[solve.velocity_inputs]]``: :class:`rockmass.solver.VelocityInput` (dynamic stages) whose
-    history is a sine, a Ricker wavelet or a CSV file."""
+    history is a sine (of velocity, or of the table's displacement), a Ricker wavelet or a CSV
+    file."""
 
 
 _Excavation = Annotated[str, Strict(), Field(min_length=1)] | Annotated[int, Strict(), Field(ge=1)]

@@ -6,8 +6,9 @@ Public names
     ``run(model, settings) -> Result``: the stages of a run (:mod:`rockmass.solver.runner`).
 :class:`Settings`, :class:`Stage`, :class:`Material`, :class:`Coulomb`,
 :class:`ContinuouslyYielding`, :class:`InSituStress`, :class:`Fix`, :class:`BoundaryStress`,
-:class:`VelocityInput`, :class:`Sine`, :class:`Ricker`, :class:`TableHistory`,
-:class:`QuietBoundary`, :class:`Monitor`
+:class:`VelocityInput`, :class:`Sine`, :class:`TableSine`, :class:`Ricker`,
+:class:`TableHistory`,
+:class:`QuietBoundary`, :class:`FreeField`, :class:`Monitor`
     What a run needs besides the blocks (:mod:`rockmass.solver.settings`).
 :class:`Result`, :class:`StageResult`, :class:`Frame`
     What it returns (:mod:`rockmass.solver.result`).
@@ -25,13 +26,13 @@ The numba kernels (:mod:`rockmass.solver._kernels`) load on first use of :func:`
 """
 
 from .result import Frame, Result, StageResult
-from .settings import (BoundaryStress, ContinuouslyYielding, Coulomb, Fix, InSituStress, Material,
-                       Monitor, QuietBoundary, Ricker, Settings, Sine, Stage, TableHistory,
-                       VelocityInput)
+from .settings import (BoundaryStress, ContinuouslyYielding, Coulomb, Fix, FreeField, InSituStress,
+                       Material, Monitor, QuietBoundary, Ricker, Settings, Sine, Stage, TableHistory,
+                       TableSine, VelocityInput)
 
 __all__ = ["run", "Engine", "Settings", "Stage", "Material", "Coulomb", "ContinuouslyYielding",
-           "InSituStress", "Fix", "BoundaryStress", "VelocityInput", "Sine", "Ricker",
-           "TableHistory", "QuietBoundary", "Monitor", "Result", "StageResult", "Frame"]
+           "InSituStress", "Fix", "BoundaryStress", "VelocityInput", "Sine", "TableSine", "Ricker",
+           "TableHistory", "QuietBoundary", "FreeField", "Monitor", "Result", "StageResult", "Frame"]
 
 
 def __getattr__(name):  # numba only when a run starts

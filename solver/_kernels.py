@@ -82,6 +82,10 @@ N_WV_COLUMNS = 8
 N_PROP_COLUMNS = 14
 MODEL_COULOMB, MODEL_CY = 0, 1
 
+# --- free-field column element table columns (free_field_step; rockmass.solver.free_field) -----
+(FF_M, FF_KX, FF_KY, FF_ABOVE, FF_CX, FF_CY, FF_MODE_X, FF_MODE_Y, FF_IN_X, FF_IN_Y) = range(10)
+N_FF_COLUMNS = 10
+
 # --- energy accumulator entries (docs/dem.md §11) -----------------------------------------------
 (E_GRAVITY, E_EXTERNAL, E_LOCAL_DAMP, E_VISCOUS, E_QUIET, E_CONTACT_FREE, E_CONTACT_PRESC,
  E_SLIP, E_BROKEN, E_NEW_BROKEN, E_NEW_SLOTS) = range(11)
@@ -118,8 +122,10 @@ RC_DONE, RC_REBUILD, RC_CONVERGED, RC_OVERLAP, RC_NONFINITE, RC_STIFF = range(6)
  PRM_FACE_MIN,      # tolerances.FACE_MIN_FRACTION
  PRM_DEGENERATE,    # tolerances.DEGENERATE_DISTANCE
  PRM_TINY,          # tolerances.TINY
- ) = range(27)
-N_PRM = 27
+ PRM_REF_X,         # presc_val column whose velocity the mass damping is relative to in x (-1: 0)
+ PRM_REF_Y,         # the same in y
+ ) = range(29)
+N_PRM = 29
 
 #: Per-block arrays (the blocks' geometry, inertia, degrees of freedom and motion) and the world
 #: vertex scratch table ``wv`` (columns ``W_*``) the kernels fill.
@@ -135,9 +141,12 @@ Pairs = namedtuple("Pairs", ["pa", "pb", "pprop", "pref", "pinit", "init_brk", "
                              "fpair", "bp_ptr", "bp_idx", "ref_pos", "ref_rot"])
 
 #: Applied loads: gravity (2,), external force ``ext_f`` (B, 2) and the two moment terms
-#: ``ext_a``, ``ext_b`` (B,), quiet-boundary edges (Q, 8) (:func:`quiet_forces`) and the
-#: prescribed velocities ``presc_val`` (steps, inputs) at the half steps.
-Loads = namedtuple("Loads", ["gravity", "ext_f", "ext_a", "ext_b", "quiet_edges", "presc_val"])
+#: ``ext_a``, ``ext_b`` (B,), quiet-boundary edges (Q, 8) (:func:`quiet_forces`), the
+#: prescribed velocities ``presc_val`` (steps, inputs) at the half steps, and the free-field
+#: edges (F, 9), column elements (E, ``N_FF_COLUMNS``) and their state (E, 4)
+#: (:func:`free_field_step`).
+Loads = namedtuple("Loads", ["gravity", "ext_f", "ext_a", "ext_b", "quiet_edges", "presc_val",
+                             "ff_edges", "ff_elem", "ff_state"])
 
 
 @njit(cache=True)
@@ -485,11 +494,13 @@ def _relative_motion(xa, ya, vxa, vya, wa, xb, yb, vxb, vyb, wb, px, py, tx, ty,
 
 
 @njit(cache=True, inline="always")
-def _stiffness_dashpot(prop, length, beta, vrx, vry, nx, ny, tx, ty, dt, fn, fs, E):
+def _stiffness_dashpot(prop, length, beta, vrx, vry, nx, ny, tx, ty, dt, fn, fs, slipping, E):
     """Add the stiffness-proportional Rayleigh dashpots β K v_rel to a slot's forces (docs/dem.md
-    §8, eq. (8.4)) and book their work; returns the damped (F_n, F_s)."""
+    §8, eq. (8.4)) and book their work; returns the damped (F_n, F_s). A slipping slot gets no
+    shear dashpot: its shear force is the joint's strength, and a viscous force on top of it
+    would make the strength grow with the slip rate."""
     vn = vrx * nx + vry * ny
-    vt = vrx * tx + vry * ty
+    vt = 0.0 if slipping else vrx * tx + vry * ty
     fn -= beta * prop[P_KN] * length * vn
     fs += beta * prop[P_KS] * length * vt
     E[E_VISCOUS] -= beta * length * (prop[P_KN] * vn * vn + prop[P_KS] * vt * vt) * dt
@@ -818,7 +829,7 @@ def contact_forces(blocks, pairs, still, prm, E):
             fs = S[p, k, FS]
             if beta > 0.0 and fn != 0.0:  # closed contacts, glued ones in tension included
                 fn, fs = _stiffness_dashpot(prop, length, beta, vrx, vry, nx, ny, tx, ty, dt, fn,
-                                            fs, E)
+                                            fs, S[p, k, SLIP] != 0.0, E)
             _add_slot_force(fpair, p, fn, fs, nx, ny, px, py, pos[a, 0], pos[a, 1], pos[b, 0],
                             pos[b, 1])
             if pdel[q] > max_ovl:
@@ -879,27 +890,96 @@ def remap_pairs(old_pa, old_pb, old_S, old_pref, old_pinit, new_pa, new_pb, nb, 
         i += 1
 
 
+@njit(cache=True, inline="always")
+def _edge_dashpot(edges, e, pos, vel, omg, rot, vref_x, vref_y, sxy, qf):
+    """Dashpots and a shear traction on boundary edge ``e`` (a row of :func:`quiet_forces`): adds
+    −L(ρC_p Δv_n n + ρC_s Δv_t t) + L σ_xy (n_y, n_x) at the edge midpoint into qf, with Δv the
+    midpoint velocity less (vref_x, vref_y) and σ_xy a (tension-positive) shear stress acting on
+    the edge (docs/dem.md §9.4, eq. (9.1); §14.2, eq. (14.4))."""
+    b = int(edges[e, 0])
+    c = math.cos(rot[b])
+    s = math.sin(rot[b])
+    rx = c * edges[e, 1] - s * edges[e, 2]
+    ry = s * edges[e, 1] + c * edges[e, 2]
+    nx = c * edges[e, 3] - s * edges[e, 4]
+    ny = s * edges[e, 3] + c * edges[e, 4]
+    vx = vel[b, 0] - omg[b] * ry - vref_x
+    vy = vel[b, 1] + omg[b] * rx - vref_y
+    vn = vx * nx + vy * ny
+    vt = -vx * ny + vy * nx
+    fx = -edges[e, 5] * (edges[e, 6] * vn * nx - edges[e, 7] * vt * ny - sxy * ny)
+    fy = -edges[e, 5] * (edges[e, 6] * vn * ny + edges[e, 7] * vt * nx - sxy * nx)
+    qf[b, 0] += fx
+    qf[b, 1] += fy
+    qf[b, 2] += rx * fy - ry * fx
+
+
 @njit(cache=True)
 def quiet_forces(edges, pos, vel, omg, rot, qf):
     """Viscous boundary forces. ``edges[e] = block, rx, ry (local midpoint), nx, ny (outward),
     length, ρC_p, ρC_s``; adds −L(ρC_p v_n n + ρC_s v_s t) at the edge midpoint into qf."""
     for e in range(len(edges)):
-        b = int(edges[e, 0])
-        c = math.cos(rot[b])
-        s = math.sin(rot[b])
-        rx = c * edges[e, 1] - s * edges[e, 2]
-        ry = s * edges[e, 1] + c * edges[e, 2]
-        nx = c * edges[e, 3] - s * edges[e, 4]
-        ny = s * edges[e, 3] + c * edges[e, 4]
-        vx = vel[b, 0] - omg[b] * ry
-        vy = vel[b, 1] + omg[b] * rx
-        vn = vx * nx + vy * ny
-        vt = -vx * ny + vy * nx
-        fx = -edges[e, 5] * (edges[e, 6] * vn * nx - edges[e, 7] * vt * ny)
-        fy = -edges[e, 5] * (edges[e, 6] * vn * ny + edges[e, 7] * vt * nx)
-        qf[b, 0] += fx
-        qf[b, 1] += fy
-        qf[b, 2] += rx * fy - ry * fx
+        _edge_dashpot(edges, e, pos, vel, omg, rot, 0.0, 0.0, 0.0, qf)
+
+
+@njit(cache=True)
+def free_field_step(edges, elem, state, presc_val, step, dt, pos, vel, omg, rot, qf):
+    """One step of the free-field columns and their forces on the model (docs/dem.md §14.2).
+
+    ``elem[i]`` (columns ``FF_*``): a column element of mass ρh per unit width, the joint to the
+    element above (``FF_ABOVE``, -1 at the top) of shear and normal stiffness k_x, k_y (Pa/m), a
+    dashpot c_x, c_y at a quiet end, and per component its mode (0 free, 1 fixed, 2 prescribed:
+    ``presc_val[step, FF_IN_*]``). ``state[i] = u_x, u_y, v_x, v_y`` (displacements at the whole
+    step, velocities at the half step before it). ``edges[e]``: a row of :func:`quiet_forces` and
+    the element it faces (column 8).
+
+    Joint stresses τ = k_x (u_x,above − u_x), σ = k_y (u_y,above − u_y) (tension positive); an
+    element moves by ρh dv/dt = τ_top − τ_bottom − c v (central differences, eqs. (2.2)–(2.3));
+    the stress under the lowest element is what moves it, τ_bottom = τ_top − ρh Δv/Δt (a support's
+    reaction, or its dashpot's c v). The element's shear stress σ_xy^ff = (τ_top + τ_bottom)/2 acts
+    on the model's edges facing it with the dashpots to its velocity (:func:`_edge_dashpot`;
+    docs/dem.md eqs. (14.4)–(14.5)), before the column steps: forces at step n from u^n and
+    v^(n−1/2), like the model's own."""
+    ne = len(elem)
+    tau_top = np.zeros(ne)
+    tau_bot = np.zeros(ne)
+    sig_top = np.zeros(ne)
+    sig_bot = np.zeros(ne)
+    lowest = np.ones(ne, np.bool_)
+    for i in range(ne):
+        j = int(elem[i, FF_ABOVE])
+        if j >= 0:
+            tau = elem[i, FF_KX] * (state[j, 0] - state[i, 0])
+            sig = elem[i, FF_KY] * (state[j, 1] - state[i, 1])
+            tau_top[i] = tau
+            tau_bot[j] = tau
+            sig_top[i] = sig
+            sig_bot[j] = sig
+            lowest[j] = False
+    v_new = np.empty((ne, 2))
+    for i in range(ne):
+        m = elem[i, FF_M]
+        for d in range(2):
+            v_old = state[i, 2 + d]
+            mode = elem[i, FF_MODE_X + d]
+            if mode == 1.0:
+                v = 0.0
+            elif mode == 2.0:
+                v = presc_val[step, int(elem[i, FF_IN_X + d])]
+            else:
+                f = ((tau_top[i] - tau_bot[i]) if d == 0 else (sig_top[i] - sig_bot[i]))
+                v = v_old + (f - elem[i, FF_CX + d] * v_old) / m * dt
+            v_new[i, d] = v
+        if lowest[i]:  # the reaction under the column's foot
+            tau_bot[i] = tau_top[i] - m * (v_new[i, 0] - state[i, 2]) / dt
+    for e in range(len(edges)):
+        i = int(edges[e, 8])
+        _edge_dashpot(edges, e, pos, vel, omg, rot, state[i, 2], state[i, 3],
+                      0.5 * (tau_top[i] + tau_bot[i]), qf)
+    for i in range(ne):
+        for d in range(2):
+            state[i, 2 + d] = v_new[i, d]
+            state[i, d] += v_new[i, d] * dt
 
 
 @njit(cache=True)
@@ -980,8 +1060,10 @@ def advance(n_steps, blocks, pairs, loads, prm, E, out):
 
     Forces on block b: contacts (gathered over its pairs in a fixed order: deterministic), gravity
     m g, external forces ``ext_f`` with moment cos θ·ext_a + sin θ·ext_b (constant tractions on
-    edges that rotate with the block), quiet-boundary dashpots, mass-proportional Rayleigh damping
-    −α_M m v, local non-viscous damping −α|F|sign(v) per degree of freedom (docs/dem.md §8).
+    edges that rotate with the block), quiet-boundary dashpots and free-field forces (booked as
+    ``E_QUIET``), mass-proportional Rayleigh damping
+    −α_M m (v − v_ref) (v_ref: the prescribed velocity in column ``PRM_REF_X`` / ``PRM_REF_Y`` of
+    ``presc_val``, or 0), local non-viscous damping −α|F|sign(v) per degree of freedom (docs/dem.md §8).
 
     Sleeping (``PRM_SLEEP_RATIO`` > 0, static stages; docs/dem.md §10.2): a block whose own
     unbalanced-force ratio stays below the sleep ratio and whose speed (including ω × radius)
@@ -994,7 +1076,7 @@ def advance(n_steps, blocks, pairs, loads, prm, E, out):
     (loc, lgeo, off, radius, mass, inv_mass, mode, dof_input, active, movable, pos, rot, vel, omg,
      asleep, calm, wv) = blocks
     pa, pb, pprop, _pref, _pinit, _brk, props, S, fpair, bp_ptr, bp_idx, ref_pos, ref_rot = pairs
-    gravity, ext_f, ext_a, ext_b, quiet_edges, presc_val = loads
+    gravity, ext_f, ext_a, ext_b, quiet_edges, presc_val, ff_edges, ff_elem, ff_state = loads
     dt, ovl_limit, margin = prm[PRM_DT], prm[PRM_OVL_LIMIT], prm[PRM_MARGIN]
     alpha_local, alpha_mass = prm[PRM_ALPHA_LOCAL], prm[PRM_ALPHA_MASS]
     tol_ratio, block_tol = prm[PRM_TOL_RATIO], prm[PRM_BLOCK_TOL]
@@ -1002,6 +1084,7 @@ def advance(n_steps, blocks, pairs, loads, prm, E, out):
     sleep_ratio, sleep_speed = prm[PRM_SLEEP_RATIO], prm[PRM_SLEEP_SPEED]
     sleep_steps = int(prm[PRM_SLEEP_STEPS])
     w2_new, wake, rebuild_fraction = prm[PRM_W2_NEW], prm[PRM_WAKE], prm[PRM_REBUILD]
+    ref_col = (int(prm[PRM_REF_X]), int(prm[PRM_REF_Y]), -1)
     nb = len(off) - 1
     qf = np.zeros((nb, 3))
     fc = np.zeros(3)
@@ -1023,9 +1106,12 @@ def advance(n_steps, blocks, pairs, loads, prm, E, out):
                                   prm[PRM_CY_PROBE_FLOOR], prm[PRM_TINY]) > w2_new:
                 out[0] = step
                 return RC_STIFF
-        if len(quiet_edges):
+        if len(quiet_edges) or len(ff_elem):
             qf[:] = 0.0
             quiet_forces(quiet_edges, pos, vel, omg, rot, qf)
+            if len(ff_elem):  # docs/dem.md §14.2
+                free_field_step(ff_edges, ff_elem, ff_state, presc_val, step, dt, pos, vel, omg,
+                                rot, qf)
         sum_unb = 0.0
         sum_app = 0.0
         worst = 0.0
@@ -1082,7 +1168,8 @@ def advance(n_steps, blocks, pairs, loads, prm, E, out):
                     v_new = presc_val[step, dof_input[b, d]]
                     E[E_CONTACT_PRESC] += fc[d] * 0.5 * (v_old + v_new) * dt
                 else:
-                    fv = -alpha_mass * mass[b, d] * v_old  # eq. (8.2), mass part
+                    v_ref = presc_val[step, ref_col[d]] if ref_col[d] >= 0 else 0.0
+                    fv = -alpha_mass * mass[b, d] * (v_old - v_ref)  # eq. (8.2), mass part
                     f = fc[d] + fg[d] + fe[d] + qf[b, d] + fv
                     if d < 2:
                         unb += f * f

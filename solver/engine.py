@@ -227,6 +227,15 @@ class Engine:
         self.ext_a = np.zeros(nb)
         self.ext_b = np.zeros(nb)
         self.quiet_edges = np.zeros((0, 8))
+        # free field (docs/dem.md §14.2): the sides' blocks are held normal to the side in static
+        # stages; the columns are set up per dynamic stage (rockmass.solver.free_field)
+        self.ff_hold = np.zeros((nb, 3), np.bool_)
+        if settings.free_field is not None:
+            sides = self.edges.on(settings.free_field.sides)
+            self.ff_hold[np.unique(self.edges.block[sides]), 0] = True
+        self.ff_edges = np.zeros((0, 9))
+        self.ff_elem = np.zeros((0, K.N_FF_COLUMNS))
+        self.ff_state = np.zeros((0, 4))
         self.gravity = np.array(settings.gravity_m_s2, float)
 
         # pairs
@@ -250,6 +259,8 @@ class Engine:
         self.mode = self.base_mode.copy()
         inp = self.dof_input >= 0
         self.mode[inp] = PRESCRIBED if dynamic else FIXED
+        if not dynamic:  # free-field sides: rollers in static stages
+            self.mode[self.ff_hold & (self.mode == FREE)] = FIXED
         self.inv_mass = np.where(self.mode == FREE, 1.0 / self.mass, 0.0)
         self.movable = (self.mode != FIXED).any(axis=1) & self.active
         self.wake_all()
@@ -305,15 +316,18 @@ class Engine:
     def loads_tuple(self, presc_val: np.ndarray) -> K.Loads:
         """Applied loads and the prescribed velocities ``presc_val`` (steps, inputs) of a chunk."""
         return K.Loads(self.gravity, self.ext_f, self.ext_a, self.ext_b, self.quiet_edges,
-                       presc_val)
+                       presc_val, self.ff_edges, self.ff_elem, self.ff_state)
 
     def kernel_params(self, dt: float = 0.0, *, alpha_local: float = 0.0, alpha_mass: float = 0.0,
                       beta: float = 0.0, tol_ratio: float = 0.0, block_tol: float = 0.0,
                       sleep_ratio: float = 0.0, sleep_speed: float = 0.0,
-                      w2_new: float = math.inf) -> np.ndarray:
+                      w2_new: float = math.inf, ref_inputs: tuple[int, int] = (-1, -1)
+                      ) -> np.ndarray:
         """The kernels' float64 parameter vector (indices ``PRM_*`` of :mod:`._kernels`): the
         scalars of a call and the numeric policy of :mod:`.tolerances`. The defaults give a
-        detection pass: no motion, no damping, no equilibrium test, no sleeping."""
+        detection pass: no motion, no damping, no equilibrium test, no sleeping. ``ref_inputs``:
+        the velocity inputs (columns of ``presc_val``) whose x and y velocities the
+        mass-proportional damping is relative to (-1: absolute velocity)."""
         entries = (
             (K.PRM_DT, dt), (K.PRM_CTOL, self.ctol_m), (K.PRM_HYST, self.hysteresis_m),
             (K.PRM_ROUNDING, self.rounding_m), (K.PRM_OVL_LIMIT, self.overlap_limit_m),
@@ -326,7 +340,8 @@ class Engine:
             (K.PRM_CY_SLIP_F, T.CY_SLIPPING_F), (K.PRM_CY_PROBE, T.CY_PROBE_STRESS_FACTOR),
             (K.PRM_CY_PROBE_FLOOR, T.CY_PROBE_FLOOR_PA), (K.PRM_FACING_COS, T.FACING_COS),
             (K.PRM_BOND_GAP, T.BOND_GAP_ROUNDINGS), (K.PRM_FACE_MIN, T.FACE_MIN_FRACTION),
-            (K.PRM_DEGENERATE, T.DEGENERATE_DISTANCE), (K.PRM_TINY, T.TINY))
+            (K.PRM_DEGENERATE, T.DEGENERATE_DISTANCE), (K.PRM_TINY, T.TINY),
+            (K.PRM_REF_X, ref_inputs[0]), (K.PRM_REF_Y, ref_inputs[1]))
         prm = np.full(K.N_PRM, np.nan)
         for index, value in entries:
             prm[index] = value
@@ -385,15 +400,17 @@ class Engine:
         scale = np.sqrt(self.inv_mass)  # 0 for dofs that do not move
         gamma = self._dashpot_bound(scale)
         lam = self._stiffness_bound(scale)
+        ff_lam, ff_gamma = self._free_field_bound()
+        lam, gamma = max(lam, ff_lam), max(gamma, ff_gamma)
         if lam <= 0 and gamma <= 0:
             return math.inf
         gamma += beta * lam
         return 4.0 / (math.sqrt(4.0 * lam + gamma * gamma) + gamma)
 
     def _dashpot_bound(self, scale) -> float:
-        """Gershgorin bound γ of M^(-1/2) C M^(-1/2) for the quiet-boundary dashpots (c = L ρC_p
-        along the edge normal, L ρC_s along it, at the edge midpoint)."""
-        q = self.quiet_edges
+        """Gershgorin bound γ of M^(-1/2) C M^(-1/2) for the quiet-boundary and free-field dashpots
+        (c = L ρC_p along the edge normal, L ρC_s along it, at the edge midpoint)."""
+        q = np.vstack([self.quiet_edges, self.ff_edges[:, :8]])
         if not len(q):
             return 0.0
         b = q[:, 0].astype(np.int64)
@@ -407,6 +424,30 @@ class Engine:
             g = np.abs(g) * scale[b]
             _add_rows(rows, b, (coef * g.sum(1))[:, None] * g)  # row sums, as for K
         return float(rows.max())
+
+    def _free_field_bound(self) -> tuple[float, float]:
+        """(ω², γ) Gershgorin bounds of the free-field columns (chains of masses m_i = ρh_i per
+        unit width on joints k_i, dashpots c_i at a quiet end; docs/dem.md §14.2), which step with
+        the model: row i of M^(-1/2) K M^(-1/2) sums to (k_i + k_(i−1))/m_i + k_i/√(m_i m_(i+1))
+        + k_(i−1)/√(m_i m_(i−1)), for the stiffer of the shear and normal joints."""
+        e = self.ff_elem
+        if not len(e):
+            return 0.0, 0.0
+        m = e[:, K.FF_M]
+        above = e[:, K.FF_ABOVE].astype(np.int64)
+        has = above >= 0
+        rows = np.zeros(len(e))
+        for col in (K.FF_KX, K.FF_KY):
+            k = np.where(has, e[:, col], 0.0)
+            link = k / np.sqrt(m * m[np.where(has, above, 0)])
+            own = np.zeros(len(e))
+            np.add.at(own, np.flatnonzero(has), k[has])
+            np.add.at(own, above[has], k[has])
+            off = link.copy()
+            np.add.at(off, above[has], link[has])
+            rows = np.maximum(rows, own / m + off)
+        gamma = np.max(np.maximum(e[:, K.FF_CX], e[:, K.FF_CY]) / m)
+        return float(rows.max()), float(gamma)
 
     def _stiffness_bound(self, scale) -> float:
         """Gershgorin bound ω² of M^(-1/2) K M^(-1/2) for the active contact slots (0: none)."""
@@ -516,10 +557,11 @@ class Engine:
 
     def snapshot(self) -> tuple:
         return tuple(a.copy() for a in (self.pos, self.rot, self.vel, self.omg, self.S, self.E,
-                                        self.init_brk)) + (self.time_s,)
+                                        self.init_brk, self.ff_state)) + (self.time_s,)
 
     def restore(self, snap):
         """Back to a :meth:`snapshot` taken since the last rebuild (same pair list)."""
-        (self.pos, self.rot, self.vel, self.omg, self.S, self.E, self.init_brk, self.time_s) = \
+        (self.pos, self.rot, self.vel, self.omg, self.S, self.E, self.init_brk, self.ff_state,
+         self.time_s) = \
             tuple(a.copy() if isinstance(a, np.ndarray) else a for a in snap)
         self.rebuild()

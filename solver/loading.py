@@ -11,10 +11,13 @@ from __future__ import annotations
 import numpy as np
 
 from . import _kernels as K
+from . import tolerances as T
 from .engine import FIXED
 from .settings import SIDES, BoundaryStress, InSituStress, QuietBoundary
 
-__all__ = ["stress_at", "apply_insitu", "apply_boundary_stress", "quiet_edge_table"]
+__all__ = ["stress_at", "apply_insitu", "apply_boundary_stress", "quiet_edge_table",
+           "boundary_edge_table", "boundary_impedance", "block_faces", "joint_compliance",
+           "rock_mass_compliance"]
 
 
 def stress_at(insitu: InSituStress, points: np.ndarray, unit_weight: float, y_ref: float):
@@ -138,7 +141,8 @@ def apply_boundary_stress(engine, loads: tuple[BoundaryStress, ...], insitu: InS
 
     With an in-situ stress, the domain edges of every other side (no user load) whose block is
     *held* normal to that side (a fix or a velocity input on x for ``left`` / ``right``, on y for
-    ``bottom`` / ``top``: a roller or a clamp) carry the in-situ traction too, as the same kind of
+    ``bottom`` / ``top``: a roller or a clamp; a free-field side, docs/dem.md §14.2) carry the
+    in-situ traction too, as the same kind of
     constant load. Reason: :func:`apply_insitu` loads only the contacts, and the traction missing on
     such an edge is the reaction of the rock beyond the boundary. The support carries its force (a
     fixed degree of freedom ignores forces) but not its moment, so a block on a roller, free to
@@ -173,7 +177,7 @@ def apply_boundary_stress(engine, loads: tuple[BoundaryStress, ...], insitu: InS
     if not free:
         return
     normal_dof = np.where(edges.side < SIDES.index("bottom"), 0, 1)  # left, right: x; else y
-    held = (engine.base_mode == FIXED) | (engine.dof_input >= 0)
+    held = (engine.base_mode == FIXED) | (engine.dof_input >= 0) | engine.ff_hold
     on = np.flatnonzero(edges.on(free) & held[edges.block, normal_dof])
     if len(on):
         _add_tractions(engine, on, insitu)
@@ -205,18 +209,142 @@ def _add_tractions(engine, on: np.ndarray, stress):
         np.add.at(engine.ext_b, blocks, -(r[:, 0] * f[:, 0] + r[:, 1] * f[:, 1]))
 
 
-def quiet_edge_table(engine, quiet: QuietBoundary) -> np.ndarray:
-    """Rows ``block, local midpoint (2), local outward normal (2), length, ρC_p, ρC_s`` for the
-    quiet sides (:func:`rockmass.solver._kernels.quiet_forces`)."""
-    cp, cs = engine.settings.material.wave_speeds()
-    rho = engine.settings.material.density_kg_m3
+#: A domain edge of a block counts as one of its joint faces (the rock mass goes on beyond the cut
+#: the way it is jointed inside) when one of the block's joint faces is within 10° of parallel to it
+#: (|cos| of the angle between the normals): the base of a column of blocks on horizontal joints is
+#: the joint the column would continue with; the side of that column is not a joint.
+PARALLEL_COS = float(np.cos(np.radians(10.0)))
+
+
+def _slot_stiffness(engine, p, slot) -> tuple[np.ndarray, np.ndarray]:
+    """(k_n, k_s) (Pa/m) of active slots: the joint model's, a continuously yielding joint at
+    its tangent a σ^e at the present stress (docs/dem.md §6)."""
+    props = engine.props[engine.pprop[p]]
+    sig = np.maximum(slot[:, K.FN] / np.maximum(slot[:, K.LEN], T.TINY), T.CY_PROBE_FLOOR_PA)
+    cy = props[:, K.P_MODEL] == K.MODEL_CY
+    kn = np.where(cy, props[:, K.P_KN] * sig ** props[:, K.P_EN], props[:, K.P_KN])
+    ks = np.where(cy, props[:, K.P_KS] * sig ** props[:, K.P_ES], props[:, K.P_KS])
+    return kn, ks
+
+
+def block_faces(engine, b: int) -> np.ndarray:
+    """Joint faces of block ``b``: rows (length l, unit normal (2), k_n, k_s) of the active contact
+    slots of its block-model faces (corner touches and contacts formed later left out), plus its
+    domain edges that are parallel (:data:`PARALLEL_COS`) to one of them, with those faces'
+    length-weighted mean stiffnesses."""
+    pairs = engine.bp_idx[engine.bp_ptr[b]:engine.bp_ptr[b + 1]] >> 1
+    slot = engine.S[pairs].reshape(-1, K.N_SLOT_COLUMNS)
+    p = np.repeat(pairs, 2)
+    keep = (slot[:, K.ACT] != 0) & (engine.pinit[p] >= 0)
+    p, slot = p[keep], slot[keep]
+    kn, ks = _slot_stiffness(engine, p, slot)
+    faces = np.column_stack([slot[:, K.LEN], slot[:, K.NX], slot[:, K.NY], kn, ks])
     edges = engine.edges
-    on = np.flatnonzero(edges.on(quiet.sides))
+    extra = []
+    for e in np.flatnonzero(edges.block == b) if len(faces) else ():
+        parallel = np.abs(faces[:, 1:3] @ edges.normal[e]) > PARALLEL_COS
+        if parallel.any():
+            w = faces[parallel, 0]
+            extra.append([np.hypot(*(edges.p1[e] - edges.p0[e])), *edges.normal[e],
+                          w @ faces[parallel, 3] / w.sum(), w @ faces[parallel, 4] / w.sum()])
+    return np.vstack([faces, extra]) if extra else faces
+
+
+def joint_compliance(faces: np.ndarray, area: float, direction) -> tuple[float, float]:
+    """(1/M, 1/G) (1/Pa): the compliance the joint faces of a block (:func:`block_faces`) add to
+    the rock mass along the unit vector ``direction`` n — uniaxial stress along n for M, pure shear
+    in the n–t plane for G (docs/dem.md §14.1, eqs. (14.1)–(14.2)).
+
+    Each face of length l is shared by two blocks, so it stands for l / (2A) of joint area per
+    unit volume of a block of area A. A face with unit normal m carries σ_n = σ c² and
+    τ = σ c s of a stress σ along n (c = m·n, s = (−m_y, m_x)·n), and σ_n = 2τ c s,
+    τ' = τ (c² − s²) of a shear τ, so equating strain energies (the equivalent continuum of a
+    jointed rock; Amadei & Goodman 1981, Schoenberg 1980):
+
+        1/M = Σ_f (l_f / 2A) c² (c² / k_n + s² / k_s),
+        1/G = Σ_f (l_f / 2A) (4 c² s² / k_n + (c² − s²)² / k_s).
+
+    For one set of spacing s_j parallel to the boundary (c = 1) this is 1/(k_n s_j), 1/(k_s s_j):
+    the chain of rigid blocks of docs/dem.md §13, problem 11, whose long-wave impedance is
+    √(ρ k_n s_j).
+    """
+    if not len(faces):
+        return 0.0, 0.0
+    n = np.asarray(direction, float)
+    w = faces[:, 0] / (2.0 * area)
+    c = faces[:, 1] * n[0] + faces[:, 2] * n[1]
+    s = -faces[:, 2] * n[0] + faces[:, 1] * n[1]
+    kn, ks = faces[:, 3], faces[:, 4]
+    inv_m = float(np.sum(w * c * c * (c * c / kn + s * s / ks)))
+    inv_g = float(np.sum(w * (4 * c * c * s * s / kn + (c * c - s * s) ** 2 / ks)))
+    return inv_m, inv_g
+
+
+def rock_mass_compliance(engine, blocks: np.ndarray, directions: np.ndarray,
+                         rule: str = "rock_mass") -> np.ndarray:
+    """(1/M, 1/G) (1/Pa) per row: the rock mass at each block along each unit direction, by
+    ``rule`` (docs/dem.md §14.1): ``"rock_mass"`` its joints (:func:`joint_compliance` of
+    :func:`block_faces`; along a direction no joint crosses, the intact rock if its moduli are
+    given, else 0: rigid); ``"rock_mass_intact"`` the joints in series with the intact rock,
+    1/M = 1/M_rock + 1/M_joints (Schoenberg 1980); ``"rock"`` the intact rock, M = K + 4G/3
+    and G."""
+    material = engine.settings.material
+    intact = np.array(material.moduli()) if material.has_moduli else None
+    inv = np.zeros((len(blocks), 2))
+    if rule != "rock":
+        faces = {}
+        for i, (b, n) in enumerate(zip(blocks, directions)):
+            if b not in faces:
+                faces[b] = block_faces(engine, int(b))
+            inv[i] = joint_compliance(faces[b], float(engine.model.area_m2[b]), n)
+    if intact is not None and rule != "rock_mass":
+        inv += 1.0 / intact
+    elif intact is not None:
+        inv = np.where(inv > 0, inv, 1.0 / intact)
+    return inv
+
+
+def boundary_impedance(engine, boundary, blocks: np.ndarray, normals: np.ndarray,
+                       sides) -> tuple[np.ndarray, np.ndarray]:
+    """(ρC_p, ρC_s) (Pa·s/m) of the dashpots on boundary edges of ``blocks`` with outward unit
+    ``normals`` (a :class:`QuietBoundary` or :class:`FreeField` ``boundary``; docs/dem.md §14.1):
+    ρC = √(ρ M) with M, G of :func:`rock_mass_compliance` along the normal by
+    ``boundary.impedance``. A given ``p_wave_speed_m_s`` / ``s_wave_speed_m_s`` replaces ρC_p /
+    ρC_s by ρ times it. Raises ValueError where the impedance is infinite (rigid rock along a
+    normal, no moduli to fall back on) on a block that can move (0 on one that cannot: blocks held
+    in every degree of freedom have no contacts among themselves in the solver)."""
+    rho = engine.settings.material.density_kg_m3
+    inv = rock_mass_compliance(engine, blocks, normals, boundary.impedance)
+    z = np.sqrt(rho / np.where(inv > 0, inv, np.nan))
+    for col, speed in enumerate((boundary.p_wave_speed_m_s, boundary.s_wave_speed_m_s)):
+        if speed is not None:
+            z[:, col] = rho * speed
+    held = (engine.mode[blocks] != 0).all(axis=1)  # no free dof: its dashpots do nothing
+    z[held] = np.nan_to_num(z[held])
+    if np.isnan(z).any():
+        i = int(np.flatnonzero(np.isnan(z).any(axis=1))[0])
+        raise ValueError(f"boundary on {tuple(sides)}: no joint of block {int(blocks[i])} "
+                         f"crosses the direction ({normals[i][0]:.3g}, {normals[i][1]:.3g}), so "
+                         "its rock mass is rigid there; give material.bulk_modulus_pa and "
+                         "shear_modulus_pa or the wave speeds")
+    return z[:, 0], z[:, 1]
+
+
+def boundary_edge_table(engine, boundary, sides) -> np.ndarray:
+    """Rows ``block, local midpoint (2), local outward normal (2), length, ρC_p, ρC_s`` of the
+    domain edges on ``sides`` (:func:`rockmass.solver._kernels.quiet_forces`), impedances by
+    :func:`boundary_impedance`."""
+    edges = engine.edges
+    on = np.flatnonzero(edges.on(sides))
     if not len(on):
-        raise ValueError(f"quiet boundary on {quiet.sides}: no block edge lies on these sides")
+        raise ValueError(f"boundary on {tuple(sides)}: no block edge lies on these sides")
     blocks = edges.block[on]
     mid = 0.5 * (edges.p0[on] + edges.p1[on]) - engine.pos0[blocks]
     length = np.hypot(*(edges.p1[on] - edges.p0[on]).T)
-    return np.ascontiguousarray(np.column_stack([blocks, mid, edges.normal[on], length,
-                                                 np.full(len(on), rho * cp),
-                                                 np.full(len(on), rho * cs)]))
+    zp, zs = boundary_impedance(engine, boundary, blocks, edges.normal[on], sides)
+    return np.ascontiguousarray(np.column_stack([blocks, mid, edges.normal[on], length, zp, zs]))
+
+
+def quiet_edge_table(engine, quiet: QuietBoundary) -> np.ndarray:
+    """The quiet sides' rows of :func:`boundary_edge_table`."""
+    return boundary_edge_table(engine, quiet, quiet.sides)

@@ -29,6 +29,7 @@ from . import _kernels as K
 from . import tolerances as T
 from .engine import FIXED, Engine
 from .failure import FailureWatch
+from .free_field import set_free_field
 from .loading import apply_boundary_stress, apply_insitu, quiet_edge_table
 from .monitoring import boundary_points, point_displacement_from
 from .result import (FAILED_STATUSES, STATUS_FAILED_BLOCKS, STATUS_OK, EnergyLedger, Frame, Result,
@@ -53,6 +54,20 @@ def _rayleigh(stage: Stage) -> tuple[float, float]:
     if stage.rayleigh_mode == "stiffness":
         return 0.0, 2 * xi / omega
     return xi * omega, xi / omega
+
+
+def _reference_inputs(settings: Settings, stage: Stage) -> tuple[int, int]:
+    """Columns of the prescribed-velocity table (the indices of ``settings.velocity_inputs``) that
+    the mass-proportional damping of ``stage`` is relative to, in x and y (-1: absolute
+    velocity). With ``rayleigh_reference="inputs"`` the first input of each component; the
+    others of that component must prescribe the same history (checked by
+    :func:`rockmass.solver.settings._check_settings`)."""
+    if stage.rayleigh_reference != "inputs":
+        return -1, -1
+    first = {}
+    for i, inp in enumerate(settings.velocity_inputs):
+        first.setdefault(inp.component, i)
+    return first.get("x", -1), first.get("y", -1)
 
 
 def _overlap_diagnostic(eng: Engine, pair: int, overlap: float, dt: float) -> str:
@@ -214,11 +229,11 @@ def _new_contact_w2(dt: float, safety: float) -> float:
     return (2.0 * safety / dt) ** 2
 
 
-def _auto_time_step(eng: Engine, settings: Settings, beta: float) -> tuple[float, float]:
+def _auto_time_step(eng: Engine, safety: float, beta: float) -> tuple[float, float]:
     """(Δt, stable limit) for the present contacts: safety × the limit; without any contact the
     limit is infinite and Δt only sets the record interval (the caller's fallback)."""
     limit = eng.stable_time_step(beta)
-    return settings.time_step_safety * limit, limit
+    return safety * limit, limit
 
 
 def _monitor_displacements(points, eng: Engine, ref) -> dict:
@@ -250,8 +265,11 @@ class _StageRun:
         eng.rebuild()
         eng.detect()
         self.alpha_mass, self.beta = _rayleigh(stage)
+        self.safety = settings.step_safety(dynamic)
+        self.ref_inputs = _reference_inputs(settings, stage)
         eng.quiet_edges = (quiet_edge_table(eng, settings.quiet) if dynamic and settings.quiet
                            else np.zeros((0, 8)))  # before the step limit: the dashpots lower it
+        set_free_field(eng, settings.free_field if dynamic else None)  # docs/dem.md §14.2
         self.dt, self.limit = self._first_time_step()
         self.n_steps = math.ceil(stage.duration_s / self.dt) if dynamic else stage.max_steps
         self.inputs = settings.velocity_inputs if dynamic else ()
@@ -295,7 +313,7 @@ class _StageRun:
         """(Δt, stable limit): automatic, or the stage's own (refused above the limit), or a
         fraction of the duration when nothing is in contact (free flight)."""
         stage = self.stage
-        dt, limit = _auto_time_step(self.eng, self.settings, self.beta)
+        dt, limit = _auto_time_step(self.eng, self.safety, self.beta)
         if stage.time_step_s is not None:
             if stage.time_step_s > limit:
                 raise ValueError(f"stage {stage.name!r}: time_step_s = {stage.time_step_s:.6g} s exceeds "
@@ -327,10 +345,11 @@ class _StageRun:
         for i, inp in enumerate(self.inputs):
             presc[:, i] = inp.history(t_half)
         return eng.advance(todo, presc, self.out, dt, alpha_local=self.alpha_local,
-                           alpha_mass=self.alpha_mass, beta=self.beta, tol_ratio=self.tol,
+                           alpha_mass=self.alpha_mass, ref_inputs=self.ref_inputs,
+                           beta=self.beta, tol_ratio=self.tol,
                            block_tol=stage.block_tolerance, sleep_ratio=self.sleep_ratio,
                            sleep_speed=T.SLEEP_CREEP * eng.rounding_m / (T.SLEEP_STEPS * dt),
-                           w2_new=_new_contact_w2(dt, self.settings.time_step_safety
+                           w2_new=_new_contact_w2(dt, self.safety
                                                   if stage.time_step_s is None else 1.0))
 
     def _shorter_step(self, new_dt: float, new_limit: float, kept: int) -> None:
@@ -353,7 +372,7 @@ class _StageRun:
         steps = int(out[0])
         dt_used = self.dt
         if rc == K.RC_STIFF:  # a contact formed that this step cannot resolve: shorter step
-            new_dt, new_limit = _auto_time_step(eng, self.settings, self.beta)
+            new_dt, new_limit = _auto_time_step(eng, self.safety, self.beta)
             eng.restore(snap)
             out[7] = ke_check
             if stage.time_step_s is not None or not new_dt < self.dt:
@@ -382,7 +401,7 @@ class _StageRun:
                  or done + steps - self.guarded >= T.GUARD_EVERY)
         if guard:
             self.guarded = done + steps
-            new_dt, new_limit = _auto_time_step(eng, self.settings, self.beta)
+            new_dt, new_limit = _auto_time_step(eng, self.safety, self.beta)
             redo = math.isfinite(new_limit) and self.dt > new_limit
             if redo and stage.time_step_s is not None:
                 eng.restore(snap)

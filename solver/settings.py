@@ -34,10 +34,11 @@ import numpy as np
 from pydantic import BeforeValidator, Field, PlainSerializer, Strict, model_validator
 
 from ..dfn.specs import Bool, Float, Int, field_error, spec
+from . import tolerances as T
 
 __all__ = ["Coulomb", "ContinuouslyYielding", "JointModel", "Material", "InSituStress",
            "Fix", "BoundaryStress", "Sine", "Ricker", "TableHistory", "History", "VelocityInput",
-           "QuietBoundary", "Monitor", "Stage", "Settings", "SIDES"]
+           "QuietBoundary", "FreeField", "Monitor", "Stage", "Settings", "SIDES"]
 
 
 def _none_is_inf(value: Any) -> Any:
@@ -56,6 +57,18 @@ Where = Annotated[str, Strict(), Field(min_length=1, max_length=4096)]
 
 _WHERE = ("blocks chosen by a side (left, right, bottom, top: blocks touching that side of the "
           "domain), \"region:K\", \"box:x0,y0,x1,y1\" (centroid inside) or \"blocks:i,j,k\"")
+
+
+Impedance = Annotated[Literal["rock_mass", "rock_mass_intact", "rock"], Field(description=(
+    "where the dashpots' ρC_p, ρC_s come from: rock_mass (the joints of the boundary blocks: "
+    "joint stiffness × spacing), rock_mass_intact (those in series with the intact moduli), rock "
+    "(material.bulk_modulus_pa and shear_modulus_pa)"))]
+PWaveSpeed = Annotated[Optional[Float], Field(gt=0, le=1e6, description=(
+    "P-wave speed C_p of the normal dashpots (ρC_p) instead of the impedance rule's; none: the "
+    "rule's"))]
+SWaveSpeed = Annotated[Optional[Float], Field(gt=0, le=1e6, description=(
+    "S-wave speed C_s of the tangential dashpots (ρC_s) instead of the impedance rule's; none: "
+    "the rule's"))]
 
 
 @spec
@@ -127,20 +140,30 @@ JointModel = Annotated[Union[Coulomb, ContinuouslyYielding], Field(discriminator
 
 @spec
 class Material:
-    """Intact rock: density, and elastic moduli (used by quiet boundaries only: blocks are rigid)."""
+    """Intact rock: density, and elastic moduli (used by the impedance of quiet and free-field
+    boundaries only, docs/dem.md §14: blocks are rigid)."""
 
     density_kg_m3: Annotated[Float, Field(gt=0, le=1e5, description="density ρ")] = 2700.0
     bulk_modulus_pa: Annotated[Optional[Float], Field(
-        gt=0, le=1e13, description="bulk modulus K (quiet boundaries only)")] = None
+        gt=0, le=1e13, description="bulk modulus K (boundary impedance only)")] = None
     shear_modulus_pa: Annotated[Optional[Float], Field(
-        gt=0, le=1e13, description="shear modulus G (quiet boundaries only)")] = None
+        gt=0, le=1e13, description="shear modulus G (boundary impedance only)")] = None
+
+    @property
+    def has_moduli(self) -> bool:
+        return self.bulk_modulus_pa is not None and self.shear_modulus_pa is not None
+
+    def moduli(self) -> tuple[float, float]:
+        """(M, G) = (K + 4G/3, G) in Pa: the P-wave (constrained) and shear moduli."""
+        if not self.has_moduli:
+            raise ValueError("this boundary impedance needs material.bulk_modulus_pa and "
+                             "shear_modulus_pa")
+        return self.bulk_modulus_pa + 4.0 * self.shear_modulus_pa / 3.0, self.shear_modulus_pa
 
     def wave_speeds(self) -> tuple[float, float]:
         """(C_p, C_s) = (√((K + 4G/3)/ρ), √(G/ρ)) in m/s."""
-        if self.bulk_modulus_pa is None or self.shear_modulus_pa is None:
-            raise ValueError("quiet boundaries need material.bulk_modulus_pa and shear_modulus_pa")
-        k, g, rho = self.bulk_modulus_pa, self.shear_modulus_pa, self.density_kg_m3
-        return math.sqrt((k + 4.0 * g / 3.0) / rho), math.sqrt(g / rho)
+        m, g = self.moduli()
+        return math.sqrt(m / self.density_kg_m3), math.sqrt(g / self.density_kg_m3)
 
 
 @spec
@@ -212,6 +235,54 @@ class Sine:
 
 
 @spec
+class TableSine:
+    """A shake table's sinusoidal motion given by its displacement: u(t) = D r(t) sin(2π f t) for
+    ``cycles`` cycles, the amplitude ramped linearly from 0 over the first ``ramp_cycles`` and
+    back to 0 over the last (r(t) = min(1, f t/n_r, f (T − t)/n_r), T = cycles/f); 0 outside. It
+    returns the velocity, the exact derivative v = D (r′ sin 2πft + 2πf r cos 2πft): the table
+    starts and ends at rest at its origin, swings ± D about it (the "maximum displacement of the
+    shake table from its original position" of Varma et al. 2019 §3), and its acceleration peaks
+    near (2πf)² D. A velocity Sine, by contrast, moves the table between 0 and 2A/(2πf).
+
+    >>> h = TableSine(0.0155, 3.0, cycles=15)
+    >>> t = np.linspace(0.0, 5.0, 200_001)
+    >>> u = np.concatenate([[0.0], np.cumsum(0.5 * (h(t[1:]) + h(t[:-1])) * np.diff(t))])
+    >>> round(float(np.abs(u).max()), 5), round(float(abs(u[-1])), 8)
+    (0.0155, 0.0)
+    """
+
+    displacement_amplitude_m: Annotated[Float, Field(gt=0, le=1e3, description=(
+        "table displacement amplitude D (m)"))]
+    frequency_hz: Annotated[Float, Field(gt=0, le=1e7, description="frequency f")]
+    cycles: Annotated[Float, Field(gt=0, le=1e7, description="number of cycles")]
+    ramp_cycles: Annotated[Float, Field(ge=0, le=1e7, description=(
+        "cycles over which the amplitude rises at the start and falls at the end"))] = 1.0
+    type: Annotated[Literal["table_sine"], Field(description="history kind: \"table_sine\"")] = \
+        "table_sine"
+
+    @model_validator(mode="after")
+    def _ramps_fit(self):
+        if 2 * self.ramp_cycles > self.cycles:
+            raise field_error(self, "ramp_cycles", f"the two ramps ({self.ramp_cycles} cycles "
+                              f"each) must fit in cycles = {self.cycles}", self.ramp_cycles)
+        return self
+
+    def __call__(self, t):
+        t = np.asarray(t, float)
+        f, n_r = self.frequency_hz, self.ramp_cycles
+        end = self.cycles / f
+        phase = 2.0 * np.pi * f * t
+        if n_r > 0:
+            r = np.minimum(1.0, np.minimum(f * t, f * (end - t)) / n_r)
+            dr = np.where(f * t < n_r, f / n_r, np.where(f * (end - t) < n_r, -f / n_r, 0.0))
+            dr = np.where(r < 1.0, dr, 0.0)
+        else:
+            r, dr = np.ones_like(t), np.zeros_like(t)
+        v = self.displacement_amplitude_m * (dr * np.sin(phase) + 2.0 * np.pi * f * r * np.cos(phase))
+        return np.where((t >= 0) & (t <= end), v, 0.0)
+
+
+@spec
 class Ricker:
     """Ricker wavelet a(1 − 2π²f²τ²) exp(−π²f²τ²), τ = t − t0 (t0 = 1.5/f when None)."""
 
@@ -263,7 +334,7 @@ class TableHistory:
         return TableHistory(tuple(t), tuple(out), source=f"{self.source} (integrated)")
 
 
-History = Union[Sine, Ricker, TableHistory]
+History = Union[Sine, TableSine, Ricker, TableHistory]
 
 
 @spec
@@ -283,10 +354,39 @@ class VelocityInput:
 @spec
 class QuietBoundary:
     """Viscous (Lysmer–Kuhlemeyer) boundary on the domain edges of ``sides``: tractions −ρC_p v_n
-    and −ρC_s v_s (docs/dem.md §9.4, eq. (9.1)), active in dynamic stages only."""
+    and −ρC_s v_s (docs/dem.md §9.4, eq. (9.1)), active in dynamic stages only.
 
-    sides: Annotated[Sides, Field(description="domain sides that absorb waves (needs "
-                                              "material.bulk_modulus_pa and shear_modulus_pa)")]
+    ``impedance`` says where ρC_p = √(ρM) and ρC_s = √(ρG) come from (docs/dem.md §14.1):
+    ``"rock_mass"`` (default) the moduli of the jointed rock mass the rigid-block model is, per
+    boundary edge, from the joints of its block (1/M = Σ_f (l_f / 2A) c²(c²/k_n + s²/k_s),
+    c = n_f·n, s = t_f·n: k_n s for joints of spacing s parallel to the boundary);
+    ``"rock_mass_intact"`` those in series with the intact moduli, 1/M_mass = 1/M_rock +
+    1/M_joints (deformable blocks; Schoenberg 1980); ``"rock"`` the intact moduli alone.
+    ``p_wave_speed_m_s`` / ``s_wave_speed_m_s`` override C_p / C_s."""
+
+    sides: Annotated[Sides, Field(description="domain sides that absorb waves")]
+    impedance: Impedance = "rock_mass"
+    p_wave_speed_m_s: PWaveSpeed = None
+    s_wave_speed_m_s: SWaveSpeed = None
+
+
+@spec
+class FreeField:
+    """Free-field boundaries on the lateral ``sides`` of dynamic stages (seed 001, Kiran & Juneja
+    2022, eqs. 14–16; Itasca's free field; docs/dem.md §14.2).
+
+    Each side is coupled to a 1D column of the blocks along it (their heights, their joints),
+    solved alongside the model, driven by the same velocity inputs and starting from the in-situ
+    stress: the side edges carry F = −ρC_p (v_n − v_n^ff) A − ρC_s (v_t − v_t^ff) A + F^ff,
+    F^ff = σ^ff·n A, σ^ff the in-situ stress plus the column's dynamic shear stress. In static
+    stages the sides are held normal to themselves (a roller carrying the in-situ stress). The
+    dashpots' impedance follows the rules of :class:`QuietBoundary`."""
+
+    sides: Annotated[tuple[Literal["left", "right"], ...], Field(
+        min_length=1, max_length=2, description="lateral sides coupled to a free-field column")]
+    impedance: Impedance = "rock_mass"
+    p_wave_speed_m_s: PWaveSpeed = None
+    s_wave_speed_m_s: SWaveSpeed = None
 
 
 @spec
@@ -345,6 +445,10 @@ class Stage:
     rayleigh_mode: Annotated[Literal["mass_stiffness", "mass", "stiffness"], Field(description=(
         "dynamic: Rayleigh terms used (mass_stiffness: minimum at the frequency; the stiffness "
         "part shortens the stable step)"))] = "mass_stiffness"
+    rayleigh_reference: Annotated[Literal["absolute", "inputs"], Field(description=(
+        "dynamic: velocity the mass-proportional damping acts on — absolute, or relative to the "
+        "velocity inputs' motion (a shake table: the model moving with the table is not "
+        "damped; each input component needs one history)"))] = "absolute"
     time_step_s: Annotated[Optional[Float], Field(gt=0, le=1e3, description=(
         "time step; none: chosen automatically (a value above the stable limit is refused)"))] = None
     frames: Annotated[Int, Field(ge=0, le=10_000, description="snapshots written in the stage")] = 10
@@ -407,14 +511,19 @@ class Settings:
         max_length=64, description="prescribed velocities (dynamic stages)")] = ()
     quiet: Annotated[Optional[QuietBoundary], Field(
         description="viscous boundary (dynamic stages)")] = None
+    # left out of dumps (and config hashes) when absent: adding it changed no existing hash
+    free_field: Annotated[Optional[FreeField], Field(
+        description="free-field lateral boundaries (dynamic stages)",
+        exclude_if=lambda value: value is None)] = None
     monitors: Annotated[tuple[Monitor, ...], Field(
         max_length=1000, description="blocks recorded in history.csv (unique names)")] = ()
     rounding_m: Annotated[Optional[Float], Field(gt=0, le=1e6, description=(
         "corner rounding d; none: the block model's, else 1 % of the median edge"))] = None
     contact_tolerance_m: Annotated[Optional[Float], Field(gt=0, le=1e6, description=(
         "gap below which blocks are in contact; none: chosen from the rounding"))] = None
-    time_step_safety: Annotated[Float, Field(gt=0, le=1, description=(
-        "fraction of the stable time step used"))] = 0.5
+    time_step_safety: Annotated[Optional[Float], Field(gt=0, le=1, description=(
+        "fraction of the stable time step used; none: 0.5 in static stages, 0.2 in dynamic ones "
+        "(an elastic impact then gains or loses < 1 % of its energy, docs/dem.md §2.4)"))] = None
     sleep: Annotated[Bool, Field(description=(
         "static stages: stop integrating blocks in equilibrium until a neighbour moves"))] = False
     failure_displacement_m: Annotated[Optional[Float], Field(gt=0, le=1e6, description=(
@@ -433,11 +542,41 @@ class Settings:
         _check_settings(self)
         return self
 
+    def step_safety(self, dynamic: bool) -> float:
+        """The fraction of the stable step a stage uses: ``time_step_safety`` when given, else
+        :data:`~rockmass.solver.tolerances.STATIC_STEP_SAFETY` (0.5: a static stage only has to
+        reach equilibrium) or :data:`~rockmass.solver.tolerances.DYNAMIC_STEP_SAFETY` (0.2: the
+        energy error of an impact grows as (ωΔt)², docs/dem.md §2.4).
+
+        >>> s = Settings(joints={"default": Coulomb(1e9, 1e9, 30.0)}, stages=(Stage("s"),))
+        >>> s.step_safety(False), s.step_safety(True)
+        (0.5, 0.2)
+        """
+        if self.time_step_safety is not None:
+            return self.time_step_safety
+        return T.DYNAMIC_STEP_SAFETY if dynamic else T.STATIC_STEP_SAFETY
+
+
+def _check_reference_inputs(settings: Any, stage: Stage) -> None:
+    """``rayleigh_reference="inputs"`` needs velocity inputs, and one history per component (the
+    motion the damping is measured from)."""
+    if not settings.velocity_inputs:
+        raise field_error(settings, "stages", f"stage {stage.name!r}: rayleigh_reference = "
+                          "'inputs' needs velocity_inputs", stage.rayleigh_reference)
+    for component in ("x", "y"):
+        histories = [inp.history for inp in settings.velocity_inputs if inp.component == component]
+        if any(h != histories[0] for h in histories[1:]):
+            raise field_error(settings, "velocity_inputs", f"stage {stage.name!r}: rayleigh_"
+                              f"reference = 'inputs' needs the {component} inputs to share one "
+                              "history (the motion the damping is relative to)", component)
+
 
 def _check_settings(settings: Any) -> None:
     """The cross-field rules of :class:`Settings`, for it and for anything with its fields (the
     ``[solve]`` section, :class:`rockmass.solve_config.SolveConfig`): a ``default`` joint model,
-    unique stage and monitor names, elastic moduli for a quiet boundary."""
+    unique stage and monitor names, elastic moduli for a boundary impedance that needs them, no
+    side both quiet and free-field, one input history per
+    component for damping relative to the inputs."""
     if "default" not in settings.joints:
         raise field_error(settings, "joints", "needs a 'default' joint model ([solve.joints."
                           "default]: used for any contact whose set or kind has none, and "
@@ -446,7 +585,21 @@ def _check_settings(settings: Any) -> None:
         names = [item.name for item in items]
         if len(set(names)) != len(names):
             raise field_error(settings, field, f"names must be unique, got {names}", names)
-    if settings.quiet is not None and (settings.material.bulk_modulus_pa is None
-                                       or settings.material.shear_modulus_pa is None):
-        raise field_error(settings, "quiet", "quiet boundaries need material.bulk_modulus_pa "
-                          "and material.shear_modulus_pa", None)
+    for stage in settings.stages:
+        if stage.kind == "dynamic" and stage.rayleigh_reference == "inputs":
+            _check_reference_inputs(settings, stage)
+    for field in ("quiet", "free_field"):
+        boundary = getattr(settings, field, None)
+        if boundary is None:
+            continue
+        speeds = boundary.p_wave_speed_m_s is not None and boundary.s_wave_speed_m_s is not None
+        if boundary.impedance != "rock_mass" and not speeds and not settings.material.has_moduli:
+            raise field_error(settings, field, f"impedance = {boundary.impedance!r} needs "
+                              "material.bulk_modulus_pa and material.shear_modulus_pa (or both "
+                              "wave speeds)", boundary.impedance)
+    free_field = getattr(settings, "free_field", None)
+    if free_field is not None and settings.quiet is not None:
+        both = sorted(set(free_field.sides) & set(settings.quiet.sides))
+        if both:
+            raise field_error(settings, "free_field", f"sides {both} are also quiet sides (a "
+                              "free-field side has its own dashpots)", both)

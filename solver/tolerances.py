@@ -15,12 +15,12 @@ from __future__ import annotations
 __all__ = [
     "BOND_GAP_ROUNDINGS", "CHECK_EVERY", "CY_PROBE_FLOOR_PA", "CY_PROBE_STRESS_FACTOR",
     "CY_REVERSAL_CLAMP", "CY_SLIPPING_F", "DEGENERATE_DISTANCE", "DOMAIN_EDGE_FRACTION",
-    "DYNAMIC_RECORDS", "FACE_MIN_FRACTION", "FACING_COS", "FAILURE_ROUNDINGS", "FAIL_KEEP_GOING",
-    "FAIL_MIN_RECENT", "FAIL_ROTATION_ARC", "FALL_SUPPORT", "FREE_FLIGHT_STEPS",
-    "GUARD_EVERY", "HYSTERESIS_ROUNDINGS", "MARGIN_EDGE_FRACTION", "MARGIN_TOLERANCES",
-    "NO_DILATION_LIMIT_M", "OVERLAP_LIMIT_ROUNDINGS", "REBUILD_MARGIN_FRACTION", "SLEEP_CREEP",
-    "SLEEP_RATIO_OF_TOLERANCE", "SLEEP_STEPS", "STATIC_CHUNK", "STEP_CUT_SLACK", "TINY",
-    "WAKE_FACTOR",
+    "DYNAMIC_RECORDS", "DYNAMIC_STEP_SAFETY", "FACE_MIN_FRACTION", "FACING_COS",
+    "FAILURE_ROUNDINGS", "FAIL_KEEP_GOING", "FAIL_MIN_RECENT", "FAIL_ROTATION_ARC", "FALL_SUPPORT",
+    "FREE_FLIGHT_STEPS", "GUARD_EVERY", "HYSTERESIS_ROUNDINGS", "MARGIN_EDGE_FRACTION",
+    "MARGIN_TOLERANCES", "NO_DILATION_LIMIT_M", "OVERLAP_LIMIT_ROUNDINGS",
+    "REBUILD_MARGIN_FRACTION", "SLEEP_CREEP", "SLEEP_RATIO_OF_TOLERANCE", "SLEEP_STEPS",
+    "STATIC_CHUNK", "STATIC_STEP_SAFETY", "STEP_CUT_SLACK", "TINY", "WAKE_FACTOR",
 ]
 
 # --- contact geometry (docs/dem.md §3) ---------------------------------------------------------
@@ -96,6 +96,18 @@ CY_PROBE_STRESS_FACTOR = 2.0
 CY_PROBE_FLOOR_PA = 1.0
 
 # --- stepping, guards and records (docs/dem.md §2.3, §10) --------------------------------------
+
+#: Default fraction of the stable step (the Gershgorin limit 2/ω_g ≤ 2/ω_max of docs/dem.md §2.3)
+#: in static stages: only the equilibrium matters there, and half the limit leaves room for
+#: contacts that form within a chunk.
+STATIC_STEP_SAFETY = 0.5
+
+#: Default fraction of the stable step in dynamic stages. The central-difference scheme meets a
+#: contact that closes or opens within a step with the wrong phase, and an elastic impact gains
+#: or loses energy of order (ωΔt)² (docs/dem.md §2.4; measured by benchmarks/bench_dynamics.py:
+#: ±4.5 % per impact at 0.5, ±0.3 % at 0.2). 0.2 keeps a typical impact within 1 %, at 2.5×
+#: the steps of 0.5; UDEC's rigid-block step is more cautious still (docs/dem.md §2.4).
+DYNAMIC_STEP_SAFETY = 0.2
 
 #: Static stages test for equilibrium every this many steps (the kinetic energy must not have grown
 #: since the previous test, so the interval must span several steps of a block's oscillation).

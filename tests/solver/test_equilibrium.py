@@ -105,10 +105,10 @@ def _freeze_time_step(monkeypatch):
     """The runner keeps the step it chose at the stage's start (as the solver before issue 14)."""
     first = {}
 
-    def frozen(eng, settings, beta):
+    def frozen(eng, safety, beta):
         if "dt" not in first:
             first["dt"] = runner_module.Engine.stable_time_step(eng, beta)
-        return settings.time_step_safety * first["dt"], first["dt"]
+        return safety * first["dt"], first["dt"]
 
     monkeypatch.setattr(runner_module, "_auto_time_step", frozen)
 

@@ -416,7 +416,7 @@ def _wave_run(n: int, monitors: dict, duration: float, quiet_impedance: float, s
         joints=joints, material=Material(WV_RHO, bulk, shear), gravity_m_s2=(0.0, 0.0),
         insitu=InSituStress(syy_pa=WV_SIG0),
         boundary_stress=(BoundaryStress(("bottom",), syy_pa=WV_SIG0),),
-        quiet=QuietBoundary(("bottom",)),
+        quiet=QuietBoundary(("bottom",), impedance="rock"),  # the moduli chosen for it
         fixes=(Fix(f"blocks:{','.join(map(str, range(n)))}", "xr" if component == "y" else "yr"),),
         velocity_inputs=(VelocityInput("top", component, pulse),), time_step_safety=safety,
         stages=(Stage("wave", "dynamic", duration_s=duration, history_every=1, frames=0),),

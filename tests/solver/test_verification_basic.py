@@ -338,7 +338,7 @@ def test_automatic_time_step_below_the_true_limit():
     assert 0.5 * true_limit <= limit <= true_limit  # measured 0.73
     r = run(model, settings)
     assert r.stages[0].stable_time_step_s == pytest.approx(limit, rel=1e-12)
-    assert r.stages[0].time_step_s == pytest.approx(settings.time_step_safety * limit, rel=1e-12)
+    assert r.stages[0].time_step_s == pytest.approx(settings.step_safety(dynamic=True) * limit, rel=1e-12)
 
 
 @pytest.mark.parametrize("factor, stable", [(0.97, True), (1.03, False)])
