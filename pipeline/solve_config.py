@@ -71,7 +71,7 @@ from .strict import ConfigFile, StrictModel, config_file, in_folder, library_sec
 __all__ = ["SolveConfig", "SolveDocument", "MaterialConfig", "CoulombConfig", "CYConfig",
            "InSituConfig", "FixConfig", "BoundaryStressConfig", "SineConfig", "RickerConfig",
            "CsvHistoryConfig", "VelocityInputConfig", "QuietConfig", "MonitorConfig",
-           "StageConfig", "StageClock", "read_history_csv"]
+           "StageConfig", "read_history_csv"]
 
 # the TOML tables that are the solver's own types (names kept for importers of this module)
 MaterialConfig = Material
@@ -140,34 +140,6 @@ def read_history_csv(path: Path, kind: str, scale: float, where: str):
     except ValueError as exc:
         raise InputError(f"{where}: {exc}") from exc
     return table.integrated() if kind == "acceleration" else table
-
-
-class StageClock:
-    """A history on the dynamic stage's own clock: t = 0 at the first instant it is evaluated.
-
-    :func:`rockmass.solver.run` evaluates velocity histories only in dynamic stages, at the run's
-    time, which includes the pseudo-time of the static stages before; wrapped, a ``Sine`` with
-    ``cycles`` starts at phase 0 when the shaking starts and ends after whole cycles (see
-    /tmp/solver_bugs.md). The first call's first time is ``t_start + dt/2`` (mid-step), so
-    ``t_start`` is recovered from the first two samples. If the solver already passes stage time
-    the shift is 0 and this is a no-op. One instance per run (:meth:`SolveConfig.to_settings`).
-    """
-
-    def __init__(self, history):
-        self.history = history
-        self.t_start_s = None
-
-    def __call__(self, t):
-        import numpy as np
-
-        t = np.asarray(t, float)
-        if self.t_start_s is None and t.size:
-            half = 0.5 * (t.flat[1] - t.flat[0]) if t.size > 1 else 0.0
-            self.t_start_s = float(t.flat[0] - half)
-        return self.history(t - (self.t_start_s or 0.0))
-
-    def __repr__(self) -> str:
-        return f"StageClock({self.history!r})"
 
 
 class VelocityInputConfig(library_section(VelocityInput, history=(HistoryConfig, Field(
@@ -258,7 +230,7 @@ class SolveConfig(library_section(Settings, stages=list[StageConfig],
                 history = build(field, lambda h=history, field=field: h.to_solver(
                     base, f"solve.{field}"))
             inputs.append(build(f"velocity_inputs[{i}]", lambda v=v, h=history: v.to_library(
-                history=StageClock(h))))
+                history=h)))
         return build("", lambda: self.to_library(stages=tuple(stages),
                                                  velocity_inputs=tuple(inputs)))
 

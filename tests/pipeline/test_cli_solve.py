@@ -350,7 +350,7 @@ def test_every_section_maps_onto_the_solver_settings(tmp_path):
     assert st.material == solver.Material(2700.0, 1e9, 6e8)
     assert st.joints["v"] == solver.ContinuouslyYielding(1e9, 5e8)
     assert st.rounding_m == 0.003 and st.time_step_safety == 0.4
-    assert st.velocity_inputs[0].history.history == solver.Ricker(0.01, 30.0)
+    assert st.velocity_inputs[0].history == solver.Ricker(0.01, 30.0)
     assert [s.kind for s in st.stages] == ["static", "dynamic"]
     result = json.loads((out / "result.json").read_text())
     assert result["status"] == "ok" and result["info"]["rounding_m"] == 0.003

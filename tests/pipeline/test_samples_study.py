@@ -20,7 +20,7 @@ EXPECTED = {
     "study_cavern.toml": 18,         # theta 40/60/90 x 3 spacings x 2 realizations
     "study_dfn_seed001.toml": 6,     # P32 = 1, 2 x 3 realizations
     "study_seed000.toml": 81,        # theta x alpha x spacings (3 each) x 3 realizations
-    "study_shaketable.toml": 4,      # 2 input amplitudes x 2 joint frictions x 1 realization
+    "study_shaketable.toml": 13,     # one parameter at a time (seed 002 §4) x 1 realization
 }
 
 
