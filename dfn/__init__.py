@@ -64,7 +64,7 @@ if TYPE_CHECKING:
     from .stereology import C13_ISOTROPIC, C23_ISOTROPIC, P32Solution, c13, c13_from_angle, c23, c23_from_angle, p10_from_p32, p21_from_p32, p32_from_p10, p32_from_p21, solve_p32, terzaghi_weights
     from .sizes import ConstantSize, ExponentialSize, LognormalSize, PowerLawSize, SizeDistribution, mean_trace_length, p20_from_p30, p30_from_p32, p32_from_p30, radius_exponent_from_trace, trace_exponent_from_radius
     from .network import DiskNetwork, disk_basis, as_box
-    from .generation import BootstrapOrientation, DEFAULT_MAX_FRACTURES, FisherOrientation, FractureSetSpec, IntensityP10, IntensityP21, IntensityP32, UniformOrientation, generate, realization_seed, realizations, size_upper_bound
+    from .generation import BootstrapOrientation, DEFAULT_MAX_FRACTURES, FisherOrientation, FractureSetSpec, IntensityP10, IntensityP21, IntensityP32, UniformOrientation, expected_counts, generate, realization_seed, realizations, size_upper_bound
     from .sampling import LineSample, plane_frame, sample_line, sample_plane
     from .section import generate_section, size_biased_sample
     from .network_io import CSV_COLUMNS, read_fractures_csv, write_fractures_csv, write_fractures_vtu, disk_polygons
@@ -160,6 +160,7 @@ _SOURCES = {
     "DEFAULT_MAX_FRACTURES": "generation",
     "FisherOrientation": "generation",
     "FractureSetSpec": "generation",
+    "expected_counts": "generation",
     "IntensityP10": "generation",
     "IntensityP21": "generation",
     "IntensityP32": "generation",

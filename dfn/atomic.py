@@ -34,22 +34,39 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import secrets
 import stat
 from collections.abc import Iterator
 from pathlib import Path
 from typing import IO
 
-__all__ = ["atomic_open", "atomic_path"]
+__all__ = ["atomic_open", "atomic_path", "destination_name"]
 
 _TMP_PREFIX = ".tmp-"
+_TOKEN_BYTES = 8
+#: A temporary name of this module: the prefix, the random token in hex, ``-``, the destination's name.
+_TMP_NAME = re.compile(re.escape(_TMP_PREFIX) + f"[0-9a-f]{{{2 * _TOKEN_BYTES}}}-(.+)", re.DOTALL)
 _MODES = ("w", "wb")
 _CREATE_FLAGS = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0)
 
 
 def _tmp_name(target: Path) -> Path:
     """A fresh temporary name beside ``target`` that ends with the target's full name."""
-    return target.with_name(f"{_TMP_PREFIX}{secrets.token_hex(8)}-{target.name}")
+    return target.with_name(f"{_TMP_PREFIX}{secrets.token_hex(_TOKEN_BYTES)}-{target.name}")
+
+
+def destination_name(name: str) -> str | None:
+    """The name of the file a temporary file of this module becomes, or None if ``name`` is not a
+    temporary name of this module (a killed writer leaves such files behind: debris).
+
+    Examples
+    --------
+    >>> destination_name(".tmp-0123456789abcdef-overlay.png"), destination_name(".tmp-notes")
+    ('overlay.png', None)
+    """
+    match = _TMP_NAME.fullmatch(name)
+    return None if match is None else match.group(1)
 
 
 def _create_tmp(target: Path) -> tuple[Path, int]:

@@ -56,7 +56,10 @@ _ACCEPTED_HEADERS = (
     "(polylines: one vertex per row), optionally followed by attribute columns"
 )
 _LAYOUTS = ("polylines", "segments")
-_METADATA = re.compile(r"#\s*(frame|crs)\s*:\s*(.*?)\s*$", re.IGNORECASE)
+#: The key of a ``# frame: NAME`` / ``# crs: NAME`` comment; its value is the rest of the line,
+#: stripped (:func:`_metadata`). No pattern spans the value: ``(.*?)\s*$`` took time quadratic in
+#: the length of a line with long runs of spaces (a 100 kB line took a minute; issue 18).
+_METADATA_KEY = re.compile(r"#\s*(frame|crs)\s*:", re.IGNORECASE)
 _INTEGER = re.compile(r"[+-]?[0-9]+")
 _INT64 = np.iinfo(np.int64)
 
@@ -121,12 +124,12 @@ class _Parser:
                 continue
             stripped = text.strip()
             if stripped.startswith("#"):
-                match = _METADATA.match(stripped)
+                match = _METADATA_KEY.match(stripped)
                 if match and self.in_header:
                     key = match.group(1).lower()
                     if key in self.metadata:
                         raise ValueError(f"{self.name}: line {number}: a second '# {key}:' comment")
-                    self.metadata[key] = match.group(2)
+                    self.metadata[key] = stripped[match.end():].strip()
                 continue
             yield text
 

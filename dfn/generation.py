@@ -57,6 +57,7 @@ __all__ = [
     "IntensityP21",
     "IntensityP32",
     "UniformOrientation",
+    "expected_counts",
     "generate",
     "realization_seed",
     "realizations",
@@ -398,6 +399,33 @@ def _fill_set(rng: np.random.Generator, spec: FractureSetSpec, box: np.ndarray, 
     return centre[keep], normal[keep], radius[keep]
 
 
+def expected_counts(sets: Sequence[FractureSetSpec], domain_m: ArrayLike) -> np.ndarray:
+    """Expected number of disks :func:`generate` draws for each set: P30 times the domain box
+    padded by the set's largest radius (:func:`size_upper_bound`) on every side.
+
+    Parameters
+    ----------
+    sets : sequence of FractureSetSpec
+        The fracture sets.
+    domain_m : (2, 3) or (6,) array_like of float
+        Domain box in metres.
+
+    Returns
+    -------
+    (n_sets,) ndarray of float64
+        Expected counts, before any is drawn (budgets check them before work starts).
+
+    Examples
+    --------
+    >>> spec = FractureSetSpec(FisherOrientation(45, 90, 20), ConstantSize(1.0), IntensityP32(0.5))
+    >>> float(expected_counts([spec], [0, 0, 0, 10, 10, 10])[0] * np.pi)  # P30 = P32 / (pi r^2)
+    864.0000000000001
+    """
+    box = as_box(domain_m)
+    return np.array([spec.p30 * float(np.prod(box[1] - box[0] + 2 * size_upper_bound(spec.size)))
+                     for spec in _check_sets(sets)], dtype=np.float64)
+
+
 def generate(sets: Sequence[FractureSetSpec], domain_m: ArrayLike, *, seed: int, realization: int = 0,
              max_fractures: int = DEFAULT_MAX_FRACTURES) -> DiskNetwork:
     """One seeded realization of a Poisson disk network, each set filled to its clipped P32 target.
@@ -440,10 +468,9 @@ def generate(sets: Sequence[FractureSetSpec], domain_m: ArrayLike, *, seed: int,
     volume = float(np.prod(box[1] - box[0]))
     plans = []
     needed_total = 0.0
-    for j, spec in enumerate(sets):
+    for j, (spec, expected) in enumerate(zip(sets, expected_counts(sets, box))):
         label = _set_label(j, spec)
-        pad = size_upper_bound(spec.size)
-        expected = spec.p30 * float(np.prod(box[1] - box[0] + 2 * pad))
+        expected = float(expected)
         if expected > limit:
             raise ValueError(f"{label}: P32 = {spec.p32:.4g} m²/m³ in this domain needs about "
                              f"{expected:.3g} fractures, more than max_fractures = {limit}")

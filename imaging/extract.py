@@ -9,13 +9,17 @@ read, grey           Pillow + EXIF orientation; RGB(A), 8/16 bit        :mod:`.e
 down-sample          to at most ``max_megapixels`` (area averaging)     here
 flatten              grey closing + wide Gaussian, divide              :mod:`.enhance`
 ridges               Sato tubeness, σ from the joint width             :mod:`.ridges`
-segment              hysteresis (median + k MAD), ROI, small objects   :mod:`.segment`
+  or learned         per-pixel features -> probability of a joint       :mod:`.features`,
+                     centre line (``detector="learned"``, §3.1)         :mod:`.learned`
+segment              hysteresis (median + k MAD, or fixed levels on     :mod:`.segment`
+                     the probability), ROI, small objects
 skeleton, graph      Zhang–Suen, skan pixel graph                      :mod:`.skeleton_graph`
 prune, X, bridge     spurs, X crossings, gaps (distance and angle)     :mod:`.skeleton_graph`
 chain                straight-through chaining at junctions            :mod:`.skeleton_graph`
 link, border         join pieces that continue one another (gaps,       :mod:`.link`
                      crossings left as two Y nodes); ends to the border
-vectorise            Douglas–Peucker, metres on the face frame          :mod:`.vectorize`
+vectorise            Douglas–Peucker, metres on the face frame;         :mod:`.vectorize`
+                     per-trace confidence (mean response along it)
 ===================  ================================================  ===========================
 
 Pixel-valued parameters in :class:`ExtractParams` are in pixels of the *working* image (the image
@@ -43,6 +47,8 @@ __all__ = ["ExtractParams", "ScaleInfo", "Extraction", "extract", "scale_from_co
 
 #: Smallest image side the chain accepts, pixels.
 MIN_SIDE_PX = 16
+#: Line detectors in front of the threshold (``ExtractParams.detector``).
+DETECTORS = ("ridge", "learned")
 
 
 @dataclass(frozen=True)
@@ -58,6 +64,15 @@ class ExtractParams:
     max_megapixels : float, default 4.0
         Larger images are down-sampled (area averaging) to this many pixels before anything else;
         24 MP then runs in a few seconds and < 1 GB. ``inf`` processes at full resolution.
+    detector : {"ridge", "learned"}, default "ridge"
+        What finds the joint pixels. "ridge": Sato's multi-scale ridge filter with robust
+        hysteresis thresholds (docs/imaging.md §3-§4; tuned on the plain synthetic faces).
+        "learned": the shipped pixel classifier (:mod:`rockmass.imaging.learned`, docs/imaging.md
+        §3.1), trained on synthetic faces only, whose probability of "joint centre line" is
+        thresholded by ``prob_low`` / ``prob_high``; it ignores ``line_polarity``, ``flatten_method``,
+        ``clahe``, the filter scales and ``low_k`` / ``high_k``, and looks for dark joints of about
+        2-12 px. ``benchmarks/bench_imaging_real.py`` compares the two on real labelled photographs
+        and on synthetic faces.
     line_polarity : {"dark", "bright"}, default "dark"
         Joints to look for: dark lines (open joints, shadowed traces) or bright ones (calcite- or
         clay-filled joints, veins, mortar). On ``skimage.data.brick()`` "dark" traces the brick
@@ -83,6 +98,12 @@ class ExtractParams:
         Hysteresis thresholds in robust standard deviations (1.4826 MAD) above the median response.
         Tuned: (2, 5) loses faint stretches (moderate recall 0.93, P21 -11 %); (1, 4) lets texture
         in (moderate precision 0.965, hard P20 +54 %).
+    prob_low, prob_high : float, default 0.85, 0.97
+        Hysteresis thresholds on the learned detector's probability. Chosen on the real training
+        photographs (rock-face-fractures ``train/``, 99 images, never on ``val/``), 50 px traces:
+        (0.7, 0.97) F1 0.58, (0.8, 0.97) 0.62, (0.85, 0.97) 0.63, (0.9, 0.97) 0.61, (0.9, 0.99)
+        0.59. The synthetic training faces leave the model over-confident on real rock texture,
+        hence the high values.
     min_object_px : int, default 40
         Smallest connected piece of the binary mask kept, pixels.
     spur_length_px : float, default 10.0
@@ -118,13 +139,17 @@ class ExtractParams:
         Trace ends that stop within this distance of the image border, pointing at it (within
         45° of its normal), are extended to it (the ridge filter fades near the border); 0 turns
         this off.
-    min_trace_length_px : float, default 20.0
-        Traces shorter than this (after linking) are dropped.
+    min_trace_length_px : float or None, default None
+        Traces shorter than this (after linking) are dropped; None: 20 px with the ridge detector,
+        50 px with the learned one (rock-face-fractures ``train/``, learned detector at (0.8,
+        0.97): 30 px F1 0.59, P 0.49, R 0.82; 50 px 0.62, 0.56, 0.77; 80 px 0.63, 0.64, 0.70 — 80
+        px is a fifth of those 400 px photographs, too long a floor for larger ones).
     simplify_tolerance_px : float, default 1.0
         Douglas–Peucker tolerance.
     """
 
     max_megapixels: float = 4.0
+    detector: str = "ridge"
     line_polarity: str = "dark"
     flatten_method: str = "divide"
     background_sigma_px: float = 40.0
@@ -135,6 +160,8 @@ class ExtractParams:
     min_sigma_px: float = 1.0
     low_k: float = 1.5
     high_k: float = 4.0
+    prob_low: float = 0.85
+    prob_high: float = 0.97
     min_object_px: int = 40
     spur_length_px: float = 10.0
     crossing_link_px: float = 10.0
@@ -149,10 +176,12 @@ class ExtractParams:
     link_skip_px: float = 6.0
     link_reach_px: float = 25.0
     border_extend_px: float = 12.0
-    min_trace_length_px: float = 20.0
+    min_trace_length_px: float | None = None
     simplify_tolerance_px: float = 1.0
 
     def __post_init__(self) -> None:
+        if self.detector not in DETECTORS:
+            raise ValueError(f"params.detector must be one of {', '.join(DETECTORS)}, got {self.detector!r}")
         if self.line_polarity not in ("dark", "bright"):
             raise ValueError(f"params.line_polarity must be 'dark' or 'bright', got {self.line_polarity!r}")
         positive = ("max_megapixels", "background_sigma_px", "scale_spread", "min_sigma_px",
@@ -166,12 +195,21 @@ class ExtractParams:
                 raise ValueError(f"params.{name} must be a number > 0, got {value!r}")
         for name in non_negative:
             value = getattr(self, name)
+            if name == "min_trace_length_px" and value is None:
+                continue
             if not (isinstance(value, (int, float)) and np.isfinite(value) and value >= 0):
                 raise ValueError(f"params.{name} must be a finite number >= 0, got {value!r}")
         for name in ("max_turn_deg", "bridge_angle_deg", "link_turn_deg"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and 0 <= value <= 90):
                 raise ValueError(f"params.{name} must be an angle in 0-90 degrees, got {value!r}")
+        for name in ("prob_low", "prob_high"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and 0 <= value <= 1):
+                raise ValueError(f"params.{name} must be a probability in 0-1, got {value!r}")
+        if self.prob_low > self.prob_high:
+            raise ValueError(f"params.prob_low ({self.prob_low}) must not exceed params.prob_high "
+                             f"({self.prob_high})")
         if self.low_k > self.high_k:
             raise ValueError(f"params.low_k ({self.low_k}) must not exceed params.high_k ({self.high_k})")
         if not (isinstance(self.n_scales, int) and self.n_scales >= 1):
@@ -183,6 +221,13 @@ class ExtractParams:
         if self.flatten_method not in FLATTEN_METHODS:
             raise ValueError(f"params.flatten_method must be one of {', '.join(FLATTEN_METHODS)}, "
                              f"got {self.flatten_method!r}")
+
+    @property
+    def trace_length_floor_px(self) -> float:
+        """``min_trace_length_px``, or the detector's default when it is None."""
+        if self.min_trace_length_px is not None:
+            return float(self.min_trace_length_px)
+        return 50.0 if self.detector == "learned" else 20.0
 
 
 @dataclass(frozen=True)
@@ -221,8 +266,11 @@ class Extraction:
     ----------
     traces : TraceMap
         Traces in the face frame (u right, v up, origin at the image's bottom-left corner), in
-        ``scale.units``, with attributes ``id``, ``length_m`` and ``angle_deg`` (0–180° counter-
-        clockwise from +u) and the window (image rectangle, or the ROI clipped to it).
+        ``scale.units``, with attributes ``id``, ``length_m``, ``angle_deg`` (0–180° counter-
+        clockwise from +u) and ``confidence`` (the detector's mean response along the trace on the
+        working grid, 0–1: the mean probability of the learned detector; the mean normalised ridge
+        response of the ridge detector, not a probability), and the window (image rectangle, or the
+        ROI clipped to it).
     scale : ScaleInfo
     params : ExtractParams
         The settings used.
@@ -234,8 +282,8 @@ class Extraction:
         Wall time per step, seconds, in chain order.
     warnings : tuple of str
     debug : mapping of str to ndarray
-        With ``debug=True``: ``flattened``, ``ridge_response``, ``binary``, ``skeleton`` and
-        ``pruned`` on the working grid; else empty.
+        With ``debug=True``: ``flattened``, ``ridge_response`` (``joint_probability`` with the
+        learned detector), ``binary``, ``skeleton`` and ``pruned`` on the working grid; else empty.
     """
 
     traces: Any
@@ -413,7 +461,7 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     """
     import cv2
 
-    from . import enhance, link, ridges, segment, skeleton_graph, vectorize
+    from . import enhance, learned, link, ridges, segment, skeleton_graph, vectorize
 
     params = ExtractParams() if params is None else params
     if not isinstance(params, ExtractParams):
@@ -483,17 +531,26 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         window = np.asarray(area.exterior.coords)
     clock.lap("roi")
 
-    flat = enhance.flatten_illumination(
-        grey, line_width_px=max(2.0 * width_work, 2.0), sigma_px=params.background_sigma_px,
-        method=params.flatten_method, clahe=params.clahe, clahe_clip_limit=params.clahe_clip_limit)
+    if params.detector == "learned":
+        flat = learned.model_input(grey, background_sigma_px=params.background_sigma_px)
+    else:
+        flat = enhance.flatten_illumination(
+            grey, line_width_px=max(2.0 * width_work, 2.0), sigma_px=params.background_sigma_px,
+            method=params.flatten_method, clahe=params.clahe, clahe_clip_limit=params.clahe_clip_limit)
     del grey
     clock.lap("flatten")
-    sigmas = ridges.ridge_sigmas(width_work, params.n_scales, spread=params.scale_spread,
-                                 min_sigma_px=params.min_sigma_px)
-    response = ridges.ridge_response(flat, sigmas, black_ridges=params.line_polarity == "dark")
-    clock.lap("ridges")
-    binary = segment.segment_ridges(response, low_k=params.low_k, high_k=params.high_k,
-                                    min_size_px=params.min_object_px, mask=mask)
+    if params.detector == "learned":
+        response = learned.joint_probability(flat)
+        clock.lap("ridges")
+        binary = segment.hysteresis_mask(response, low=params.prob_low, high=params.prob_high,
+                                         min_size_px=params.min_object_px, mask=mask)
+    else:
+        sigmas = ridges.ridge_sigmas(width_work, params.n_scales, spread=params.scale_spread,
+                                     min_sigma_px=params.min_sigma_px)
+        response = ridges.ridge_response(flat, sigmas, black_ridges=params.line_polarity == "dark")
+        clock.lap("ridges")
+        binary = segment.segment_ridges(response, low_k=params.low_k, high_k=params.high_k,
+                                        min_size_px=params.min_object_px, mask=mask)
     clock.lap("segment")
     skeleton = skeleton_graph.skeletonize(binary)
     clock.lap("skeleton")
@@ -517,18 +574,20 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     if params.border_extend_px > 0:
         chains = link.extend_to_border(chains, work_shape, max_distance_px=params.border_extend_px,
                                        skip_px=params.link_skip_px, reach_px=params.link_reach_px)
-    chains = [c for c in chains if link.polyline_length_px(c) >= params.min_trace_length_px]
+    chains = [c for c in chains if link.polyline_length_px(c) >= params.trace_length_floor_px]
     clock.lap("link")
+    confidence = vectorize.mean_along(chains, response)
     chains_in = [np.column_stack([(c[:, 0] + 0.5) / row_factor - 0.5,
                                   (c[:, 1] + 0.5) / col_factor - 0.5]) for c in chains]
     traces = vectorize.to_trace_map(chains_in, height_px=h, m_per_px=scale, window_uv_m=window,
                                     tolerance_px=params.simplify_tolerance_px / factor,
-                                    frame="face")
+                                    frame="face", attributes={"confidence": confidence})
     clock.lap("vectorize")
 
     debug_images = {}
     if debug:
-        debug_images = {"flattened": flat, "ridge_response": response, "binary": binary,
+        detector_key = "joint_probability" if params.detector == "learned" else "ridge_response"
+        debug_images = {"flattened": flat, detector_key: response, "binary": binary,
                         "skeleton": skeleton, "pruned": _render(pruned, work_shape)}
     for note in notes:
         if note.startswith("no scale"):

@@ -1,5 +1,8 @@
 """The extraction overlay: traces coloured by joint set, drawn over the photograph.
 
+When the traces carry a ``confidence`` attribute (:func:`rockmass.imaging.extract`, docs/imaging.md
+§7), each is drawn with opacity 0.25 + 0.75 · confidence, so doubtful traces fade.
+
 matplotlib is imported inside the function (Agg backend). Large photographs are shown down-sampled
 to at most ``max_side_px`` pixels on their longer side; the traces are scaled with them.
 """
@@ -31,6 +34,7 @@ def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title
     set_ids : (n_traces,) array of int, optional
         Joint set of each trace, -1 for none.
     """
+    from matplotlib.colors import to_rgba
     from matplotlib.collections import LineCollection
 
     img = np.asarray(image)
@@ -47,11 +51,16 @@ def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title
         a = uv_to_rc(segments[:, :2], h, m_per_px)
         b = uv_to_rc(segments[:, 2:], h, m_per_px)
         lines = np.stack([a[:, ::-1], b[:, ::-1]], axis=1)  # (x=col, y=row) for matplotlib
-        colours = _segment_colours(trace_map, set_ids, "0.7")
+        colours = np.array([to_rgba(c) for c in _segment_colours(trace_map, set_ids, "0.7")])
+        confidence = trace_map.attributes.get("confidence")
+        if confidence is not None:
+            alpha = np.clip(np.asarray(confidence, dtype=float), 0.0, 1.0)
+            colours[:, 3] = 0.25 + 0.75 * np.nan_to_num(alpha)[trace_map.segment_trace_index()]
         ax.add_collection(LineCollection(lines, colors=colours, linewidths=1.2))
     _set_legend(ax, set_ids)
     ax.set_xlim(-0.5, w - 0.5)
     ax.set_ylim(h - 0.5, -0.5)
     ax.set_axis_off()
-    ax.set_title(title or f"{trace_map.n_traces} traces", fontsize=10)
+    shading = ", opacity = confidence" if "confidence" in trace_map.attributes else ""
+    ax.set_title(title or f"{trace_map.n_traces} traces{shading}", fontsize=10)
     fig.savefig(path, dpi=110)

@@ -15,7 +15,7 @@ import numpy as np
 
 from .frame import check_scale, uv_to_rc
 
-__all__ = ["robust_thresholds", "roi_mask", "segment_ridges", "remove_small_objects"]
+__all__ = ["robust_thresholds", "roi_mask", "segment_ridges", "hysteresis_mask", "remove_small_objects"]
 
 #: MAD of a normal distribution times this is its standard deviation.
 MAD_TO_SIGMA = 1.482602218505602
@@ -188,10 +188,40 @@ def segment_ridges(response, *, low_k: float = 2.0, high_k: float = 6.0, min_siz
     .. [1] Canny, J. (1986). A computational approach to edge detection. IEEE Transactions on
        Pattern Analysis and Machine Intelligence 8(6), 679-698 (hysteresis thresholding).
     """
-    import cv2
-
     values = np.asarray(response, dtype=np.float32)
     low, high = robust_thresholds(values, low_k=low_k, high_k=high_k, mask=mask)
+    return hysteresis_mask(values, low=low, high=high, min_size_px=min_size_px, mask=mask)
+
+
+def hysteresis_mask(response, *, low: float, high: float, min_size_px: int = 30, mask=None) -> np.ndarray:
+    """Hysteresis threshold (Canny 1986): the 8-connected pieces of {R >= low, R > 0} that hold a
+    pixel with R >= high, limited to ``mask``, pieces under ``min_size_px`` pixels removed.
+
+    Parameters
+    ----------
+    response : (H, W) array_like of float
+        Ridge response or joint probability; not modified.
+    low, high : float
+        Thresholds, low <= high.
+    min_size_px : int, default 30
+    mask : (H, W) bool array_like, optional
+        Region of interest.
+
+    Returns
+    -------
+    (H, W) bool ndarray
+
+    Examples
+    --------
+    >>> r = np.zeros((5, 12)); r[2, 1:11] = 0.6; r[2, 5] = 0.9; r[0, 0:3] = 0.6
+    >>> hysteresis_mask(r, low=0.5, high=0.8, min_size_px=1).sum(axis=1).tolist()
+    [0, 0, 10, 0, 0]
+    """
+    import cv2
+
+    if not low <= high:
+        raise ValueError(f"low ({low!r}) must not exceed high ({high!r})")
+    values = np.asarray(response, dtype=np.float32)
     candidate = (values >= low) & (values > 0)
     if mask is not None:
         candidate &= np.asarray(mask, dtype=bool)

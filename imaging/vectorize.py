@@ -11,7 +11,7 @@ import numpy as np
 
 from .frame import check_scale, rc_to_uv
 
-__all__ = ["simplify_polylines", "axial_angle_deg", "image_window_uv_m", "to_trace_map"]
+__all__ = ["simplify_polylines", "axial_angle_deg", "image_window_uv_m", "mean_along", "to_trace_map"]
 
 
 def simplify_polylines(polylines_rc_px, tolerance_px: float) -> list[np.ndarray]:
@@ -83,8 +83,46 @@ def image_window_uv_m(shape_px, m_per_px: float) -> np.ndarray:
     return np.array([[0.0, 0.0], [w * s, 0.0], [w * s, h * s], [0.0, h * s]])
 
 
+def mean_along(polylines_rc_px, image, *, step_px: float = 0.5) -> np.ndarray:
+    r"""Mean of an image along each pixel polyline (nearest pixel, points every ``step_px``).
+
+    Parameters
+    ----------
+    polylines_rc_px : sequence of (k, 2) array_like
+        Pixel (row, col) polylines on the image's grid.
+    image : (H, W) array_like
+        E.g. the joint probability map; not modified.
+    step_px : float, default 0.5
+
+    Returns
+    -------
+    (n,) float64 ndarray
+        :math:`\frac{1}{m}\sum_j I(\mathrm{round}(p_j))` over m points :math:`p_j` evenly spaced
+        along each polyline (its vertices included), so every stretch counts by its length; NaN for
+        an empty image.
+
+    Examples
+    --------
+    >>> img = np.zeros((5, 10)); img[2, :5] = 1.0
+    >>> mean_along([[(2, 0), (2, 9)]], img).round(1).tolist()
+    [0.5]
+    """
+    values = np.asarray(image, dtype=np.float64)
+    h, w = values.shape
+    out = np.full(len(polylines_rc_px), np.nan)
+    for i, line in enumerate(polylines_rc_px):
+        rc = np.asarray(line, dtype=np.float64)
+        seg = np.hypot(*np.diff(rc, axis=0).T)
+        arc = np.concatenate([[0.0], np.cumsum(seg)])
+        t = np.linspace(0.0, arc[-1], max(int(np.ceil(arc[-1] / step_px)), 1) + 1)
+        r = np.clip(np.round(np.interp(t, arc, rc[:, 0])).astype(np.int64), 0, h - 1)
+        c = np.clip(np.round(np.interp(t, arc, rc[:, 1])).astype(np.int64), 0, w - 1)
+        out[i] = values[r, c].mean() if values.size else np.nan
+    return out
+
+
 def to_trace_map(polylines_rc_px, *, height_px: int, m_per_px: float, window_uv_m=None,
-                 tolerance_px: float = 1.0, frame: str = "face"):
+                 tolerance_px: float = 1.0, frame: str = "face", attributes=None):
     """Build a :class:`rockmass.dfn.TraceMap` (metres, face frame) from pixel trace polylines.
 
     Parameters
@@ -101,12 +139,14 @@ def to_trace_map(polylines_rc_px, *, height_px: int, m_per_px: float, window_uv_
     tolerance_px : float, default 1.0
         Douglas–Peucker tolerance, pixels.
     frame : str, default "face"
+    attributes : mapping of str to (n,) array_like, optional
+        More per-trace attributes (e.g. ``confidence``), one value per polyline.
 
     Returns
     -------
     TraceMap
-        Attributes ``length_m`` (simplified polyline length) and ``angle_deg`` (see
-        :func:`axial_angle_deg`).
+        Attributes ``length_m`` (simplified polyline length), ``angle_deg`` (see
+        :func:`axial_angle_deg`) and those given.
     """
     from ..dfn import TraceMap
 
@@ -115,5 +155,6 @@ def to_trace_map(polylines_rc_px, *, height_px: int, m_per_px: float, window_uv_
     uv = [rc_to_uv(p, height_px, scale) for p in simple]
     trace_map = TraceMap.from_polylines(uv, window=window_uv_m, frame=frame)
     return TraceMap.from_polylines(
-        uv, {"length_m": trace_map.lengths_m(), "angle_deg": axial_angle_deg(trace_map)},
+        uv, {"length_m": trace_map.lengths_m(), "angle_deg": axial_angle_deg(trace_map),
+             **dict(attributes or {})},
         window=window_uv_m, frame=frame)

@@ -18,9 +18,14 @@ import time
 from collections import Counter
 
 from .errors import ConfigError, InputError
-from .outputs import csv_text, output_folder
+from .outputs import csv_text, output_set
 
 __all__ = ["compute", "produce", "summary"]
+
+#: names ``rockmass blocks3d`` writes in either layout (one realization or several), so a set
+#: of the other layout left in --out is replaced, not mixed with the new one.
+_OWNED = (r"realization_\d{4,}", r"realizations\.csv", r"blocks3d\.vtu", r"keyblocks\.(png|csv)",
+          r"blocks\.csv")
 
 def _network(document, settings, config_path):
     """The DFN realization of ``[dfn]`` in the block box, or None."""
@@ -193,7 +198,7 @@ def produce(args, out_dir, document=None):
                "across": _across(docs)}
         files["realizations.csv"] = lambda path: atomic_write_text(path, _realizations_csv(first, docs))
         files["summary.json"] = lambda path: atomic_write_json(path, doc)
-    with output_folder(out_dir) as out, ExitStack() as stack:
+    with output_set(out_dir, owns=_OWNED) as out, ExitStack() as stack:
         paths = {name: stack.enter_context(atomic_path(out / name)) for name in [*files, "manifest.json"]}
         for name, write in files.items():
             write(paths[name])

@@ -14,9 +14,9 @@ from __future__ import annotations
 import re
 import time
 
-from .errors import ConfigError, InputError, RunError
+from .errors import ConfigError, InputError, RunError, reading
 from .inputs import read_trace_file
-from .outputs import output_folder
+from .outputs import output_set
 
 __all__ = ["dfn_section_traces", "compute", "produce"]
 
@@ -64,6 +64,27 @@ def dfn_section_traces(document, config_path):
     return traces, [tuple(p) for p in sec.window_uv_m]
 
 
+def _check_memory_budget(config_path, cfg, domain_xy, joint_sets) -> None:
+    """Refuse, before building, a model whose blocks need more memory than the limit
+    (:mod:`rockmass.budgets`), naming the field that makes most of them: the spacings of the joint
+    sets or the size of the cracks (each against the domain)."""
+    from .budgets import BLOCK_BYTES, block_count_terms, check_memory
+
+    if domain_xy is None:
+        return
+    crack = cfg.cracks.size_m if cfg.cracks is not None else None
+    terms = block_count_terms(domain_xy, [(j.angle_deg, j.spacing_m) for j in joint_sets], crack)
+    total = 1.0 + sum(terms.values())
+    if terms["cracks"] >= terms["lines"] + terms["crossings"]:
+        field, fix = "blocks.cracks.size_m", "raise cracks.size_m or make the domain smaller"
+    else:
+        field = "blocks.two_sets.spacing_m" if cfg.two_sets is not None else "blocks.sets"
+        fix = "raise the joint spacings or make the domain smaller"
+    check_memory(total * BLOCK_BYTES, f"{config_path}: {field}",
+                 f"about {total:.3g} blocks ({terms['crossings']:.3g} from joint crossings, "
+                 f"{terms['cracks']:.3g} from cracks)", fix)
+
+
 def compute(args, document=None, section=None):
     """Load (unless ``document`` is given), validate and build; return (document, model,
     invariants, timings).
@@ -87,10 +108,12 @@ def compute(args, document=None, section=None):
         joint_sets = cfg.joint_sets()
         excavations = [e.to_excavation() for e in cfg.excavations]
         if path is not None:
-            traces = read_trace_file(path, "blocks.traces")
+            with reading(path, "blocks.traces", config=args.config):
+                traces = read_trace_file(path, "blocks.traces")
         if cfg.dfn_section is not None:
             traces, window = section or dfn_section_traces(document, args.config)
             domain_xy = window if domain_xy is None else domain_xy
+        _check_memory_budget(args.config, cfg, domain_xy, joint_sets)
         t1 = time.perf_counter()
         model = build(domain_xy, joint_sets, traces, excavations, dangling=cfg.dangling,
                       seed=cfg.seed, rounding_m=cfg.rounding_m, min_edge_m=cfg.min_edge_m,
@@ -126,7 +149,7 @@ def produce(args, out_dir, document=None, section=None):
     path = document.blocks.traces_path(args.config)
     if path is not None:
         inputs.append(str(path))
-    with output_folder(out_dir) as out, ExitStack() as stack:
+    with output_set(out_dir) as out, ExitStack() as stack:
         paths = {name: stack.enter_context(atomic_path(out / name))
                  for name in ("blocks.json", "blocks.vtu", "blocks.png", "manifest.json")}
         write_json(model, paths["blocks.json"])

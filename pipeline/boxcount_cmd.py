@@ -13,6 +13,7 @@ import argparse
 import sys
 
 from .boxcount_stage import produce
+from .image_limits import pixel_limit_arg
 from .outputs import print_json
 
 __all__ = ["add_parser", "run"]
@@ -54,6 +55,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="thin lines to 1 pixel: auto (default), always, never")
     p.add_argument("--config", help="TOML file; its [fractal] section sets the defaults")
     p.add_argument("--out", help="write boxcount.json, boxcount.png and manifest.json here")
+    p.add_argument("--max-pixels", type=pixel_limit_arg, dest="max_pixels", metavar="N",
+                   help="refuse images above N pixels, read from the file's header before decoding "
+                        "(default 100000000, or the environment variable ROCKMASS_MAX_PIXELS)")
     p.add_argument("--json", action="store_true", help="print the result as JSON on stdout")
     p.set_defaults(handler=run)
     return p

@@ -13,9 +13,9 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from .errors import InputError
+from .errors import InputError, reading, reads
 from .inputs import read_polygon_file, read_trace_file
-from .outputs import output_folder
+from .outputs import output_set, plot_text
 
 __all__ = ["TRACE_SUFFIXES", "IMAGE_SUFFIXES", "FLAGS", "compute", "produce"]
 
@@ -58,29 +58,34 @@ def _resolve_settings(args, image_side: int | None, document=None):
                                    for field, message in problems)) from None
 
 
-def _load_input(path: Path):
+def _load_input(path: Path, max_pixels: int | None = None):
     """('traces', TraceMap) or ('image', ndarray), by suffix; unreadable files are bad input."""
     suffix = path.suffix.lower()
     if suffix in TRACE_SUFFIXES:
         return "traces", read_trace_file(path)
     if suffix in IMAGE_SUFFIXES:
-        return "image", _read_image_file(path, "input")
+        return "image", _read_image_file(path, "input", max_pixels)
     raise InputError(f"{path}: unknown file type {suffix or '(none)'}; expected traces "
                      f"({', '.join(TRACE_SUFFIXES)}) or an image ({', '.join(IMAGE_SUFFIXES)})")
 
 
-def _load_mask(spec: str, kind: str):
+def _load_mask(spec: str, kind: str, max_pixels: int | None = None):
     if spec == "auto":
         return "auto"
     if spec == "none":
         return None
-    if kind == "image":
-        return _read_image_file(Path(spec), "--mask")
-    return read_polygon_file(spec, "--mask")
+    with reading(spec, "--mask"):
+        if kind == "image":
+            return _read_image_file(Path(spec), "--mask", max_pixels)
+        return read_polygon_file(spec, "--mask")
 
 
-def _read_image_file(path: Path, what: str):
+def _read_image_file(path: Path, what: str, max_pixels: int | None = None):
+    """The image at ``path``, once its header is within the pixel limit (``--max-pixels``)."""
     from .fractal import read_image
+    from .image_limits import check_image_pixels
+
+    check_image_pixels(path, max_pixels)
 
     try:
         return read_image(path)
@@ -88,6 +93,7 @@ def _read_image_file(path: Path, what: str):
         raise InputError(f"{path}: cannot read the {what} image: {exc.strerror or exc}") from exc
 
 
+@reads("file")
 def compute(args, document=None) -> tuple[dict, object, dict]:
     """Read, count and fit; return the JSON document, the BoxCount and the settings used.
     ``document``: the validated config to take ``[fractal]`` from instead of loading
@@ -97,7 +103,7 @@ def compute(args, document=None) -> tuple[dict, object, dict]:
 
     path = Path(args.file)
     t0 = time.perf_counter()
-    kind, data = _load_input(path)
+    kind, data = _load_input(path, getattr(args, "max_pixels", None))
     if kind == "image" and args.grid is not None:
         raise InputError("--grid applies to traces; an image is counted on its own pixel grid")
     if kind == "image" and args.window is not None:
@@ -112,7 +118,7 @@ def compute(args, document=None) -> tuple[dict, object, dict]:
                              "pixels a side can be box-counted — downsample it first")
     settings = _resolve_settings(args, padded_side(*data.shape) if kind == "image" else None,
                                  document)
-    mask = _load_mask(args.mask, kind)
+    mask = _load_mask(args.mask, kind, getattr(args, "max_pixels", None))
     t1 = time.perf_counter()
     try:
         result = box_count(data, kind=kind, grid=settings.grid, method=settings.method,
@@ -149,11 +155,11 @@ def produce(args, out_dir=None, document=None):
         from .manifest import build_manifest
 
         t0 = time.perf_counter()
-        with output_folder(out_dir) as out, ExitStack() as stack:
+        with output_set(out_dir) as out, ExitStack() as stack:
             # every file is renamed into place only if all of them were written
             png = stack.enter_context(atomic_path(out / "boxcount.png"))
             js = stack.enter_context(atomic_path(out / "boxcount.json"))
-            plot_box_count(result, png, title=f"{Path(args.file).name}: box counting")
+            plot_box_count(result, png, title=f"{plot_text(Path(args.file).name)}: box counting")
             atomic_write_json(js, data)
             timings = {**extra["timings"], "write_s": time.perf_counter() - t0}
             manifest = build_manifest(command=args.argv,

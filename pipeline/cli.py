@@ -66,6 +66,13 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         _error(args.command, "interrupted", "stopped by the user; no partial output was written")
         return 130
+    except MemoryError:  # its message is empty: say what happened
+        if args.debug:
+            raise
+        _error(args.command, "failed", "out of memory: the input or the settings need more memory "
+                                       "than this machine has; use a smaller input or settings "
+                                       "(run with --debug for the traceback)")
+        return EXIT_FAILURE
     except Exception as exc:  # noqa: BLE001 - the CLI's last line of defence maps to exit 1
         if args.debug:
             raise

@@ -347,6 +347,8 @@ def load_config(path: str | os.PathLike, model: type[BaseModel] = RockmassConfig
             if 1 <= lineno <= len(lines):
                 message += f"; line {lineno} is: {lines[lineno - 1].strip()[:80]}"
         raise ConfigError(shown, [("<file>", message)]) from exc
+    except RecursionError as exc:  # arrays or tables nested thousands deep (issue 18)
+        raise ConfigError(shown, [("<file>", "invalid TOML: nested too deeply to be read")]) from exc
     try:
         return model.model_validate(data)
     except ValidationError as exc:

@@ -31,7 +31,7 @@ __all__ = ["UNITS", "Key", "config_keys", "config_reference", "write_config_refe
 
 #: Unit of a key, by suffix (longest first): the naming rule that puts the unit in the name.
 UNITS = (("m_per_px", "m/px"), ("_kg_m3", "kg/m³"), ("_m_s2", "m/s²"), ("_pa_m", "Pa/m"),
-         ("_m2", "m²"), ("_m3", "m³"), ("_m_s", "m/s"), ("_pa", "Pa"), ("_deg", "°"), ("_hz", "Hz"),
+         ("_n_m2", "N/m²"), ("_n_m", "N/m"), ("_n", "N"), ("_m2", "m²"), ("_m3", "m³"), ("_m_s", "m/s"), ("_pa", "Pa"), ("_deg", "°"), ("_hz", "Hz"),
          ("_px", "px"), ("_s", "s"), ("_m", "m"))
 
 _TITLE = "rockmass configuration reference"

@@ -13,10 +13,13 @@ from __future__ import annotations
 
 import time
 
-from .errors import InputError
-from .outputs import output_folder
+from .errors import InputError, reading
+from .outputs import output_set
 
 __all__ = ["realization_summary", "compute", "validation_document", "produce"]
+
+#: names ``rockmass dfn`` may write besides those of the new set (more realizations, a fit).
+_OWNED = (r"realization_\d{4,}", r"fitted\.json")
 
 
 def _check_flag(value, flag: str, low: int, high: int | None = None) -> None:
@@ -57,21 +60,17 @@ def _read_field_data(config_path, fit_cfg):
     scanlines, faces = [], []
     for k, name in enumerate(fit_cfg.scanlines):
         path = fit_cfg.path(name, config_path)
-        try:
+        with reading(path, f"dfn.fit.scanlines[{k}]", config=config_path):
             scanlines.append(read_scanline(path))
-        except (OSError, ValueError) as exc:
-            raise InputError(f"{config_path}: dfn.fit.scanlines[{k}]: {path}: {exc}") from exc
         if fit_cfg.validate_ and scanlines[-1].start_xyz_m is None:
             raise InputError(f"{config_path}: dfn.fit.validate: {path} has no start point (start_xyz_m in its "
                              "header); validate re-samples realizations along each scanline")
     for k, face in enumerate(fit_cfg.faces):
         path = fit_cfg.path(face.file, config_path)
-        try:
+        with reading(path, f"dfn.fit.faces[{k}].file", config=config_path):
             trace_map = read_traces(path)
             faces.append(FaceSurvey.from_dip(trace_map, face.dip_deg, face.dip_direction_deg, face.point_m,
                                               name=str(face.file)))
-        except (OSError, ValueError) as exc:
-            raise InputError(f"{config_path}: dfn.fit.faces[{k}].file: {path}: {exc}") from exc
         if fit_cfg.validate_ and face.point_m is None:
             raise InputError(f"{config_path}: dfn.fit.faces[{k}].point_m: required with validate = true "
                              "(the world position of the face frame's origin)")
@@ -135,6 +134,7 @@ def compute(args, document=None):
             raise InputError(f"{args.config}: dfn.sets[{j}]: {exc}") from exc
     seed = cfg.seed if args.seed is None else args.seed
     count = cfg.realizations if args.realizations is None else args.realizations
+    _check_memory_budget(args.config, cfg, specs, len(specs) - len(cfg.sets), count)
     indices = list(range(args.first, args.first + count))
     t1 = time.perf_counter()
     results = []
@@ -145,6 +145,28 @@ def compute(args, document=None):
                 bar(done)
     t2 = time.perf_counter()
     return document, specs, seed, results, {"load_s": t1 - t0, "generate_s": t2 - t1}, fit
+
+
+def _check_memory_budget(config_path, cfg, specs, n_fitted: int, count: int) -> None:
+    """Refuse, before any realization is drawn, a network whose outputs need more memory than the
+    limit (:mod:`rockmass.budgets`), naming the set that needs most. A count above
+    ``max_fractures`` is left to the generator, whose message names that field."""
+    from .budgets import check_memory, dfn_memory_bytes
+    from .dfn.generation import expected_counts
+
+    try:
+        expected = [float(n) for n in expected_counts(specs, cfg.domain_m())]
+    except ValueError:  # a bad domain or set: the generator says which
+        return
+    if not expected or sum(expected) > cfg.max_fractures:
+        return
+    j = max(range(len(expected)), key=expected.__getitem__)
+    field = "dfn.fit" if j < n_fitted else f"dfn.sets[{j - n_fitted}].intensity"
+    check_memory(dfn_memory_bytes(expected, count, [s.n_vertices for s in specs]),
+                 f"{config_path}: {field}",
+                 f"{count} realization(s) of about {sum(expected):.3g} fractures "
+                 f"({expected[j]:.3g} in this set)",
+                 "lower the intensity, the domain, the realizations or n_vertices")
 
 
 def _realization(args, cfg, specs, fit, field, seed: int, i: int) -> tuple:
@@ -198,7 +220,7 @@ def produce(args, out_dir, document=None):
 
     document, specs, seed, results, timings, fit = computed = compute(args, document)
     t0 = time.perf_counter()
-    with output_folder(out_dir) as out, ExitStack() as stack:
+    with output_set(out_dir, owns=_OWNED) as out, ExitStack() as stack:
         if fit is not None:
             atomic_write_json(stack.enter_context(atomic_path(out / "fitted.json")), fit.as_dict())
         for index, network, summary, rows in results:

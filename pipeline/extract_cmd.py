@@ -17,6 +17,7 @@ import argparse
 import sys
 
 from .extract_stage import produce
+from .image_limits import pixel_limit_arg
 from .outputs import print_json
 
 __all__ = ["add_parser", "run"]
@@ -49,11 +50,17 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="look for bright joints (filled joints, veins, mortar) instead of dark ones; "
                         "set --joint-width to their full width (about 8 px for the mortar of "
                         "skimage's brick photo), or recessed joints split into their two bright rims")
+    p.add_argument("--detector", choices=("ridge", "learned"), dest="detector",
+                   help="joint detector: 'ridge' (multi-scale ridge filter, default) or 'learned' "
+                        "(the shipped pixel classifier; see docs/imaging.md §3.1)")
     p.add_argument("--sets", type=int, dest="n_sets", help="number of joint sets (default: by BIC)")
     p.add_argument("--config", help="TOML file; its [imaging] section sets scale, width and params")
     # its own destination: ``rockmass --debug`` (tracebacks) is the global flag of the same name
     p.add_argument("--debug", "--debug-images", dest="debug_images", action="store_true",
                    help="also write the intermediate images")
+    p.add_argument("--max-pixels", type=pixel_limit_arg, dest="max_pixels", metavar="N",
+                   help="refuse images above N pixels, read from the file's header before decoding "
+                        "(default 100000000, or the environment variable ROCKMASS_MAX_PIXELS)")
     p.add_argument("--json", action="store_true", help="print summary.json on stdout")
     p.set_defaults(handler=run)
     return p

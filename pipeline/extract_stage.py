@@ -15,12 +15,15 @@ import time
 import warnings
 from pathlib import Path
 
-from .errors import InputError
+from .errors import InputError, reading, reads
 from .inputs import read_polygon_file
-from .outputs import output_folder
+from .outputs import output_set, plot_text
 from .traces_stage import dimension_entry
 
 __all__ = ["compute", "produce"]
+
+#: names ``rockmass extract`` may write besides those of the new set (``--debug-images``).
+_OWNED = (r"debug_.+\.png",)
 
 
 def _settings(args, document=None):
@@ -40,9 +43,12 @@ def _settings(args, document=None):
             values[key] = getattr(args, key)
     if args.bright_lines:
         values["params"] = {**values["params"], "line_polarity": "bright"}
+    if getattr(args, "detector", None) is not None:  # ``rockmass run`` plans args without it
+        values["params"] = {**values["params"], "detector": args.detector}
     return values
 
 
+@reads("photo")
 def compute(args, document=None):
     """Extract and analyse; return (summary, extraction, traces with sets, image, set ids, timings,
     settings used). ``document``: the validated config to take ``[imaging]`` from instead of
@@ -54,6 +60,7 @@ def compute(args, document=None):
     from .dfn import trace_map_statistics
     from .fractal import box_count
     from .imaging import extract
+    from .image_limits import check_image_pixels
     from .imaging.enhance import read_photo
     from .imaging.extract import STEPS, ExtractParams
     from .progress import step_bar
@@ -61,6 +68,7 @@ def compute(args, document=None):
     settings = _settings(args, document)
     path = Path(args.photo)
     t0 = time.perf_counter()
+    check_image_pixels(path, getattr(args, "max_pixels", None))  # from the header, before decoding
     try:
         image = read_photo(path)
     except OSError as exc:
@@ -69,9 +77,11 @@ def compute(args, document=None):
         raise InputError(f"{path}: {exc}") from None
     roi = None
     if args.roi:
-        roi = {"uv_m": read_polygon_file(args.roi, "--roi")}
+        with reading(args.roi, "--roi"):
+            roi = {"uv_m": read_polygon_file(args.roi, "--roi")}
     elif args.roi_px:
-        roi = {"rc_px": read_polygon_file(args.roi_px, "--roi-px")[:, ::-1]}
+        with reading(args.roi_px, "--roi-px"):
+            roi = {"rc_px": read_polygon_file(args.roi_px, "--roi-px")[:, ::-1]}
     control = None
     if args.control_points:
         r1, c1, r2, c2, distance = args.control_points
@@ -125,8 +135,8 @@ def produce(args, out_dir, document=None):
     from .imaging.overlay import plot_overlay
     from .manifest import build_manifest
 
-    name = Path(args.photo).name
-    with output_folder(out_dir) as out, ExitStack() as stack:
+    name = plot_text(Path(args.photo).name)
+    with output_set(out_dir, owns=_OWNED) as out, ExitStack() as stack:
         files = ["traces.geojson", "summary.json", "overlay.png", "rose.png", "manifest.json"]
         files += [f"debug_{key}.png" for key in result.debug]
         paths = {f: stack.enter_context(atomic_path(out / f)) for f in files}

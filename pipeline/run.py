@@ -12,21 +12,24 @@ stage folder holds exactly the files that subcommand writes into its ``--out``, 
 
 Reuse. A stage's hash is the SHA-256 of its config section(s) (resolved: defaults filled in), the
 SHA-256 of every input file it reads, the hashes of the upstream stages it reads, and the rockmass
-version. ``DIR/<stage>/stage.json`` records it; when it matches and every output recorded there
-exists, the stage is reused (not recomputed) and the log says ``reused <stage> (hash …)``. A changed
+version. ``DIR/<stage>/stage.json`` records it and each output's SHA-256; when the hash matches and
+every output recorded there has its SHA-256 (a truncated or edited output does not), the stage is
+reused (not recomputed) and the log says ``reused <stage> (hash …)``. A changed
 setting changes its stage's hash and so every downstream hash: exactly those stages rerun.
 
 Atomicity. A stage writes into ``DIR/<stage>.partial/`` (every file atomically, ``stage.json``
-last), which then replaces ``DIR/<stage>/``; a killed stage never looks finished. ``run.json`` is
+last), which then replaces ``DIR/<stage>/``; a killed stage never looks finished, and the next run
+removes what it left (``<stage>.partial``, ``<stage>.old``, temporary files; a link named like
+them is removed, never written through). ``run.json`` is
 written atomically after the stages, then ``report.html`` (:func:`rockmass.run_report
 .write_run_report`), then ``manifest.json`` listing every file with its SHA-256.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
-import shutil
 import sys
 import time
 import types
@@ -35,14 +38,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .errors import ConfigError, InputError, RunError
+from .errors import ConfigError, InputError, RunError, reading
+from .outputs import PARTIAL_SUFFIX as _PARTIAL
+from .outputs import remove_entry, remove_write_debris
 from .run_config import REFERENCES, STAGES
 
 __all__ = ["RUN_FILE", "STAGE_FILE", "RunPlan", "StagePlan", "execute", "plan_run", "stage_hash"]
 
 STAGE_FILE = "stage.json"
 RUN_FILE = "run.json"
-_PARTIAL = ".partial"
 _OLD = ".old"
 
 
@@ -120,6 +124,61 @@ def _check_file(config_path, key: str, path: Path | None) -> None:
                          "config file)")
 
 
+def _check_photo(path: Path) -> None:
+    """The photo's header: within the pixel limit, and an image Pillow can open."""
+    from PIL import Image, UnidentifiedImageError
+
+    from .image_limits import check_image_pixels
+
+    check_image_pixels(path, option=None)  # run has no --max-pixels: the environment variable
+    try:
+        with Image.open(path) as image:
+            image.verify()
+    except (UnidentifiedImageError, SyntaxError) as exc:
+        raise InputError(f"not a readable image (JPEG, PNG or TIFF expected): {exc}") from exc
+
+
+def _read_traces(path: Path) -> None:
+    """The trace map, read whole (GeoJSON or CSV)."""
+    from .inputs import read_trace_file
+
+    read_trace_file(path)
+
+
+def _read_scanline(path: Path) -> None:
+    """The scanline survey, read whole."""
+    from .dfn.scanline import read_scanline
+
+    read_scanline(path)
+
+
+#: What planning reads of each kind of input file (the stages read them again, whole).
+_CONTENT_CHECKS = {"photo": _check_photo, "traces": _read_traces, "scanline": _read_scanline}
+
+
+def _check_contents(config_path, files: list[tuple[str, Path, str]]) -> None:
+    """Read what the stages will read before any runs (issue 18): each ``(field, path, kind)``
+    with its :data:`_CONTENT_CHECKS` reader; a problem is bad input naming the config, the field
+    and the file (by its name only, nothing quoted from it)."""
+    for field, path, kind in files:
+        with reading(path, field, config=config_path):
+            _CONTENT_CHECKS[kind](path)
+
+
+def _check_excavation_names(config_path, solve, blocks) -> None:
+    """The excavation stages ``[solve]`` removes exist in the run's ``[blocks]`` (by name or region
+    number), checked while planning: found by the solve stage, after the blocks were built, they
+    cost every stage before it (issue 18)."""
+    from types import SimpleNamespace
+
+    model = SimpleNamespace(region_names=("rock", *(e.name for e in blocks.excavations)))
+    for i, stage in enumerate(solve.stages):
+        try:
+            stage.regions(model)
+        except ValueError as exc:
+            raise _problem(config_path, f"solve.stages[{i}].excavate", str(exc)) from exc
+
+
 def plan_run(config_path, out_dir, document=None) -> RunPlan:
     """Validate a run config and plan its stages; raise before anything runs.
 
@@ -159,6 +218,9 @@ def plan_run(config_path, out_dir, document=None) -> RunPlan:
     photo, traces_file, scanline = (run.path(k, config_path) for k in ("photo", "traces", "scanline"))
     for key, path in (("run.photo", photo), ("run.traces", traces_file), ("run.scanline", scanline)):
         _check_file(config_path, key, path)
+    contents = [(key, path, kind) for key, path, kind in (
+        ("run.photo", photo, "photo"), ("run.traces", traces_file, "traces"),
+        ("run.scanline", scanline, "scanline")) if path is not None]
     trace_map = (out_dir.resolve() / "extract" / "traces.geojson" if photo is not None
                  else traces_file)
     as_written = {**document.model_dump(mode="json"), "run": run.model_dump(mode="json")}
@@ -230,11 +292,14 @@ def plan_run(config_path, out_dir, document=None) -> RunPlan:
         for i, name in enumerate(fit.scanlines):
             p = fit.path(name, config_path)
             _check_file(config_path, f"dfn.fit.scanlines[{i}]", p)
+            contents.append((f"dfn.fit.scanlines[{i}]", p, "scanline"))
             stage_files["dfn"].append(p)
         for i, face in enumerate(fit.faces):
             p = fit.path(face.file, config_path)
             if p != trace_map or photo is None:
                 _check_file(config_path, f"dfn.fit.faces[{i}].file", p)
+                if p != traces_file:
+                    contents.append((f"dfn.fit.faces[{i}].file", p, "traces"))
                 stage_files["dfn"].append(p)
             # scanline TOML beside a CSV is read by read_scanline: hash it too
         for p in list(stage_files["dfn"]):
@@ -247,6 +312,8 @@ def plan_run(config_path, out_dir, document=None) -> RunPlan:
         p = document.blocks.traces_path(config_path)
         if p is not None and (p != trace_map or photo is None):
             _check_file(config_path, "blocks.traces", p)
+            if p != traces_file:
+                contents.append(("blocks.traces", p, "traces"))
             stage_files["blocks"].append(p)
     if "solve" in needed:
         cfg = document.solve
@@ -254,12 +321,17 @@ def plan_run(config_path, out_dir, document=None) -> RunPlan:
         if p is not None:
             _check_file(config_path, "solve.blocks_file", p)
             stage_files["solve"].append(p)
+        elif document.blocks is not None:
+            _check_excavation_names(config_path, cfg, document.blocks)
         base = config_path.parent
         for i, v in enumerate(cfg.velocity_inputs):
             if v.history.type == "csv":
                 hp = v.history.path(base)
                 _check_file(config_path, f"solve.velocity_inputs[{i}].history.file", hp)
                 stage_files["solve"].append(hp)
+
+    read = {p for name in needed for p in stage_files[name]}  # files only unneeded stages read
+    _check_contents(config_path, [c for c in contents if c[1] in read])  # are not read
 
     sections = {
         "extract": {"imaging": _dump(document.imaging), "run.trace_sets": run.trace_sets},
@@ -378,6 +450,20 @@ def _run_stage(plan: RunPlan, stage: StagePlan, folder: Path, argv) -> dict:
     """Run one stage into ``folder`` with its subcommand's compute-and-write function; return
     notes for the log (e.g. a solver run that stopped). Every stage takes its settings from the
     planned document (what its hash was computed from), never from the config file again."""
+    source = _CONFIG_FILES.get(stage.name)
+    path = plan.document.run.path(source, plan.config_path) if source else None
+    if path is None:
+        return _run_stage_from(plan, stage, folder, argv)
+    with reading(path, f"run.{source}", config=plan.config_path):
+        return _run_stage_from(plan, stage, folder, argv)
+
+
+#: The ``[run]`` file each stage reads, if the config names it (errors name it by its name only).
+_CONFIG_FILES = {"extract": "photo", "traces": "traces", "boxcount": "traces", "scanline": "scanline"}
+
+
+def _run_stage_from(plan: RunPlan, stage: StagePlan, folder: Path, argv) -> dict:
+    """The work of :func:`_run_stage`."""
     doc = plan.document
     run = doc.run
     notes: dict = {}
@@ -463,18 +549,47 @@ def _outputs(folder: Path) -> list[str]:
                   if p.is_file() and p.name != STAGE_FILE)
 
 
+def _digests(folder: Path, outputs: list[str]) -> dict[str, str]:
+    """SHA-256 of each output (relative name -> hex digest), as recorded in stage.json."""
+    from .manifest import file_sha256
+
+    return {name: file_sha256(folder / name)[0] for name in outputs}
+
+
 def _reusable(folder: Path, digest: str) -> list[str] | None:
-    """The outputs recorded in ``folder/stage.json`` when its hash is ``digest`` and all exist."""
+    """The outputs recorded in ``folder/stage.json`` when its hash is ``digest`` and every output
+    is there with the SHA-256 recorded (a truncated or edited output is recomputed, issue 18)."""
+    if folder.is_symlink():  # a stage folder is the run's own: never one that points elsewhere
+        return None
     try:
         record = json.loads((folder / STAGE_FILE).read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
-    outputs = record.get("outputs")
-    if record.get("hash") != digest or not isinstance(outputs, list):
+    outputs, recorded = record.get("outputs"), record.get("sha256")
+    if record.get("hash") != digest or not isinstance(outputs, list) \
+            or not isinstance(recorded, dict) or set(recorded) != set(outputs):
         return None
-    if not all((folder / name).is_file() for name in outputs):
+    if not all((folder / name).is_file() and not (folder / name).is_symlink() for name in outputs):
+        return None
+    try:
+        if _digests(folder, outputs) != recorded:
+            return None
+    except InputError:  # unreadable: recompute
         return None
     return outputs
+
+
+def _clean_debris(out: Path) -> None:
+    """Remove what a killed run left in ``out``: staging folders ``<stage>.partial``, a previous
+    stage folder ``<stage>.old`` (put back if the stage folder itself is missing: a kill between the
+    two renames of :func:`_replace_folder`), and temporary files of the atomic writers."""
+    for name in STAGES:
+        folder, old = out / name, out / (name + _OLD)
+        remove_entry(out / (name + _PARTIAL))
+        if old.is_dir() and not old.is_symlink() and not os.path.lexists(folder):
+            os.replace(old, folder)
+        remove_entry(old)
+    remove_write_debris(out)
 
 
 def _log(message: str) -> None:
@@ -506,6 +621,7 @@ def _execute(plan: RunPlan, force: bool, argv, log: Callable[[str], None]) -> di
     out = plan.out_dir
     try:
         out.mkdir(parents=True, exist_ok=True)
+        _clean_debris(out)
     except OSError as exc:
         raise RunError(f"{out}: cannot create the output folder: {exc.strerror or exc}") from exc
     records, failures = [], []
@@ -520,8 +636,13 @@ def _execute(plan: RunPlan, force: bool, argv, log: Callable[[str], None]) -> di
             status = "ran"
             log(f"running {stage.name} ...")
             partial = out / (stage.name + _PARTIAL)
-            shutil.rmtree(partial, ignore_errors=True)
-            notes = _run_stage(plan, stage, partial, argv)
+            remove_entry(partial)  # a link is removed, never written through (issue 18)
+            try:
+                notes = _run_stage(plan, stage, partial, argv)
+            except BaseException:
+                with contextlib.suppress(OSError):
+                    remove_entry(partial)
+                raise
             if notes.get("failed"):
                 failures.append(f"{stage.name}: {notes['failed']}")
             outputs = _outputs(partial)
@@ -529,7 +650,8 @@ def _execute(plan: RunPlan, force: bool, argv, log: Callable[[str], None]) -> di
             atomic_write_json(partial / STAGE_FILE, {
                 "stage": stage.name, "hash": stage.hash, "rockmass_version": __version__,
                 "sections": stage.sections, "upstream": stage.upstream,
-                "inputs": [str(p) for p in stage.files], "outputs": outputs, "wall_s": wall})
+                "inputs": [str(p) for p in stage.files], "outputs": outputs,
+                "sha256": _digests(partial, outputs), "wall_s": wall})
             _replace_folder(partial, folder)
             log(f"ran {stage.name} in {wall:.2f} s (hash {stage.hash[:12]})")
         records.append({"name": stage.name, "dir": stage.name, "status": status, "hash": stage.hash,
@@ -560,11 +682,11 @@ def other_stage_folders(plan: RunPlan) -> list[str]:
 def _replace_folder(partial: Path, folder: Path) -> None:
     """Put the finished ``partial`` folder in place of ``folder`` (the old one removed after)."""
     old = folder.with_name(folder.name + _OLD)
-    shutil.rmtree(old, ignore_errors=True)
-    if folder.exists():
+    remove_entry(old)
+    if os.path.lexists(folder):
         os.replace(folder, old)
     os.replace(partial, folder)
-    shutil.rmtree(old, ignore_errors=True)
+    remove_entry(old)
 
 
 def _write_manifest(plan: RunPlan, document: dict, argv, failures: list[str],

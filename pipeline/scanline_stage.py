@@ -13,8 +13,8 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from .errors import InputError
-from .outputs import output_folder
+from .errors import InputError, reads
+from .outputs import output_set, plot_text
 
 __all__ = ["DEFAULT_SEED", "compute", "produce"]
 
@@ -32,6 +32,7 @@ def _check_args(args) -> None:
         raise InputError(f"--seed must be >= 0, got {args.seed}")
 
 
+@reads("file")
 def compute(args):
     """Read and analyse; return (summary dict, scanline, sets, timings)."""
     from .dfn.scanline import read_scanline
@@ -84,12 +85,12 @@ def produce(args, out_dir=None):
         if toml.is_file():
             inputs.append(str(toml))
         # all files renamed into place only when every one is written
-        with output_folder(out_dir) as out, ExitStack() as stack:
+        with output_set(out_dir) as out, ExitStack() as stack:
             paths = {name: stack.enter_context(atomic_path(out / name))
                      for name in ("stereonet.png", "summary.json", "manifest.json")}
             plot_stereonet(scanline.poles(), paths["stereonet.png"], membership=sets.membership,
                            set_fits=sets.fits, line_direction=scanline.direction,
-                           title=f"{Path(args.file).name}: poles (lower hemisphere, equal area)")
+                           title=f"{plot_text(Path(args.file).name)}: poles (lower hemisphere, equal area)")
             atomic_write_json(paths["summary.json"], summary)
             manifest = build_manifest(
                 command=args.argv, inputs=inputs,

@@ -12,14 +12,19 @@ The command (:mod:`rockmass.solve_cmd`) parses the arguments, calls :func:`produ
 
 from __future__ import annotations
 
-import re
 import time
 from pathlib import Path
 
-from .errors import ConfigError, InputError, RunError
-from .outputs import csv_text, output_folder
+from .errors import ConfigError, InputError, RunError, reading
+from .outputs import csv_text, output_set
 
 __all__ = ["prepare", "solve", "build_outputs", "produce"]
+
+#: names ``rockmass solve`` may write besides those of the new set, dropped with the old set
+#: rather than kept as the user's: the frames of an earlier solve (``blocks_0000.vtu`` …; a
+#: ParaView series must not mix two runs, issue 18) and outputs written only for some models
+#: (``bolts.csv``). A new optional output belongs here.
+_OWNED = (r"blocks_\d{4,}\.vtu", r"bolts\.csv")
 
 
 def prepare(config_path, document=None, model=None):
@@ -48,14 +53,11 @@ def prepare(config_path, document=None, model=None):
     elif path is not None:
         from .blockgen import check_model, read_json
 
-        try:
-            model = read_json(path)
-        except OSError as exc:
-            raise InputError(f"{config_path}: solve.blocks_file: cannot read {path}: "
-                             f"{exc.strerror or exc}") from exc
-        except (ValueError, KeyError, TypeError) as exc:
-            raise InputError(f"{config_path}: solve.blocks_file: {path} is not a valid blocks.json: "
-                             f"{exc}") from exc
+        with reading(path, "solve.blocks_file", config=config_path):  # names it, quotes nothing
+            try:
+                model = read_json(path)
+            except (KeyError, TypeError) as exc:
+                raise InputError(f"not a valid blocks.json: {exc}") from exc
         invariants = check_model(model)
         if not invariants["ok"]:
             raise InputError(f"{config_path}: solve.blocks_file: {path} fails the block-model "
@@ -201,7 +203,7 @@ def produce(args, out_dir, document=None, model=None, progress=None):
     doc = files["result.json"]
     doc["timings_s"] = dict(timings)
     names = list(files) + ["blocks.json", "manifest.json"]
-    with output_folder(out_dir) as out, ExitStack() as stack:
+    with output_set(out_dir, owns=_OWNED) as out, ExitStack() as stack:
         paths = {name: stack.enter_context(atomic_path(out / name)) for name in names}
         for name, content in files.items():
             if name == "result.json":
@@ -220,18 +222,6 @@ def produce(args, out_dir, document=None, model=None, progress=None):
                                   extra={"status": result.status, "diagnostic": result.diagnostic,
                                          "blocks_source": inputs["source"]})
         atomic_write_json(paths["manifest.json"], manifest)
-    _remove_stale_frames(Path(out_dir), set(files))
     return result, doc
 
 
-#: the frame files of ``rockmass solve`` (``blocks_0000.vtu`` …), as :func:`build_outputs` names them.
-_FRAME_NAME = re.compile(r"blocks_\d{4,}\.vtu")
-
-
-def _remove_stale_frames(folder: Path, written: set[str]) -> None:
-    """Remove frame files an earlier solve left in ``folder`` that the new set does not have: a
-    ParaView series must not mix two runs (issue 18). Runs after the new set is complete."""
-    for path in folder.iterdir():
-        if _FRAME_NAME.fullmatch(path.name) and path.name not in written and path.is_file() \
-                and not path.is_symlink():
-            path.unlink()

@@ -157,6 +157,39 @@ def init_worker() -> None:
     _WARM["seconds"] = time.perf_counter() - t0
 
 
+def _exit_with_parent(parent_pid: int, every_s: float = 0.5) -> None:
+    """End this worker process as soon as ``parent_pid`` is no longer its parent (the study was
+    killed, even by SIGKILL, which no handler sees): a daemon thread polls :func:`os.getppid`."""
+    import threading
+
+    def watch() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(every_s)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="rockmass-parent-watch", daemon=True).start()
+
+
+def _init_pool_worker(parent_pid: int) -> None:
+    """Initializer of a local pool's worker: end with the study (:func:`_exit_with_parent`), then
+    :func:`init_worker`."""
+    _exit_with_parent(parent_pid)
+    init_worker()
+
+
+def _stop_pool(pool) -> None:
+    """Cancel the queued cases and end the pool's worker processes now (a case they were running is
+    abandoned; a re-run of the study runs it again). ``ProcessPoolExecutor`` has no public way to
+    end busy workers, hence its ``_processes``."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        if process.is_alive():
+            process.terminate()
+    for process in processes:
+        process.join(timeout=5)
+
+
 def dask_worker_plugin():
     """A Dask ``WorkerPlugin`` that runs :func:`init_worker` once on every worker of the cluster,
     including workers that join later (``client.register_plugin``)."""
@@ -661,7 +694,7 @@ def run_tasks(tasks: list[dict], on_done: Callable[[dict], None], *, workers: in
     try:
         pool = ProcessPoolExecutor(max_workers=workers,
                                    mp_context=multiprocessing.get_context("spawn"),
-                                   initializer=init_worker)
+                                   initializer=_init_pool_worker, initargs=(os.getpid(),))
         try:
             futures = {pool.submit(run_case, t): t for t in _longest_first(tasks)}
             pending = set(futures)
@@ -669,8 +702,8 @@ def run_tasks(tasks: list[dict], on_done: Callable[[dict], None], *, workers: in
                 done, pending = wait(pending, return_when=FIRST_COMPLETED)
                 for fut in sorted(done, key=lambda f: futures[f]["case"]):
                     on_done(_result(fut, futures[fut]))
-        except BaseException:
-            pool.shutdown(wait=False, cancel_futures=True)
+        except BaseException:  # Ctrl-C, SIGTERM (study_cmd makes it one), a failing callback
+            _stop_pool(pool)
             raise
         pool.shutdown(wait=True)
     finally:

@@ -36,9 +36,11 @@ local pool of ``--workers`` processes (default: the number of CPUs), or serially
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 import time
+from collections.abc import Iterator
 
 from .errors import InputError, RunError
 
@@ -133,11 +135,40 @@ def _write_case_config(folder, case, config_path) -> None:
                       + toml_text(standalone_config(case, config_path)))
 
 
+def _remove_debris(out) -> None:
+    """Temporary files that a killed study left in ``out`` and its case folders."""
+    from .outputs import remove_write_debris
+
+    for folder in [out, *sorted((out / "cases").glob("*/"))]:
+        if folder.is_dir() and not folder.is_symlink():
+            remove_write_debris(folder)
+
+
+@contextlib.contextmanager
+def _terminate_as_interrupt() -> Iterator[None]:
+    """Within the block, SIGTERM stops the study as Ctrl-C does (its workers ended, the finished
+    cases kept, exit 130) instead of killing this process and leaving its pool workers behind."""
+    import signal
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    try:
+        previous = signal.signal(signal.SIGTERM, interrupt)
+    except ValueError:  # not the main thread: leave signals alone
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def run(args) -> int:
     """Handler of ``rockmass study``."""
     from .atomic import atomic_write_json, atomic_write_text
     from .manifest import build_manifest
-    from .outputs import output_folder, print_json
+    from .outputs import output_folder, print_json, refuse_links
     from .solver.result import FAILED_STATUSES
     from .study import (CASE_FILE, RESULTS_FILE, RETRIED, case_cost, csv_text,
                         displacement_m, load_finished, outcome_counts, outcome_summary,
@@ -154,6 +185,8 @@ def run(args) -> int:
     from pathlib import Path
 
     out_path = Path(args.out)
+    if out_path.is_dir():  # never write (or read cases) through a link inside --out (issue 18)
+        refuse_links(out_path, ["cases", *(f"cases/{c.short_id}" for c in cases)])
     finished = load_finished(out_path, cases) if out_path.is_dir() else {}
     pending = [c for c in cases if c.case_id not in finished]
     if args.list:
@@ -182,6 +215,8 @@ def run(args) -> int:
     executor = "none"
     status = "interrupted"
     interrupted = False
+    if out_path.is_dir():
+        _remove_debris(out_path)
     with output_folder(args.out) as out:
         def write_results():
             header, rows = results_rows(cases, {**finished, **failed}, study.displacement)
@@ -225,8 +260,9 @@ def run(args) -> int:
         write_results()
         t_run = time.perf_counter()
         try:
-            executor = run_tasks(tasks, on_done, workers=workers, scheduler=scheduler,
-                                 client=client)
+            with _terminate_as_interrupt():
+                executor = run_tasks(tasks, on_done, workers=workers, scheduler=scheduler,
+                                     client=client)
             stopped = [r for r in finished.values() if r.get("status") in FAILED_STATUSES]
             status = "complete" if not failed and not stopped else "failed cases"
         except KeyboardInterrupt:

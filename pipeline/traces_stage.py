@@ -13,9 +13,9 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from .errors import InputError
+from .errors import InputError, reading, reads
 from .inputs import read_polygon_file, read_trace_file
-from .outputs import output_folder
+from .outputs import output_set, plot_text
 
 __all__ = ["dimension_entry", "compute", "produce"]
 
@@ -27,6 +27,7 @@ def dimension_entry(result) -> dict:
             "offsets_min": result.offset_range[0], "offsets_max": result.offset_range[1]}
 
 
+@reads("file")
 def compute(args):
     """Read and analyse; return (summary dict, trace map, timings)."""
     from .dfn import trace_map_statistics
@@ -34,7 +35,10 @@ def compute(args):
 
     t0 = time.perf_counter()
     trace_map = read_trace_file(Path(args.file))
-    window = read_polygon_file(args.area, "--area") if args.area else None
+    window = None
+    if args.area:
+        with reading(args.area, "--area"):
+            window = read_polygon_file(args.area, "--area")
     if trace_map.n_traces == 0:
         raise InputError(f"{args.file}: the map holds no traces")
     if window is not None:
@@ -70,14 +74,14 @@ def produce(args, out_dir=None):
         traces = summary["traces"]
         set_means = [s["Mean Angle"]["value"] for s in summary["sets"]]
         # all files renamed into place only when every one is written
-        with output_folder(out_dir) as out, ExitStack() as stack:
+        with output_set(out_dir) as out, ExitStack() as stack:
             paths = {name: stack.enter_context(atomic_path(out / name))
                      for name in ("rose.png", "traces.png", "summary.json", "manifest.json")}
             rose_diagram(np.array(traces["angle_deg"], dtype=float),
                          np.array(traces["length"], dtype=float), paths["rose.png"],
-                         set_means_deg=set_means, title=f"{Path(args.file).name}: trace orientations")
+                         set_means_deg=set_means, title=f"{plot_text(Path(args.file).name)}: trace orientations")
             plot_trace_map(trace_map, paths["traces.png"], set_ids=np.array(traces["set"]),
-                           title=f"{Path(args.file).name}: traces by set")
+                           title=f"{plot_text(Path(args.file).name)}: traces by set")
             atomic_write_json(paths["summary.json"], summary)
             manifest = build_manifest(
                 command=args.argv, inputs=[args.file] + ([args.area] if args.area else []),

@@ -62,3 +62,34 @@ def test_p21_error_is_relative_length_error():
                                       for p in (truth.polyline(i) for i in range(6))], window=WINDOW)
     assert trace_accuracy(shorter, truth, m_per_px=0.05).p21_rel_error == pytest.approx(0.0)
     assert trace_accuracy(longer, truth, m_per_px=0.05).p21_rel_error == pytest.approx(0.1)
+
+
+def test_raster_match_scores_parallel_lines_by_their_distance():
+    from rockmass.imaging.metrics import raster_match
+
+    a = np.zeros((30, 40), bool)
+    a[10, 5:35] = True
+    b = np.zeros((30, 40), bool)
+    b[14, 5:35] = True  # 4 px away
+    assert raster_match(a, b, tolerance_px=5.0) == (1.0, 1.0, 1.0)
+    assert raster_match(a, b, tolerance_px=3.0)[2] == 0.0
+
+
+def test_raster_match_of_half_a_line_has_precision_one_and_recall_near_one_half():
+    from rockmass.imaging.metrics import raster_match
+
+    truth = np.zeros((20, 101), bool)
+    truth[10, :100] = True
+    half = np.zeros_like(truth)
+    half[10, :50] = True
+    precision, recall, _ = raster_match(half, truth, tolerance_px=5.0)
+    assert precision == 1.0 and recall == pytest.approx(55 / 100)  # the tolerance reaches 5 px on
+
+
+def test_raster_match_with_nothing_extracted_has_recall_zero():
+    from rockmass.imaging.metrics import raster_match
+
+    truth = np.zeros((10, 10), bool)
+    truth[5, 2:8] = True
+    precision, recall, f1 = raster_match(np.zeros_like(truth), truth)
+    assert np.isnan(precision) and recall == 0.0 and f1 == 0.0

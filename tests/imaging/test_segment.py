@@ -60,3 +60,16 @@ def test_roi_outside_the_image_raises_naming_roi():
 def test_zero_response_raises():
     with pytest.raises(ValueError, match="zero everywhere"):
         robust_thresholds(np.zeros((5, 5)), low_k=1, high_k=2)
+
+
+def test_hysteresis_mask_keeps_only_pieces_holding_a_strong_pixel():
+    from rockmass.imaging.segment import hysteresis_mask
+
+    response = np.zeros((9, 20))
+    response[2, 2:18] = 0.6  # weak line with one strong pixel: kept whole
+    response[2, 9] = 0.95
+    response[6, 2:18] = 0.6  # weak line alone: dropped
+    mask = hysteresis_mask(response, low=0.5, high=0.9, min_size_px=1)
+    assert mask[2].sum() == 16 and mask[6].sum() == 0 and mask.sum() == 16
+    with pytest.raises(ValueError, match="low"):
+        hysteresis_mask(response, low=0.9, high=0.5)

@@ -96,9 +96,9 @@ def test_shaketable_sample_builds_its_settings():
 @pytest.mark.slow
 def test_ahola_shaketable_threshold_between_11p7_and_15p5_mm():
     """Varma et al. (2019) §3: four cycles at each of 3.8, 7.6, 11.7 and 15.5 mm — the blocks
-    slipped only at 15.5 mm. Here: two cycles each; the top-left block's displacement relative to
-    the table grows by less than 0.1 mm over the 11.7 mm level (settling, elastic) and by more
-    than twice that over the 15.5 mm level."""
+    slipped only at 15.5 mm. The same four cycles each here: the top-left block's displacement
+    relative to the table grows by less than 0.1 mm over the 11.7 mm level (settling) and by more
+    than three times that over the 15.5 mm level (measured 0.045 and 0.186 mm)."""
     import sys
 
     sys.path.insert(0, str(SAMPLES.parent / "benchmarks"))
@@ -106,10 +106,10 @@ def test_ahola_shaketable_threshold_between_11p7_and_15p5_mm():
 
     model, settings = load()
     frequency = next(v.history.frequency_hz for v in settings.velocity_inputs)
-    out, _ = shaking(model, settings, LEVELS_M, frequency, 2)
+    out, _ = shaking(model, settings, LEVELS_M, frequency, 4)
     assert out["status"] == "ok"
-    end = {r["level_mm"]: r["slip_mm"] for r in out["rows"] if r["cycle"] == 2}
+    end = {r["level_mm"]: r["slip_mm"] for r in out["rows"] if r["cycle"] == 4}
     grow_11p7 = end[11.7] - end[7.6]
     grow_15p5 = end[15.5] - end[11.7]
     assert grow_11p7 < 0.1
-    assert grow_15p5 > 2 * grow_11p7 and grow_15p5 > 0.15
+    assert grow_15p5 > 3 * grow_11p7

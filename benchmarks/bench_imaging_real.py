@@ -1,0 +1,185 @@
+"""Photo -> traces on real labelled photographs (validation only), and on synthetic faces.
+
+    python benchmarks/bench_imaging_real.py [--quick] [--detectors ridge,learned] [--no-synthetic]
+
+1. Real faces: ``../shared/data/rock-face-fractures/val`` (44 natural rock faces, 300-400 px, with
+   hand-traced major fractures painted red about 5 px wide; AGPL-3.0, read from the shared data
+   folder, never copied into the package and never trained on). Labels are skeletonised (the red
+   strokes only; the label files' 1-px white frame is not a label), the extracted traces are drawn
+   as 1-px lines, and each image is scored by :func:`rockmass.imaging.metrics.raster_match` at a
+   5 px tolerance (docs/imaging.md §8, eqs. (8.5)-(8.6)). Rows give the mean over images of F1,
+   precision and recall (F1 = 0 for an image with nothing drawn), the pooled ("micro") F1 over all
+   pixels, dP21 = drawn / labelled line length - 1 over all images (lengths as 1-px line pixel
+   counts, %), and the extraction time per image. When the folder is absent the section is skipped with a
+   message (exit code 0). ``ROCKMASS_REAL_DATA`` points at another copy.
+2. Synthetic faces, the two generators (1000 x 1500 px, 0.008 m/px; seeds 1-3, not the tuning seeds
+   100+ nor the training seeds of the learned model, 10_000+): the chain's own "moderate" faces
+   (:func:`rockmass.imaging.synthetic_face`) and field-like faces
+   (:func:`rockmass.imaging.synthetic_field.field_face`), buffered F1 at 3 px, dP21, run time.
+
+3. Throughput (not with ``--quick``): one 12 MP moderate face (4000 x 3000 px, processed
+   down-sampled to the default 4 MP), whole ``extract`` call per detector, MP/s of the input.
+
+The header names the shipped model file and its size. Rows also go to
+benchmarks/results/bench_imaging_real.json (``..._quick.json`` with ``--quick``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from _common import header, save, table
+
+DATA = Path(os.environ.get("ROCKMASS_REAL_DATA",
+                           Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+                           / "rock-face-fractures")).resolve()
+TOLERANCE_PX = 5.0
+
+REAL_COLUMNS = [("detector", "s"), ("setting", "s"), ("images", "d"), ("F1", ".3f"), ("P", ".3f"),
+                ("R", ".3f"), ("F1_pooled", ".3f"), ("dP21_pct", "+.0f"), ("s_per_image", ".2f")]
+SYNTH_COLUMNS = [("detector", "s"), ("faces", "s"), ("F1", ".3f"), ("P", ".3f"), ("R", ".3f"),
+                 ("dP21_%", "+.1f"), ("time_s", ".2f")]
+
+
+def label_skeleton(path: Path) -> np.ndarray:
+    """Skeleton of the red strokes of a label image (bool mask)."""
+    import cv2
+    from skimage.morphology import skeletonize
+
+    bgr = cv2.imread(str(path), cv2.IMREAD_COLOR)
+    if bgr is None:
+        raise OSError(f"{path}: cannot read the label image")
+    red = (bgr[..., 2] > 128) & (bgr[..., 1] < 100) & (bgr[..., 0] < 100)
+    return skeletonize(red)
+
+
+def real_pairs(split: str = "val") -> list[tuple[Path, Path]]:
+    """(image, label) paths of one split of the labelled set, sorted by name."""
+    images = sorted((DATA / split / "images").glob("*.jpg"))
+    return [(p, DATA / split / "labels" / f"{p.stem}.png") for p in images]
+
+
+def score_real(pairs, params, joint_width_px: float) -> dict:
+    """Mean and pooled scores of one setting over the labelled images."""
+    import cv2
+
+    from rockmass.imaging.extract import extract
+    from rockmass.imaging.metrics import raster_counts, render_traces
+
+    counts, elapsed = [], 0.0
+    for image_path, label_path in pairs:
+        truth = label_skeleton(label_path)
+        image = cv2.imread(str(image_path), cv2.IMREAD_COLOR)[..., ::-1]  # RGB, as read_photo
+        t0 = time.perf_counter()
+        result = extract(image, m_per_px=1.0, joint_width_px=joint_width_px, params=params)
+        elapsed += time.perf_counter() - t0
+        drawn = render_traces(result.traces, truth.shape, 1.0)
+        counts.append(raster_counts(drawn, truth, tolerance_px=TOLERANCE_PX))
+    c = np.array(counts, dtype=float).reshape(-1, 4)  # matched drawn, drawn, matched true, true
+    with np.errstate(invalid="ignore", divide="ignore"):
+        p, r = c[:, 0] / c[:, 1], c[:, 2] / c[:, 3]
+        f = np.where(p + r > 0, 2 * p * r / (p + r), 0.0)
+    pp, pr = c[:, 0].sum() / max(c[:, 1].sum(), 1), c[:, 2].sum() / max(c[:, 3].sum(), 1)
+    return dict(images=len(pairs), F1=float(np.nanmean(f)), P=float(np.nanmean(p)),
+                R=float(np.nanmean(r)), F1_pooled=float(2 * pp * pr / max(pp + pr, 1e-12)),
+                dP21_pct=float(100 * (c[:, 1].sum() / max(c[:, 3].sum(), 1) - 1)),
+                s_per_image=elapsed / max(len(pairs), 1))
+
+
+def score_synthetic(make_face, seeds, params) -> dict:
+    """Mean buffered scores (3 px) and dP21 of one setting over synthetic faces."""
+    from rockmass.imaging.extract import extract
+    from rockmass.imaging.metrics import trace_accuracy
+
+    rows = []
+    for seed in seeds:
+        face = make_face(seed)
+        t0 = time.perf_counter()
+        result = extract(face.image, m_per_px=face.m_per_px, params=params)
+        elapsed = time.perf_counter() - t0
+        acc = trace_accuracy(result.traces, face.truth,
+                             m_per_px=face.m_per_px / result.scale.work_factor)
+        rows.append((acc.f1, acc.precision, acc.recall, 100 * acc.p21_rel_error, elapsed))
+    f1, p, r, dp21, t = np.mean(rows, axis=0)
+    return {"F1": f1, "P": p, "R": r, "dP21_%": dp21, "time_s": t}
+
+
+def main(argv=None) -> int:
+    import cv2
+
+    from rockmass.imaging.extract import ExtractParams, extract
+    from rockmass.imaging.learned import MODEL_FILE
+
+    cv2.setNumThreads(1)
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="12 real images, one synthetic seed")
+    parser.add_argument("--detectors", default="ridge,learned",
+                        help="comma-separated ExtractParams.detector values (default both)")
+    parser.add_argument("--no-synthetic", action="store_true", help="real images only")
+    args = parser.parse_args(argv)
+    detectors = [d.strip() for d in args.detectors.split(",") if d.strip()]
+
+    print(header("photo -> traces on real labelled faces (val) and synthetic faces"))
+    print(f"learned model: {MODEL_FILE.name}, {MODEL_FILE.stat().st_size} bytes")
+    payload: dict = {"data": str(DATA), "tolerance_px": TOLERANCE_PX, "real": [], "synthetic": []}
+    pairs = real_pairs("val") if (DATA / "val" / "images").is_dir() else []
+    if not pairs:
+        print(f"\n1. real faces: skipped, no labelled images at {DATA / 'val'} "
+              "(set ROCKMASS_REAL_DATA to a copy of rock-face-fractures)")
+    else:
+        pairs = pairs[:12] if args.quick else pairs
+        settings = [("defaults, joint width 3", {}, 3.0)]
+        rows = []
+        for detector in detectors:
+            for label, extra, width in settings:
+                row = score_real(pairs, ExtractParams(detector=detector, **extra), width)
+                rows.append({"detector": detector, "setting": label, **row})
+        print(f"\n1. real faces: {DATA / 'val'} ({len(pairs)} images, labels skeletonised, "
+              f"{TOLERANCE_PX:g} px tolerance; F1, P, R are means over images)")
+        print(table(rows, REAL_COLUMNS))
+        payload["real"] = rows
+
+    if not args.no_synthetic:
+        from rockmass.imaging.synthetic import synthetic_face
+        from rockmass.imaging.synthetic_field import field_face
+
+        seeds = [1] if args.quick else [1, 2, 3]
+        makers = {"moderate (synthetic_face)":
+                  lambda s: synthetic_face("moderate", seed=s, shape_px=(1000, 1500), m_per_px=0.008),
+                  "field-like (field_face)":
+                  lambda s: field_face(seed=s, shape_px=(1000, 1500), m_per_px=0.008)}
+        rows = []
+        for name, make in makers.items():
+            for detector in detectors:
+                rows.append({"detector": detector, "faces": f"{name}, seeds {seeds}",
+                             **score_synthetic(make, seeds, ExtractParams(detector=detector))})
+        print("\n2. synthetic faces (1000 x 1500 px; buffered F1 at 3 px, means over seeds)")
+        print(table(rows, SYNTH_COLUMNS))
+        payload["synthetic"] = rows
+    if not args.quick:
+        from rockmass.imaging.synthetic import synthetic_face
+
+        face = synthetic_face("moderate", seed=1, shape_px=(3000, 4000), m_per_px=0.003)
+        rows = []
+        for detector in detectors:
+            t0 = time.perf_counter()
+            extract(face.image, m_per_px=face.m_per_px, params=ExtractParams(detector=detector))
+            elapsed = time.perf_counter() - t0
+            rows.append({"detector": detector, "MP": face.image.size / 1e6, "time_s": elapsed,
+                         "MP_per_s": face.image.size / 1e6 / elapsed})
+        print("\n3. throughput (12 MP moderate face, down-sampled to 4 MP; one core)")
+        print(table(rows, [("detector", "s"), ("MP", ".1f"), ("time_s", ".2f"), ("MP_per_s", ".2f")]))
+        payload["throughput"] = rows
+    path = save("bench_imaging_real_quick" if args.quick else "bench_imaging_real", payload)
+    print(f"\nrows saved to {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

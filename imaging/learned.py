@@ -1,0 +1,184 @@
+"""The learned joint detector: small multilayer perceptrons giving, per pixel, the probability of
+lying on a joint's centre line (docs/imaging.md §3.1).
+
+Stage 1 reads the features of :func:`rockmass.imaging.features.pixel_features`; stage 2 reads the
+same features and the context of stage 1's probability map
+(:func:`rockmass.imaging.features.context_features`: is the pixel on a long run of likely pixels?),
+as in auto-context (Tu & Bai 2010). Each stage standardises its inputs by the training set's mean
+and standard deviation, clips them to ±6, and applies two hidden layers of rectified linear units
+and a logistic output,
+
+    p = σ(w₃ᵀ relu(W₂ relu(W₁ z + b₁) + b₂) + b₃),   σ(t) = 1 / (1 + e^{−t})          (3.2)
+
+The stages are trained by :mod:`rockmass.imaging.train_pixel_model` on synthetic faces only
+(:func:`rockmass.imaging.synthetic_field.field_face` and
+:func:`rockmass.imaging.synthetic.synthetic_face`). The weights ship inside the package as a NumPy
+``.npz`` file (:data:`MODEL_FILE`, about 20 kB) read with ``allow_pickle=False``; nothing is
+downloaded. Inference is NumPy matrix products, in row blocks to bound memory.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .features import CONTEXT_NAMES, FEATURE_NAMES, context_features, pixel_features
+
+__all__ = ["MODEL_FILE", "MODEL_LINE_WIDTH_PX", "Stage", "PixelModel", "load_model", "model_input",
+           "joint_probability"]
+
+#: The shipped model, inside the installed package.
+MODEL_FILE = Path(__file__).resolve().parent / "models" / "joint_pixel_mlp.npz"
+#: Widest dark line kept out of the illumination estimate before the features (pixels).
+MODEL_LINE_WIDTH_PX = 12.0
+#: Standardised inputs are clipped to ± this many standard deviations.
+CLIP_SD = 6.0
+
+
+@dataclass(frozen=True, eq=False)
+class Stage:
+    """One perceptron of eq. (3.2).
+
+    Attributes
+    ----------
+    mean, std : (F,) float32 ndarray
+        Input standardisation.
+    weights, biases : tuple of ndarrays
+        Layer k maps ``x`` to ``x @ weights[k] + biases[k]``; ReLU between layers, logistic at the end.
+    """
+
+    mean: np.ndarray
+    std: np.ndarray
+    weights: tuple
+    biases: tuple
+
+    def predict(self, columns: np.ndarray, *, block: int = 262144) -> np.ndarray:
+        """Probability (float32, shape (N,)) for each column of (F, N) inputs.
+
+        Columns, not rows: the features of an image come as (F, H, W) maps, and
+        ``features.reshape(F, -1)`` is then a view; a (N, F) row array is passed as ``x.T``.
+        """
+        x = np.asarray(columns, dtype=np.float32)
+        if x.ndim != 2 or x.shape[0] != self.mean.size:
+            raise ValueError(f"inputs must be ({self.mean.size}, N) columns, got shape {x.shape}")
+        mean, std = self.mean[:, None], self.std[:, None]
+        out = np.empty(x.shape[1], dtype=np.float32)
+        for start in range(0, x.shape[1], block):
+            z = np.clip((x[:, start:start + block] - mean) / std, -CLIP_SD, CLIP_SD)
+            for k, (w, b) in enumerate(zip(self.weights, self.biases)):
+                z = w.T @ z + b[:, None]
+                if k < len(self.weights) - 1:
+                    np.maximum(z, 0.0, out=z)
+            out[start:start + block] = 1.0 / (1.0 + np.exp(-np.clip(z[0], -30, 30)))
+        return out
+
+
+@dataclass(frozen=True, eq=False)
+class PixelModel:
+    """A trained detector: one or two :class:`Stage` s (see the module notes).
+
+    Attributes
+    ----------
+    stages : tuple of Stage
+        Stage 1 reads the pixel features; a stage 2 reads them and the context of stage 1.
+    feature_names : tuple of str
+        The inputs of the last stage, in order (pixel features, then context features).
+    info : dict
+        How the model was trained (command, seeds, faces, samples, time).
+    """
+
+    stages: tuple
+    feature_names: tuple
+    info: dict = field(default_factory=dict)
+
+    def probability(self, features: np.ndarray) -> np.ndarray:
+        """Joint probability map (H, W) from the (F, H, W) pixel features of an image."""
+        shape = features.shape[1:]
+        p = self.stages[0].predict(features.reshape(features.shape[0], -1)).reshape(shape)
+        for stage in self.stages[1:]:
+            both = np.concatenate([features, context_features(p)])
+            p = stage.predict(both.reshape(both.shape[0], -1)).reshape(shape)
+        return p
+
+    def save(self, path) -> Path:
+        """Write the model as a compressed ``.npz`` file (no pickled objects)."""
+        import json
+
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        arrays = {"feature_names": np.array(self.feature_names),
+                  "info": np.array(json.dumps(self.info, sort_keys=True))}
+        for i, stage in enumerate(self.stages):
+            arrays[f"s{i}_mean"], arrays[f"s{i}_std"] = stage.mean, stage.std
+            for k, (w, b) in enumerate(zip(stage.weights, stage.biases)):
+                arrays[f"s{i}_w{k}"], arrays[f"s{i}_b{k}"] = w.astype(np.float32), b.astype(np.float32)
+        with open(path, "wb") as handle:
+            np.savez_compressed(handle, **arrays)
+        return path
+
+
+_CACHE: dict[str, PixelModel] = {}
+
+
+def _read_stage(data, i):
+    n_layers = sum(1 for name in data.files if name.startswith(f"s{i}_w"))
+    return Stage(mean=data[f"s{i}_mean"].astype(np.float32), std=data[f"s{i}_std"].astype(np.float32),
+                 weights=tuple(data[f"s{i}_w{k}"].astype(np.float32) for k in range(n_layers)),
+                 biases=tuple(data[f"s{i}_b{k}"].astype(np.float32) for k in range(n_layers)))
+
+
+def load_model(path=None) -> PixelModel:
+    """Read a model file (default: the shipped :data:`MODEL_FILE`); cached per path.
+
+    Raises
+    ------
+    FileNotFoundError
+        The file is missing (a broken install when it is the shipped one).
+    ValueError
+        The file's inputs differ from the features this rockmass computes.
+    """
+    import json
+
+    key = str(Path(path or MODEL_FILE).resolve())
+    if key in _CACHE:
+        return _CACHE[key]
+    if not Path(key).is_file():
+        raise FileNotFoundError(f"{key}: the learned detector's model file is missing (it ships with "
+                                "rockmass; reinstall, or train one with python -m "
+                                "rockmass.imaging.train_pixel_model)")
+    with np.load(key, allow_pickle=False) as data:
+        n_stages = sum(1 for name in data.files if name.endswith("_mean"))
+        model = PixelModel(stages=tuple(_read_stage(data, i) for i in range(n_stages)),
+                           feature_names=tuple(str(s) for s in data["feature_names"]),
+                           info=json.loads(str(data["info"])))
+    expected = FEATURE_NAMES + (CONTEXT_NAMES if n_stages > 1 else ())
+    if model.feature_names != expected:
+        raise ValueError(f"{key}: the model was trained on other features ({len(model.feature_names)}"
+                         f" named) than this rockmass computes ({len(expected)}); retrain it")
+    _CACHE[key] = model
+    return model
+
+
+def model_input(grey, *, background_sigma_px: float = 40.0) -> np.ndarray:
+    """The flattened image the features are computed on: division by the background, with dark
+    lines up to :data:`MODEL_LINE_WIDTH_PX` kept out of it (docs/imaging.md §2, eq. (2.1))."""
+    from .enhance import flatten_illumination
+
+    return flatten_illumination(grey, line_width_px=MODEL_LINE_WIDTH_PX, sigma_px=background_sigma_px,
+                                method="divide")
+
+
+def joint_probability(flat, model: PixelModel | None = None) -> np.ndarray:
+    """Probability map (H, W) float32 in [0, 1] of joint centre lines in a :func:`model_input` image.
+
+    Examples
+    --------
+    >>> img = np.ones((64, 64), np.float32); img[:, 30:33] = 0.5
+    >>> p = joint_probability(img)
+    >>> int(p[32].argmax()) in (30, 31, 32)
+    True
+    """
+    model = model or load_model()
+    return model.probability(pixel_features(flat))

@@ -1,0 +1,204 @@
+"""Train the learned joint detector's pixel model on synthetic faces only, reproducibly.
+
+    OMP_NUM_THREADS=1 python -m rockmass.imaging.train_pixel_model [--out FILE] [--faces N] [--seed S]
+
+Training data (docs/imaging.md §3.1): per stage, ``--faces`` field-like faces
+(:func:`rockmass.imaging.synthetic_field.field_face`, 400 x 400 px) and a quarter as many faces of
+the plain generator (:func:`rockmass.imaging.synthetic.synthetic_face`, "moderate" and "hard",
+500 x 750 px), so the model keeps finding thin joints. Stage 1 is fitted on the faces of seeds
+``seed, seed + 1, ...``, stage 2 on the next ones, with stage 1's probability maps of faces stage 1
+never saw (so the context it learns from is as good as at run time, not better). No real
+photograph is used. Each face is flattened (:func:`rockmass.imaging.learned.model_input`), its
+features computed, and pixels sampled: positives within 1 px of a true centre line, negatives
+farther than 3 px (pixels in between are left out), half of the negatives drawn from the 10 % with
+the strongest dark-ridge response (the confusable ones). Every tenth face of the second lot is held out
+and the log loss of each stage on it reported. ``--stages 1`` (the default: stage 2 learned the
+synthetic faces' context too well and doubled the false traces on real photographs) fits stage 1
+only.
+
+Each perceptron (eq. (3.2)) is fitted by minimising the class-balanced binary cross-entropy with Adam
+(Kingma & Ba 2015) on mini-batches, from a fixed seed. The default ``--seed`` (10 000) keeps the
+training faces apart from the seeds tests and benchmarks use (0-999).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import sys
+import time
+
+import numpy as np
+
+from .features import CONTEXT_NAMES, FEATURE_NAMES, context_features, pixel_features
+from .learned import MODEL_FILE, PixelModel, Stage, model_input
+
+__all__ = ["face_samples", "training_faces", "fit_mlp", "main"]
+
+POSITIVE_PX = 1.0
+NEGATIVE_PX = 3.0
+
+
+def face_samples(features, centre_lines, rng, *, n_positive=2500, n_negative=5000):
+    """Indices and labels of pixels sampled from one face's (F, H, W) features (module notes)."""
+    import cv2
+
+    distance = cv2.distanceTransform(np.where(centre_lines, 0, 255).astype(np.uint8), cv2.DIST_L2,
+                                     cv2.DIST_MASK_PRECISE).ravel()
+    positive = np.flatnonzero(distance <= POSITIVE_PX)
+    negative = np.flatnonzero(distance > NEGATIVE_PX)
+    ridge = features[FEATURE_NAMES.index("ridge_dark_2")].ravel()[negative]
+    hard = negative[ridge >= np.quantile(ridge, 0.9)] if negative.size else negative
+    pick = [rng.choice(positive, min(n_positive, positive.size), replace=False),
+            rng.choice(negative, min(n_negative // 2, negative.size), replace=False),
+            rng.choice(hard, min(n_negative // 2, hard.size), replace=False)]
+    labels = np.concatenate([np.ones(pick[0].size), np.zeros(pick[1].size + pick[2].size)])
+    return np.concatenate(pick), labels.astype(np.float32)
+
+
+def training_faces(first_seed: int, n_field: int, n_plain: int):
+    """(seed, grey image, centre-line mask) of ``n_field`` field-like and ``n_plain`` plain
+    synthetic faces, seeds from ``first_seed`` on."""
+    from .metrics import render_traces
+    from .synthetic import synthetic_face
+    from .synthetic_field import centre_line_mask, field_face
+
+    for i in range(n_field + n_plain):
+        seed = first_seed + i
+        if i < n_field:
+            face = field_face(seed=seed)
+            lines = centre_line_mask(face)
+        else:
+            face = synthetic_face(("moderate", "hard")[i % 2], seed=seed, shape_px=(500, 750),
+                                  m_per_px=0.016)
+            lines = render_traces(face.truth, face.image.shape, face.m_per_px)
+        yield seed, face.image, lines
+
+
+def fit_mlp(x, y, *, hidden=(32, 16), epochs=12, batch=1024, learning_rate=3e-3, seed=0):
+    """Fit eq. (3.2) by Adam on the class-balanced cross-entropy; return (mean, std, weights, biases).
+
+    Gradients by back-propagation of :math:`L = -\\sum_i c_i [y_i \\log p_i + (1 - y_i) \\log(1 - p_i)]
+    / \\sum_i c_i`, :math:`c_i` = 1 / (share of y_i's class); Adam with β = (0.9, 0.999), ε = 1e-8.
+    """
+    rng = np.random.default_rng(seed)
+    mean = x.mean(axis=0).astype(np.float32)
+    std = np.maximum(x.std(axis=0), 1e-6).astype(np.float32)
+    z = np.clip((x - mean) / std, -6, 6).astype(np.float32)
+    share = y.mean()
+    weight = np.where(y > 0.5, 0.5 / share, 0.5 / (1 - share)).astype(np.float32)
+    sizes = (z.shape[1], *hidden, 1)
+    params = []
+    for a, b in zip(sizes[:-1], sizes[1:]):  # He initialisation
+        params += [rng.normal(0, np.sqrt(2.0 / a), (a, b)).astype(np.float32), np.zeros(b, np.float32)]
+    m = [np.zeros_like(p) for p in params]
+    v = [np.zeros_like(p) for p in params]
+    step = 0
+    for _ in range(epochs):
+        order = rng.permutation(len(z))
+        for start in range(0, len(z), batch):
+            idx = order[start:start + batch]
+            acts = [z[idx]]
+            for k in range(0, len(params), 2):
+                out = acts[-1] @ params[k] + params[k + 1]
+                acts.append(np.maximum(out, 0) if k < len(params) - 2 else out)
+            p = 1.0 / (1.0 + np.exp(-np.clip(acts[-1][:, 0], -30, 30)))
+            c = weight[idx] / weight[idx].sum()
+            delta = ((p - y[idx]) * c)[:, None]
+            grads = [None] * len(params)
+            for k in range(len(params) - 2, -1, -2):
+                grads[k] = acts[k // 2].T @ delta
+                grads[k + 1] = delta.sum(axis=0)
+                if k:
+                    delta = (delta @ params[k].T) * (acts[k // 2] > 0)
+            step += 1
+            for i, g in enumerate(grads):
+                m[i] = 0.9 * m[i] + 0.1 * g
+                v[i] = 0.999 * v[i] + 0.001 * g * g
+                m_hat, v_hat = m[i] / (1 - 0.9**step), v[i] / (1 - 0.999**step)
+                params[i] -= learning_rate * m_hat / (np.sqrt(v_hat) + 1e-8)
+    return mean, std, tuple(params[0::2]), tuple(params[1::2])
+
+
+def _log_loss(p, y):
+    p = np.clip(p, 1e-6, 1 - 1e-6)
+    return float(-np.mean(y * np.log(p) + (1 - y) * np.log(1 - p)))
+
+
+def _stage(x, y, **kwargs) -> Stage:
+    mean, std, weights, biases = fit_mlp(x, y, **kwargs)
+    return Stage(mean=mean, std=std, weights=weights, biases=biases)
+
+
+def main(argv=None) -> int:
+    import cv2
+
+    cv2.setNumThreads(1)
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", default=str(MODEL_FILE), help=f"model file (default {MODEL_FILE})")
+    parser.add_argument("--faces", type=int, default=80,
+                        help="field-like training faces per stage (default 80)")
+    parser.add_argument("--seed", type=int, default=10_000, help="first face seed (default 10000)")
+    parser.add_argument("--epochs", type=int, default=12)
+    parser.add_argument("--hidden", type=int, nargs="+", default=[32, 16])
+    parser.add_argument("--stages", type=int, choices=(1, 2), default=1,
+                        help="1: pixel features only (default); 2: add an auto-context stage")
+    parser.add_argument("--plain-faces", type=int, dest="plain_faces",
+                        help="plain synthetic faces per stage (default a quarter of --faces)")
+    args = parser.parse_args(argv)
+    n_plain = max(args.faces // 4, 1) if args.plain_faces is None else args.plain_faces
+    fit = dict(hidden=tuple(args.hidden), epochs=args.epochs, seed=args.seed)
+
+    t0 = time.perf_counter()
+    rng = np.random.default_rng(args.seed)
+    xs, ys = [], []
+    for seed, image, lines in training_faces(args.seed, args.faces, n_plain):
+        features = pixel_features(model_input(image.astype(np.float32) / 255.0))
+        index, labels = face_samples(features, lines, rng)
+        xs.append(features.reshape(features.shape[0], -1)[:, index].T)
+        ys.append(labels)
+    stage1 = _stage(np.concatenate(xs), np.concatenate(ys), **fit)
+    n_stage1 = int(sum(len(y) for y in ys))
+    t_stage1 = time.perf_counter() - t0
+
+    xs, ys, held = [], [], []
+    second = args.seed + args.faces + n_plain
+    for k, (seed, image, lines) in enumerate(training_faces(second, args.faces, n_plain)):
+        if args.stages == 1 and k % 10 != 9:
+            continue  # stage 1 alone: the second lot only provides the held-out faces
+        features = pixel_features(model_input(image.astype(np.float32) / 255.0))
+        both = features
+        if args.stages == 2:
+            p1 = stage1.predict(features.reshape(features.shape[0], -1)).reshape(features.shape[1:])
+            both = np.concatenate([features, context_features(p1)])
+        index, labels = face_samples(features, lines, rng)
+        xs.append(both.reshape(both.shape[0], -1)[:, index].T)
+        ys.append(labels)
+        held.append(np.full(len(labels), k % 10 == 9))
+    x, y, held = np.concatenate(xs), np.concatenate(ys), np.concatenate(held)
+    n_features = len(FEATURE_NAMES)
+    if args.stages == 2:
+        stages, names = (stage1, _stage(x[~held], y[~held], **fit)), FEATURE_NAMES + CONTEXT_NAMES
+    else:  # the second lot of faces only measures stage 1
+        stages, names = (stage1,), FEATURE_NAMES
+    info = {"command": "python -m rockmass.imaging.train_pixel_model " + " ".join(argv or sys.argv[1:]),
+            "seed": args.seed, "stages": args.stages, "field_faces_per_stage": args.faces,
+            "plain_faces_per_stage": n_plain,
+            "samples": [n_stage1, int((~held).sum())], "held_out_samples": int(held.sum()),
+            "hidden": list(args.hidden), "epochs": args.epochs,
+            "held_out_log_loss": [round(_log_loss(stage.predict(x[held][:, :len(names) if i else
+                                                                       n_features].T), y[held]), 4)
+                                  for i, stage in enumerate(stages)],
+            "stage1_s": round(t_stage1, 1), "total_s": round(time.perf_counter() - t0, 1),
+            "python": platform.python_version(), "numpy": np.__version__,
+            "data": "synthetic faces only (field_face, synthetic_face)"}
+    model = PixelModel(stages=stages, feature_names=names, info=info)
+    path = model.save(args.out)
+    print(json.dumps(info, indent=2))
+    print(f"wrote {path} ({path.stat().st_size} bytes) in {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,131 @@
+"""The learned detector: shipped model, file round trip, forward pass, known lines, confidence."""
+
+import importlib.resources
+
+import cv2
+import numpy as np
+import pytest
+
+from rockmass.imaging.extract import ExtractParams, extract
+from rockmass.imaging.features import CONTEXT_NAMES, FEATURE_NAMES, line_support
+from rockmass.imaging.learned import PixelModel, Stage, joint_probability, load_model, model_input
+from rockmass.imaging.train_pixel_model import fit_mlp
+from rockmass.imaging.vectorize import mean_along
+
+
+def _line_face(row=60, width=4, shape=(120, 200), seed=3):
+    """Textured rock (grey ~150, noise sd 6, seed fixed) with one dark horizontal joint at ``row``."""
+    rng = np.random.default_rng(seed)
+    image = 150 + 6 * cv2.GaussianBlur(rng.standard_normal(shape).astype(np.float32), (0, 0), 1.0)
+    cv2.line(image, (0, row), (shape[1] - 1, row), 70.0, width, cv2.LINE_AA)
+    return np.clip(image, 0, 255).astype(np.uint8)
+
+
+def _naive_forward(stage, x):
+    """Eq. (3.2) one row at a time, with explicit sums (an independent implementation)."""
+    out = []
+    for row in x:
+        z = [min(max((v - m) / s, -6.0), 6.0) for v, m, s in zip(row, stage.mean, stage.std)]
+        for k, (w, b) in enumerate(zip(stage.weights, stage.biases)):
+            z = [sum(z[i] * w[i, j] for i in range(len(z))) + b[j] for j in range(w.shape[1])]
+            if k < len(stage.weights) - 1:
+                z = [max(v, 0.0) for v in z]
+        out.append(1.0 / (1.0 + np.exp(-z[0])))
+    return np.array(out)
+
+
+def _random_stage(rng, n_in, hidden=(5, 3)):
+    sizes = (n_in, *hidden, 1)
+    return Stage(mean=rng.normal(size=n_in).astype(np.float32),
+                 std=rng.uniform(0.5, 2, n_in).astype(np.float32),
+                 weights=tuple(rng.normal(size=(a, b)).astype(np.float32)
+                               for a, b in zip(sizes[:-1], sizes[1:])),
+                 biases=tuple(rng.normal(size=b).astype(np.float32) for b in sizes[1:]))
+
+
+def test_shipped_model_is_package_data_and_loads():
+    resource = importlib.resources.files("rockmass.imaging").joinpath("models/joint_pixel_mlp.npz")
+    assert resource.is_file()
+    model = load_model()
+    assert model.feature_names[:len(FEATURE_NAMES)] == FEATURE_NAMES
+    assert model.stages[0].mean.size == len(FEATURE_NAMES)
+    assert "synthetic" in model.info["data"]  # trained on synthetic faces only
+
+
+def test_stage_forward_pass_matches_a_naive_loop():
+    rng = np.random.default_rng(0)  # fixed: random weights and inputs
+    stage = _random_stage(rng, 4)
+    x = rng.normal(size=(6, 4)).astype(np.float32) * 3
+    assert np.allclose(stage.predict(x.T), _naive_forward(stage, x), atol=1e-5)
+
+
+def test_model_file_round_trip_keeps_every_prediction(tmp_path):
+    rng = np.random.default_rng(1)
+    n1, n2 = len(FEATURE_NAMES), len(FEATURE_NAMES) + len(CONTEXT_NAMES)
+    model = PixelModel(stages=(_random_stage(rng, n1), _random_stage(rng, n2)),
+                       feature_names=FEATURE_NAMES + CONTEXT_NAMES, info={"seed": 1})
+    path = model.save(tmp_path / "m.npz")
+    loaded = load_model(path)
+    features = rng.normal(size=(n1, 24, 24)).astype(np.float32)
+    assert loaded.info == {"seed": 1} and len(loaded.stages) == 2
+    assert np.array_equal(loaded.probability(features), model.probability(features))
+
+
+def test_model_with_other_features_is_refused(tmp_path):
+    rng = np.random.default_rng(2)
+    model = PixelModel(stages=(_random_stage(rng, 3),), feature_names=("a", "b", "c"))
+    with pytest.raises(ValueError, match="features"):
+        load_model(model.save(tmp_path / "other.npz"))
+
+
+def test_probability_peaks_on_a_dark_line_of_known_position():
+    image = _line_face(row=60)
+    p = joint_probability(model_input(image.astype(np.float32) / 255.0))
+    profile = p[:, 40:160].mean(axis=1)
+    assert abs(int(profile.argmax()) - 60) <= 1
+    assert profile[60] > 0.9 and np.median(profile) < 0.2
+
+
+def test_learned_detector_traces_a_dark_line_at_its_known_position():
+    image = _line_face(row=60)
+    traces = extract(image, m_per_px=1.0, params=ExtractParams(detector="learned")).traces
+    assert traces.n_traces >= 1
+    longest = int(np.argmax(traces.lengths_m()))
+    rows = 120 - 0.5 - traces.polyline(longest)[:, 1]  # v up from the bottom edge -> row
+    assert np.all(np.abs(rows - 60) <= 2.0)
+    assert traces.lengths_m()[longest] >= 0.8 * 200
+    confidence = traces.attributes["confidence"]
+    assert np.all((confidence >= 0) & (confidence <= 1)) and confidence[longest] > 0.9
+
+
+def test_unknown_detector_and_bad_probabilities_are_refused():
+    with pytest.raises(ValueError, match="detector"):
+        ExtractParams(detector="sobel")
+    with pytest.raises(ValueError, match="prob_high"):
+        ExtractParams(prob_low=0.9, prob_high=0.5)
+
+
+def test_mean_along_weights_each_stretch_by_its_length():
+    image = np.zeros((10, 41))
+    image[5, :10] = 1.0  # columns 0-9: nearest-pixel sampling sees the first 9.5 px of 40
+    assert mean_along([np.array([[5.0, 0.0], [5.0, 40.0]])], image)[0] == pytest.approx(9.5 / 40, abs=0.01)
+
+
+def test_line_support_is_largest_along_the_line():
+    values = np.zeros((61, 61), np.float32)
+    values[30, :] = 1.0
+    top, excess = line_support(values, 21)
+    assert top[30, 30] == pytest.approx(1.0, abs=0.02)
+    assert excess[30, 30] > 0.7  # only the horizontal direction sees the whole line
+    dot = np.zeros((61, 61), np.float32)
+    dot[30, 30] = 1.0
+    assert line_support(dot, 21)[0][30, 30] < 0.1  # a point is 1 of about 21 samples
+
+
+def test_fit_mlp_separates_two_linearly_separable_classes():
+    rng = np.random.default_rng(4)
+    x = rng.normal(size=(3000, 2)).astype(np.float32)
+    y = (x[:, 0] + 0.5 * x[:, 1] > 0.3).astype(np.float32)
+    mean, std, weights, biases = fit_mlp(x, y, hidden=(8,), epochs=40, batch=256, seed=4)
+    stage = Stage(mean=mean, std=std, weights=weights, biases=biases)
+    assert np.mean((stage.predict(x.T) > 0.5) == (y > 0.5)) > 0.97

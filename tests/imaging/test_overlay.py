@@ -1,0 +1,21 @@
+"""The overlay fades traces of low confidence."""
+
+import matplotlib.image
+import numpy as np
+
+from rockmass.dfn import TraceMap
+from rockmass.imaging.overlay import plot_overlay
+
+
+def test_overlay_draws_a_confident_trace_stronger_than_a_doubtful_one(tmp_path):
+    image = np.zeros((100, 200), dtype=np.uint8)  # black photo: only the traces have colour
+    # traces in pixels (m_per_px = 1), v up: v = 70 is row 29.5 (upper half), v = 30 the lower half
+    traces = TraceMap.from_segments([[20, 70, 180, 70], [20, 30, 180, 30]],
+                                    {"confidence": [1.0, 0.0]})
+    path = tmp_path / "overlay.png"
+    plot_overlay(image, traces, path, m_per_px=1.0)
+    rgb = matplotlib.image.imread(path)[..., :3]
+    blue = (rgb[..., 2] > 0.4) & (rgb[..., 2] > rgb[..., 0] + 0.2)  # C0 at full opacity
+    rows = np.flatnonzero(blue.any(axis=1))
+    middle = rgb.shape[0] / 2
+    assert rows.size and np.all(rows < middle)  # only the confident (upper) trace is strong
