@@ -40,8 +40,12 @@ def read(path: Path) -> list[dict]:
 
 
 def displacement_mm(row: dict) -> float:
-    value = row.get("max_displacement_m") or "nan"
-    return float(value) * 1e3
+    """The tunnel-wall displacement in mm; a case that stopped (overlap, instability: the roof
+    collapsing, as the paper's UDEC runs also stopped "because of the joint overlap error") counts
+    as infinitely large."""
+    if row["status"] not in ("ok", "failed_blocks"):
+        return float("inf")
+    return float(row.get("max_displacement_m") or "nan") * 1e3
 
 
 def is_baseline(row: dict) -> bool:
@@ -53,7 +57,10 @@ def is_baseline(row: dict) -> bool:
 def direction(points: list[tuple[float, float]], baseline: float) -> str:
     """rising / falling / flat from the smallest to the largest parameter value."""
     points = sorted(points)
-    change = points[-1][1] - points[0][1]
+    low, high = points[0][1], points[-1][1]
+    if low == high:  # both stopped, or equal
+        return "flat"
+    change = high - low
     if abs(change) <= FLAT * baseline:
         return "flat"
     return "rising" if change > 0 else "falling"
@@ -71,14 +78,17 @@ def main(path: Path) -> None:
         points = [(float(r[column]) * unit, displacement_mm(r)) for r in mine]
         points = sorted(set(points + [(_baseline_value(column) * unit, base_mm)]))
         here = direction(points, base_mm)
-        values = ", ".join(f"{v:g}: {d:.3f}" for v, d in points)
+        values = ", ".join(f"{v:g}: " + ("stop" if d == float("inf") else f"{d:.3f}")
+                           for v, d in points)
         print(f"{label:34s} {values:52s} {here:8s} {paper:8s} {'yes' if here == paper else 'NO'}")
     print("\njoint angles (first set clockwise / second anticlockwise from horizontal):")
     for r in rows:
         if r.get(ANGLES[0]):
             second, first = float(r[ANGLES[0]]), 180.0 - float(r[ANGLES[1]])
-            print(f"  {first:.0f} / {second:.0f} deg: {displacement_mm(r):.3f} mm, status "
-                  f"{r['status']}, failed blocks {r.get('failed_blocks') or 0}")
+            d = displacement_mm(r)
+            shown = "stopped" if d == float("inf") else f"{d:.3f} mm"
+            print(f"  {first:.0f} / {second:.0f} deg: {shown}, status {r['status']}, failed blocks "
+                  f"{r.get('failed_blocks') or 0}")
     print("  paper: 40/0 and 50/10 fail in shaking (keyblocks out of the wall); 70/60 surface "
           "settlement only")
 
