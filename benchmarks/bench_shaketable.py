@@ -139,10 +139,11 @@ def shaking(model, settings, levels, frequency_hz: float, cycles: int,
         for c in range(1, cycles + 1):
             when = k * period + c / frequency_hz
             if t[-1] < when - 0.5 / frequency_hz:  # the run stopped before this cycle
-                rows.append({"level_mm": d * 1e3, "cycle": c, "slip_mm": None, "down_mm": None})
+                rows.append({"level_mm": round(d * 1e3, 3), "cycle": c, "slip_mm": None,
+                             "down_mm": None})
                 continue
             i = min(np.searchsorted(t, when), len(t) - 1)
-            rows.append({"level_mm": d * 1e3, "cycle": c,
+            rows.append({"level_mm": round(d * 1e3, 3), "cycle": c,
                          "slip_mm": 1e3 * float(np.hypot(*(rel[i] - rel[0]))),
                          "down_mm": -1e3 * float(rel[i, 1] - rel[0, 1])})
     return {"rows": rows, "status": result.status,

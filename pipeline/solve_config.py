@@ -32,6 +32,19 @@ Example::
     name = "crown"
     point_xy_m = [0.0, 16.0]
 
+    [[solve.bolt_patterns]]             # bolts by rule around the opening (docs/dem.md §15)
+    stage = "arch"                      # installed at the start of this stage
+    length_m = 5.0
+    spacing_m = 1.5
+    walls = ["roof", "left", "right"]
+    [solve.bolt_patterns.properties]    # steel and grout of each bolt (UDEC cable)
+    axial_stiffness_n = 1e8             # E·A (or youngs_modulus_pa and diameter_m)
+    yield_force_n = 2.5e5
+    bond_stiffness_n_m2 = 1e9
+    bond_strength_n_m = 4e5
+    out_of_plane_spacing_m = 1.5
+    # [[solve.bolts]]: one bolt: start_xy_m, end_xy_m, stage, properties, segments
+
     [[solve.stages]]
     name = "equilibrium"
     [[solve.stages]]
@@ -47,7 +60,8 @@ therefore run the same thing.
 Parameters are declared once, on the solver's types
 ---------------------------------------------------
 The tables ``material``, ``joints.*``, ``insitu``, ``fixes``, ``boundary_stress``, ``quiet``,
-``monitors`` and the ``sine`` / ``ricker`` histories *are* the solver's dataclasses
+``monitors``, ``bolts``, ``bolt_patterns`` and the ``sine`` / ``ricker`` histories *are* the
+solver's dataclasses
 (:mod:`rockmass.solver.settings`: names, units, defaults, ranges, descriptions and cross-field
 rules live there). :class:`SolveConfig`, :class:`StageConfig` and :class:`VelocityInputConfig` are
 generated from :class:`~rockmass.solver.Settings`, :class:`~rockmass.solver.Stage` and
@@ -63,14 +77,15 @@ from typing import Annotated, Literal
 
 from pydantic import Field, Strict
 
-from .solver.settings import (BoundaryStress, ContinuouslyYielding, Coulomb, Fix, InSituStress,
-                              Material, Monitor, QuietBoundary, Ricker, Settings, Sine, Stage,
-                              TableSine, VelocityInput)
+from .solver.settings import (Bolt, BoltPattern, BoundaryStress, ContinuouslyYielding, Coulomb,
+                              Fix, InSituStress, Material, Monitor, QuietBoundary, Ricker,
+                              Settings, Sine, Stage, TableSine, VelocityInput)
 from .strict import ConfigFile, StrictModel, config_file, in_folder, library_section
 
 __all__ = ["SolveConfig", "SolveDocument", "MaterialConfig", "CoulombConfig", "CYConfig",
            "InSituConfig", "FixConfig", "BoundaryStressConfig", "SineConfig", "RickerConfig",
            "CsvHistoryConfig", "VelocityInputConfig", "QuietConfig", "MonitorConfig",
+           "BoltConfig", "BoltPatternConfig",
            "StageConfig", "read_history_csv"]
 
 # the TOML tables that are the solver's own types (names kept for importers of this module)
@@ -84,6 +99,8 @@ SineConfig = Sine
 RickerConfig = Ricker
 QuietConfig = QuietBoundary
 MonitorConfig = Monitor
+BoltConfig = Bolt
+BoltPatternConfig = BoltPattern
 
 
 class CsvHistoryConfig(StrictModel):

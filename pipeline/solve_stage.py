@@ -167,6 +167,8 @@ def build_outputs(model, settings, result, timings) -> dict:
         "peak_kinetic_energy_j": be["peak_kinetic_energy_j"]})
     contacts = result.contacts or {}
     files["contacts.csv"] = csv_text(contacts) if contacts else "block_a,block_b\n"
+    if result.bolts:  # docs/dem.md §15: per bolt node, axial force, yield, bond slip
+        files["bolts.csv"] = csv_text(result.bolts)
     doc = result.to_json_dict()
     doc["monitors"] = _monitor_summary(result, model, settings)
     doc["model"] = {"blocks": int(model.n_blocks), "contacts": int(model.n_contacts),

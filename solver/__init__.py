@@ -8,7 +8,8 @@ Public names
 :class:`ContinuouslyYielding`, :class:`InSituStress`, :class:`Fix`, :class:`BoundaryStress`,
 :class:`VelocityInput`, :class:`Sine`, :class:`TableSine`, :class:`Ricker`,
 :class:`TableHistory`,
-:class:`QuietBoundary`, :class:`FreeField`, :class:`Monitor`
+:class:`QuietBoundary`, :class:`FreeField`, :class:`Monitor`, :class:`Bolt`,
+:class:`BoltPattern`, :class:`BoltProperties`
     What a run needs besides the blocks (:mod:`rockmass.solver.settings`).
 :class:`Result`, :class:`StageResult`, :class:`Frame`
     What it returns (:mod:`rockmass.solver.result`).
@@ -17,7 +18,8 @@ Public names
 
 Also: :mod:`rockmass.solver.failure` (blocks that keep moving in a static stage: detected,
 classified as fall / slide / rotation, taken out) and :mod:`rockmass.solver.monitoring` (points
-fixed on the excavation boundary: crown, walls, invert), :mod:`rockmass.solver.vtu` (the frames as
+fixed on the excavation boundary: crown, walls, invert), :mod:`rockmass.solver.bolts` (rock bolts:
+cable elements grouted into the blocks, docs/dem.md §15), :mod:`rockmass.solver.vtu` (the frames as
 ParaView files: ``blocks_NNNN.vtu`` and ``blocks.pvd``) and :mod:`rockmass.solver.tolerances` (the
 numeric policy, each constant with its reason). The formulas are in docs/dem.md.
 
@@ -26,13 +28,14 @@ The numba kernels (:mod:`rockmass.solver._kernels`) load on first use of :func:`
 """
 
 from .result import Frame, Result, StageResult
-from .settings import (BoundaryStress, ContinuouslyYielding, Coulomb, Fix, FreeField, InSituStress,
-                       Material, Monitor, QuietBoundary, Ricker, Settings, Sine, Stage, TableHistory,
-                       TableSine, VelocityInput)
+from .settings import (Bolt, BoltPattern, BoltProperties, BoundaryStress, ContinuouslyYielding,
+                       Coulomb, Fix, FreeField, InSituStress, Material, Monitor, QuietBoundary,
+                       Ricker, Settings, Sine, Stage, TableHistory, TableSine, VelocityInput)
 
 __all__ = ["run", "Engine", "Settings", "Stage", "Material", "Coulomb", "ContinuouslyYielding",
            "InSituStress", "Fix", "BoundaryStress", "VelocityInput", "Sine", "TableSine", "Ricker",
-           "TableHistory", "QuietBoundary", "FreeField", "Monitor", "Result", "StageResult", "Frame"]
+           "TableHistory", "QuietBoundary", "FreeField", "Monitor", "Bolt", "BoltPattern",
+           "BoltProperties", "Result", "StageResult", "Frame"]
 
 
 def __getattr__(name):  # numba only when a run starts

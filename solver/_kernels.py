@@ -86,10 +86,19 @@ MODEL_COULOMB, MODEL_CY = 0, 1
 (FF_M, FF_KX, FF_KY, FF_ABOVE, FF_CX, FF_CY, FF_MODE_X, FF_MODE_Y, FF_IN_X, FF_IN_Y) = range(10)
 N_FF_COLUMNS = 10
 
+# --- bolt node table columns (bolt_step; rockmass.solver.bolts; docs/dem.md §15) ---------------
+(BN_HOST, BN_RX, BN_RY, BN_AX, BN_AY, BN_M, BN_KG, BN_SG, BN_NEXT, BN_KA, BN_NT,
+ BN_NC) = range(12)
+N_BN_COLUMNS = 12
+# --- bolt state columns: node (axial displacement, velocity, grout force and slip), and the
+# segment from the node to the next (axial force, plastic elongation, yield flags)
+(BS_U, BS_V, BS_G, BS_SLIP, BS_SLIPPING, BS_N, BS_EP, BS_YIELD, BS_YIELDED) = range(9)
+N_BS_COLUMNS = 9
+
 # --- energy accumulator entries (docs/dem.md §11) -----------------------------------------------
 (E_GRAVITY, E_EXTERNAL, E_LOCAL_DAMP, E_VISCOUS, E_QUIET, E_CONTACT_FREE, E_CONTACT_PRESC,
- E_SLIP, E_BROKEN, E_NEW_BROKEN, E_NEW_SLOTS) = range(11)
-N_ENERGY = 11
+ E_SLIP, E_BROKEN, E_NEW_BROKEN, E_NEW_SLOTS, E_BOLT_SLIP, E_BOLT_YIELD) = range(13)
+N_ENERGY = 13
 
 # --- return codes of advance() ------------------------------------------------------------------
 RC_DONE, RC_REBUILD, RC_CONVERGED, RC_OVERLAP, RC_NONFINITE, RC_STIFF = range(6)
@@ -142,11 +151,12 @@ Pairs = namedtuple("Pairs", ["pa", "pb", "pprop", "pref", "pinit", "init_brk", "
 
 #: Applied loads: gravity (2,), external force ``ext_f`` (B, 2) and the two moment terms
 #: ``ext_a``, ``ext_b`` (B,), quiet-boundary edges (Q, 8) (:func:`quiet_forces`), the
-#: prescribed velocities ``presc_val`` (steps, inputs) at the half steps, and the free-field
+#: prescribed velocities ``presc_val`` (steps, inputs) at the half steps, the free-field
 #: edges (F, 9), column elements (E, ``N_FF_COLUMNS``) and their state (E, 4)
-#: (:func:`free_field_step`).
+#: (:func:`free_field_step`), and the bolt nodes (N, ``N_BN_COLUMNS``) and their state
+#: (N, ``N_BS_COLUMNS``) (:func:`bolt_step`).
 Loads = namedtuple("Loads", ["gravity", "ext_f", "ext_a", "ext_b", "quiet_edges", "presc_val",
-                             "ff_edges", "ff_elem", "ff_state"])
+                             "ff_edges", "ff_elem", "ff_state", "bolt_node", "bolt_state"])
 
 
 @njit(cache=True)
@@ -982,6 +992,110 @@ def free_field_step(edges, elem, state, presc_val, step, dt, pos, vel, omg, rot,
             state[i, d] += v_new[i, d] * dt
 
 
+@njit(cache=True, inline="always")
+def _elastoplastic_spring(force, k, increment, lower, upper):
+    """(force, plastic increment, dissipated energy) of a spring of stiffness k after the
+    displacement increment ``increment``, its force held within [lower, upper] (docs/dem.md §15,
+    eqs. (15.2)–(15.3)); the dissipation is that of a slipping joint (eq. (11.3))."""
+    trial = force + k * increment
+    new = min(max(trial, lower), upper)
+    if new == trial:
+        return new, 0.0, 0.0
+    return new, (trial - new) / k, _slip_dissipation(force, new, increment, k)
+
+
+@njit(cache=True)
+def bolt_step(node, state, pos, vel, omg, rot, active, dt, alpha_local, alpha_mass, vref_x, vref_y,
+              E, bf):
+    """One step of the bolts (UDEC cable elements; docs/dem.md §15, eqs. (15.1)–(15.5)).
+
+    ``node[i]`` (columns ``BN_*``): host block (-1: none) and the node's anchor point in the host's
+    frame, the bolt's unit axis a, the node's mass, its grout spring's stiffness k_bond l_i and
+    strength s_bond l_i (l_i its share of the bolt), the next node of the bolt (-1 at the end) and
+    the segment to it: stiffness EA/h, tensile and compressive yield forces. ``state[i]``
+    (columns ``BS_*``): the node's axial displacement u and velocity v (half step), its grout
+    force G (on the node, along a) and accumulated slip, and the segment's axial force N (tension
+    positive), plastic elongation and yield flags. ``vref_x``, ``vref_y``: the velocity the
+    mass-proportional damping α_M is relative to (docs/dem.md §8.2).
+
+    From the increments of the last half step (host anchor Δw = (v_b + ω × r)·a Δt, node Δu = v Δt):
+    G ← G + k_g (Δw − Δu) within ±s_g (slip), N ← N + k_a (Δu_next − Δu) within [−N_c, N_t]
+    (yield); the node moves by m dv/dt = G + N_i − N_(i−1) − α_M m (v − v_ref·a) (local damping
+    ``alpha_local`` too, eq. (8.1)), the host takes −G a at the anchor into ``bf`` (B, 3). A node
+    whose host is gone (excavated, taken out) releases its grout spring (its energy booked as
+    slip). Dissipation goes to ``E_BOLT_SLIP``, ``E_BOLT_YIELD``, the damping to ``E_LOCAL_DAMP``
+    and ``E_VISCOUS``. Returns, for the equilibrium test (docs/dem.md §10.1), the nodes'
+    Σ|unbalanced force|, Σ applied force (|G| + |N_i| + |N_(i−1)|) and kinetic energy: they enter
+    the model's ratio and the kinetic-energy test, not the blocks' own ratios (a node at a free
+    end, held by one spring, has a ratio of 1 whatever its force). No checks: nodes of a bolt are
+    consecutive."""
+    n = len(node)
+    applied = np.zeros(n)
+    du = np.empty(n)
+    force = np.zeros(n)
+    for i in range(n):
+        du[i] = state[i, BS_V] * dt
+    for i in range(n):
+        b = int(node[i, BN_HOST])
+        ax = node[i, BN_AX]
+        ay = node[i, BN_AY]
+        kg = node[i, BN_KG]
+        if b >= 0 and active[b]:
+            c = math.cos(rot[b])
+            s = math.sin(rot[b])
+            rx = c * node[i, BN_RX] - s * node[i, BN_RY]
+            ry = s * node[i, BN_RX] + c * node[i, BN_RY]
+            dw = ((vel[b, 0] - omg[b] * ry) * ax + (vel[b, 1] + omg[b] * rx) * ay) * dt
+            sg = node[i, BN_SG]
+            g, slip, lost = _elastoplastic_spring(state[i, BS_G], kg, dw - du[i], -sg, sg)
+            state[i, BS_G] = g
+            state[i, BS_SLIP] += abs(slip)
+            state[i, BS_SLIPPING] = 1.0 if slip != 0.0 else 0.0
+            E[E_BOLT_SLIP] += lost
+            bf[b, 0] -= g * ax
+            bf[b, 1] -= g * ay
+            bf[b, 2] -= g * (rx * ay - ry * ax)
+        elif state[i, BS_G] != 0.0:  # the host is gone: the grout lets go
+            E[E_BOLT_SLIP] += 0.5 * state[i, BS_G] ** 2 / kg
+            state[i, BS_G] = 0.0
+        force[i] += state[i, BS_G]
+        applied[i] += abs(state[i, BS_G])
+        j = int(node[i, BN_NEXT])
+        if j >= 0:
+            nn, plastic, lost = _elastoplastic_spring(state[i, BS_N], node[i, BN_KA], du[j] - du[i],
+                                                      -node[i, BN_NC], node[i, BN_NT])
+            state[i, BS_N] = nn
+            state[i, BS_EP] += plastic
+            state[i, BS_YIELD] = 1.0 if plastic != 0.0 else 0.0
+            if plastic != 0.0:
+                state[i, BS_YIELDED] = 1.0
+            E[E_BOLT_YIELD] += lost
+            force[i] += nn
+            force[j] -= nn
+            applied[i] += abs(nn)
+            applied[j] += abs(nn)
+    sum_unb = 0.0
+    sum_app = 0.0
+    ke = 0.0
+    for i in range(n):
+        sum_unb += abs(force[i])
+        sum_app += applied[i]
+        v_old = state[i, BS_V]
+        m = node[i, BN_M]
+        fv = -alpha_mass * m * (v_old - vref_x * node[i, BN_AX] - vref_y * node[i, BN_AY])
+        f = force[i] + fv
+        fd = 0.0
+        if alpha_local > 0.0 and v_old != 0.0:  # eq. (8.1)
+            fd = -alpha_local * abs(f) * (1.0 if v_old > 0 else -1.0)
+        v_new = v_old + (f + fd) / m * dt
+        E[E_LOCAL_DAMP] += fd * 0.5 * (v_old + v_new) * dt
+        E[E_VISCOUS] += fv * 0.5 * (v_old + v_new) * dt
+        state[i, BS_V] = v_new
+        state[i, BS_U] += v_new * dt
+        ke += 0.5 * m * v_new * v_new
+    return sum_unb, sum_app, ke
+
+
 @njit(cache=True)
 def _stiffest_new_slot(S, pa, pb, pprop, props, pos, inv_mass, cy_probe, cy_floor, tiny):
     """Largest ω² = k l gᵀM⁻¹g over the slots flagged ``NEW`` (and clear the flags): the
@@ -1061,7 +1175,8 @@ def advance(n_steps, blocks, pairs, loads, prm, E, out):
     Forces on block b: contacts (gathered over its pairs in a fixed order: deterministic), gravity
     m g, external forces ``ext_f`` with moment cos θ·ext_a + sin θ·ext_b (constant tractions on
     edges that rotate with the block), quiet-boundary dashpots and free-field forces (booked as
-    ``E_QUIET``), mass-proportional Rayleigh damping
+    ``E_QUIET``), the bolts' grout forces (:func:`bolt_step`, counted with the contact forces;
+    the bolt nodes enter the model's ratio and the kinetic energy), mass-proportional Rayleigh damping
     −α_M m (v − v_ref) (v_ref: the prescribed velocity in column ``PRM_REF_X`` / ``PRM_REF_Y`` of
     ``presc_val``, or 0), local non-viscous damping −α|F|sign(v) per degree of freedom (docs/dem.md §8).
 
@@ -1076,7 +1191,8 @@ def advance(n_steps, blocks, pairs, loads, prm, E, out):
     (loc, lgeo, off, radius, mass, inv_mass, mode, dof_input, active, movable, pos, rot, vel, omg,
      asleep, calm, wv) = blocks
     pa, pb, pprop, _pref, _pinit, _brk, props, S, fpair, bp_ptr, bp_idx, ref_pos, ref_rot = pairs
-    gravity, ext_f, ext_a, ext_b, quiet_edges, presc_val, ff_edges, ff_elem, ff_state = loads
+    (gravity, ext_f, ext_a, ext_b, quiet_edges, presc_val, ff_edges, ff_elem, ff_state,
+     bolt_node, bolt_state) = loads
     dt, ovl_limit, margin = prm[PRM_DT], prm[PRM_OVL_LIMIT], prm[PRM_MARGIN]
     alpha_local, alpha_mass = prm[PRM_ALPHA_LOCAL], prm[PRM_ALPHA_MASS]
     tol_ratio, block_tol = prm[PRM_TOL_RATIO], prm[PRM_BLOCK_TOL]
@@ -1087,6 +1203,7 @@ def advance(n_steps, blocks, pairs, loads, prm, E, out):
     ref_col = (int(prm[PRM_REF_X]), int(prm[PRM_REF_Y]), -1)
     nb = len(off) - 1
     qf = np.zeros((nb, 3))
+    bf = np.zeros((nb, 3))  # bolt forces on the blocks (docs/dem.md §15)
     fc = np.zeros(3)
     fg = np.zeros(3)
     fe = np.zeros(3)
@@ -1117,14 +1234,22 @@ def advance(n_steps, blocks, pairs, loads, prm, E, out):
         worst = 0.0
         worst_b = -1
         ke = 0.0
+        if len(bolt_node):  # docs/dem.md §15: from the half-step velocities, before they move
+            bf[:] = 0.0
+            sum_unb, sum_app, ke = bolt_step(
+                bolt_node, bolt_state, pos, vel, omg, rot, active, dt, alpha_local, alpha_mass,
+                presc_val[step, ref_col[0]] if ref_col[0] >= 0 else 0.0,
+                presc_val[step, ref_col[1]] if ref_col[1] >= 0 else 0.0, E, bf)
         moved = False
         vmax = 0.0
         for b in range(nb):
             if not active[b] or not movable[b]:
                 continue
             # contact forces gathered over the block's pairs in the fixed CSR order (deterministic)
-            fc[:] = 0.0
-            fabs = 0.0  # Σ|contact force|, part of the block's applied load
+            fc[0] = bf[b, 0]  # bolts act like contacts: in the contact force and its work
+            fc[1] = bf[b, 1]
+            fc[2] = bf[b, 2]
+            fabs = math.sqrt(bf[b, 0] ** 2 + bf[b, 1] ** 2)  # Σ|contact force|: the applied load
             for q in range(bp_ptr[b], bp_ptr[b + 1]):
                 e = bp_idx[q]
                 p = e >> 1

@@ -14,6 +14,7 @@ import numpy as np
 from ..blockgen.tolerances import ROUNDING_FRACTION
 from . import _kernels as K
 from . import tolerances as T
+from .bolts import bolt_bound, bolt_kinetic_energy, empty_bolt_tables
 from .selectors import domain_edges, select_blocks
 from .settings import ContinuouslyYielding, Coulomb, Settings
 
@@ -236,6 +237,9 @@ class Engine:
         self.ff_edges = np.zeros((0, 9))
         self.ff_elem = np.zeros((0, K.N_FF_COLUMNS))
         self.ff_state = np.zeros((0, 4))
+        # rock bolts (docs/dem.md §15): node tables, filled stage by stage (rockmass.solver.bolts)
+        for name, value in empty_bolt_tables().items():
+            setattr(self, name, value)
         self.gravity = np.array(settings.gravity_m_s2, float)
 
         # pairs
@@ -316,7 +320,8 @@ class Engine:
     def loads_tuple(self, presc_val: np.ndarray) -> K.Loads:
         """Applied loads and the prescribed velocities ``presc_val`` (steps, inputs) of a chunk."""
         return K.Loads(self.gravity, self.ext_f, self.ext_a, self.ext_b, self.quiet_edges,
-                       presc_val, self.ff_edges, self.ff_elem, self.ff_state)
+                       presc_val, self.ff_edges, self.ff_elem, self.ff_state, self.bolt_node,
+                       self.bolt_state)
 
     def kernel_params(self, dt: float = 0.0, *, alpha_local: float = 0.0, alpha_mass: float = 0.0,
                       beta: float = 0.0, tol_ratio: float = 0.0, block_tol: float = 0.0,
@@ -395,13 +400,15 @@ class Engine:
         (2/ω)(√(1 + ξ²) − ξ) (docs/dem.md §2.3, eq. (2.6)), and it falls as ω or γ grows, so the two bounds give
         a safe step. C holds the stiffness-proportional Rayleigh term β K (γ ≤ β ω²) and the
         quiet-boundary dashpots of :attr:`quiet_edges` (Gershgorin row sums like K: a dashpot on a
-        small boundary block, c/m large, is what limits the step there).
+        small boundary block, c/m large, is what limits the step there). The bolts' springs add
+        their own largest row (:func:`rockmass.solver.bolts.bolt_bound`; docs/dem.md §15.2).
         """
         scale = np.sqrt(self.inv_mass)  # 0 for dofs that do not move
         gamma = self._dashpot_bound(scale)
         lam = self._stiffness_bound(scale)
         ff_lam, ff_gamma = self._free_field_bound()
         lam, gamma = max(lam, ff_lam), max(gamma, ff_gamma)
+        lam += bolt_bound(self, scale)  # docs/dem.md §15: rows of a sum add
         if lam <= 0 and gamma <= 0:
             return math.inf
         gamma += beta * lam
@@ -519,10 +526,11 @@ class Engine:
         return float(np.sum(slot[:, K.FN] * -vn) * dt), float(np.sum(slot[:, K.FS] * vt) * dt)
 
     def kinetic_energy(self) -> float:
+        """½ Σ m v² over the free dofs of the active blocks, and the bolt nodes' (J per m)."""
         m = self.mass
         free = self.active[:, None] & (self.mode == FREE)  # prescribed dofs are the boundary's
         v2 = np.column_stack([self.vel ** 2, self.omg ** 2])
-        return float(0.5 * np.sum(np.where(free, m * v2, 0.0)))
+        return float(0.5 * np.sum(np.where(free, m * v2, 0.0))) + bolt_kinetic_energy(self)
 
     def vertex_displacement(self, ref_pos, ref_rot) -> np.ndarray:
         """Largest vertex displacement of each block from a reference placement (m)."""
@@ -557,11 +565,11 @@ class Engine:
 
     def snapshot(self) -> tuple:
         return tuple(a.copy() for a in (self.pos, self.rot, self.vel, self.omg, self.S, self.E,
-                                        self.init_brk, self.ff_state)) + (self.time_s,)
+                                        self.init_brk, self.ff_state, self.bolt_state)) + (self.time_s,)
 
     def restore(self, snap):
         """Back to a :meth:`snapshot` taken since the last rebuild (same pair list)."""
         (self.pos, self.rot, self.vel, self.omg, self.S, self.E, self.init_brk, self.ff_state,
-         self.time_s) = \
+         self.bolt_state, self.time_s) = \
             tuple(a.copy() if isinstance(a, np.ndarray) else a for a in snap)
         self.rebuild()

@@ -20,8 +20,10 @@ class EnergyLedger(Mapping):
     """A stage's energy ledger, J per metre of thickness (docs/dem.md §11).
 
     Work in (``work_gravity_j`` + ``work_boundary_j``) equals the change of kinetic and strain
-    energy plus what was dissipated (slip, bond breakage, damping) and what left with blocks taken
-    out; ``residual_j`` is what does not balance. ``damping_dissipation_j`` is the sum of the local,
+    energy (of the contacts, and ``bolt_strain_*`` of the bolts' steel and grout; the kinetic
+    energy includes the bolt nodes') plus what was dissipated (slip, bond breakage, damping, the
+    bolts' grout slip and steel yield) and what left with blocks taken out; ``residual_j`` is what
+    does not balance. ``damping_dissipation_j`` is the sum of the local,
     viscous (Rayleigh) and quiet-boundary terms. It reads like the ``energy`` object of
     ``result.json`` (a read-only mapping of these names), and :attr:`relative_error` is the guard's
     measure of it.
@@ -41,6 +43,11 @@ class EnergyLedger(Mapping):
     quiet_boundary_j: float
     removed_blocks_j: float
     residual_j: float
+    # rock bolts (docs/dem.md §15; kernel entries E_BOLT_SLIP, E_BOLT_YIELD)
+    bolt_strain_start_j: float = 0.0
+    bolt_strain_end_j: float = 0.0
+    bolt_slip_dissipation_j: float = 0.0
+    bolt_yield_dissipation_j: float = 0.0
 
     def __getitem__(self, key: str) -> float:
         if key not in _LEDGER_TERMS:
@@ -62,7 +69,10 @@ class EnergyLedger(Mapping):
                 + abs(self.strain_end_j - self.strain_start_j)
                 + abs(self.slip_dissipation_j) + abs(self.breakage_dissipation_j)
                 + abs(self.damping_dissipation_j) + abs(self.removed_blocks_j)
-                + 1e-6 * (self.strain_start_j + self.strain_end_j))
+                + abs(self.bolt_strain_end_j - self.bolt_strain_start_j)
+                + abs(self.bolt_slip_dissipation_j) + abs(self.bolt_yield_dissipation_j)
+                + 1e-6 * (self.strain_start_j + self.strain_end_j
+                          + self.bolt_strain_start_j + self.bolt_strain_end_j))
 
     @property
     def relative_error(self) -> float:
@@ -147,7 +157,9 @@ class Result:
     blocks keep their last values and ``active`` False). ``history``: columns of the monitored
     blocks (``time_s``, ``stage``, ``<name>_ux_m``, ``<name>_uy_m``, ``<name>_vx_m_s``,
     ``<name>_contact_fx_n`` (sum of contact forces on the block), …). ``contacts``: the active
-    contact slots at the end (:meth:`Engine.contact_table`).
+    contact slots at the end (:meth:`Engine.contact_table`). ``bolts``: the bolt nodes at the end
+    (:func:`rockmass.solver.bolts.bolt_table`: axial force along each bolt, yielded segments,
+    bond slip; empty without bolts).
     ``block_energy``: per block volume (area × 1 m), mass, peak velocity and peak kinetic energy
     over the dynamic stages (as in Kiran & Juneja 2022, Fig. 7; docs/dem.md, References).
     ``status`` is ``ok``, ``failed_blocks`` (blocks kept moving in a static stage and were taken
@@ -167,6 +179,7 @@ class Result:
     diagnostic: str | None = None
     info: dict = field(default_factory=dict)
     failed: np.ndarray | None = None
+    bolts: dict = field(default_factory=dict)
 
     @property
     def ok(self) -> bool:
@@ -207,4 +220,19 @@ class Result:
                 "max_displacement_m": float(np.max(np.hypot(*self.displacement_m[self.active].T),
                                                    initial=0.0)),
                 "block_energy_vs_volume": self.energy_table(),
-                "info": self.info}
+                "info": self.info} | ({"bolts": self.bolt_summary()} if self.bolts else {})
+
+    def bolt_summary(self) -> list[dict]:
+        """Per bolt: stage installed, largest and smallest axial force (N per m, tension +),
+        segments yielded (ever), nodes slipping now, largest bond slip (m)."""
+        t = self.bolts
+        rows = []
+        for name in dict.fromkeys(t["bolt"]):
+            mine = t["bolt"] == name
+            rows.append({"bolt": str(name), "stage": str(t["stage"][mine][0]),
+                         "max_axial_force_n": float(np.max(t["axial_force_n"][mine])),
+                         "min_axial_force_n": float(np.min(t["axial_force_n"][mine])),
+                         "yielded_segments": int(np.sum(t["yielded"][mine])),
+                         "slipping_nodes": int(np.sum(t["bond_slipping"][mine])),
+                         "max_bond_slip_m": float(np.max(t["bond_slip_m"][mine]))})
+        return rows

@@ -29,6 +29,7 @@ from . import _kernels as K
 from . import tolerances as T
 from .engine import FIXED, Engine
 from .failure import FailureWatch
+from .bolts import bolt_energy, bolt_table, install_bolts
 from .free_field import set_free_field
 from .loading import apply_boundary_stress, apply_insitu, quiet_edge_table
 from .monitoring import boundary_points, point_displacement_from
@@ -191,24 +192,36 @@ def _detached(eng: Engine, removed: np.ndarray) -> int:
     return int((inside & eng.active).sum())
 
 
+def _bolt_strain(eng: Engine, dt: float) -> tuple[float, float]:
+    """(elastic energy of the bolts, its leapfrog 'shadow' form): the bolts' forces are all
+    incremental, so both lag the positions by a step at a chunk's end and at a stage's start
+    (docs/dem.md §15)."""
+    elastic, work = bolt_energy(eng, dt)
+    return elastic, elastic + 0.5 * work
+
+
 def _energy_ledger(eng: Engine, dt: float, ke0: float, se0: float, se0_shadow: float,
-                   removed_j: float) -> EnergyLedger:
+                   removed_j: float, bolts0: tuple[float, float] = (0.0, 0.0)) -> EnergyLedger:
     """The stage's energy ledger so far (module docstring); ``removed_j``: kinetic and strain
-    energy that left with blocks taken out during the stage (failed blocks)."""
+    energy that left with blocks taken out during the stage (failed blocks); ``bolts0``: the
+    bolts' elastic energy at the stage's start, plain and shadow (:func:`_bolt_strain`)."""
     wn, ws = eng.contact_increment_work(dt)
     ke1, se1 = eng.kinetic_energy(), eng.strain_energy()
     se1_shadow = se1 + 0.5 * (wn + ws)
+    be1, be1_shadow = _bolt_strain(eng, dt)
     E = eng.E
     work_in = E[K.E_GRAVITY] + E[K.E_EXTERNAL] - E[K.E_CONTACT_PRESC]
     damping = -(E[K.E_LOCAL_DAMP] + E[K.E_VISCOUS] + E[K.E_QUIET])
     stored = ((ke1 - ke0) + (se1_shadow - se0_shadow) + E[K.E_SLIP] + E[K.E_BROKEN] + damping
-              + removed_j)
+              + removed_j + (be1_shadow - bolts0[1]) + E[K.E_BOLT_SLIP] + E[K.E_BOLT_YIELD])
     terms = dict(work_gravity_j=E[K.E_GRAVITY], work_boundary_j=E[K.E_EXTERNAL] - E[K.E_CONTACT_PRESC],
                  kinetic_start_j=ke0, kinetic_end_j=ke1, strain_start_j=se0, strain_end_j=se1,
                  slip_dissipation_j=E[K.E_SLIP], breakage_dissipation_j=E[K.E_BROKEN],
                  damping_dissipation_j=damping, local_damping_j=-E[K.E_LOCAL_DAMP],
                  viscous_damping_j=-E[K.E_VISCOUS], quiet_boundary_j=-E[K.E_QUIET],
-                 removed_blocks_j=removed_j, residual_j=work_in - stored)
+                 removed_blocks_j=removed_j, residual_j=work_in - stored,
+                 bolt_strain_start_j=bolts0[0], bolt_strain_end_j=be1,
+                 bolt_slip_dissipation_j=E[K.E_BOLT_SLIP], bolt_yield_dissipation_j=E[K.E_BOLT_YIELD])
     return EnergyLedger(**{k: float(v) for k, v in terms.items()})
 
 
@@ -270,6 +283,7 @@ class _StageRun:
         eng.quiet_edges = (quiet_edge_table(eng, settings.quiet) if dynamic and settings.quiet
                            else np.zeros((0, 8)))  # before the step limit: the dashpots lower it
         set_free_field(eng, settings.free_field if dynamic else None)  # docs/dem.md §14.2
+        install_bolts(eng, settings, stage.name)  # docs/dem.md §15, before the step limit
         self.dt, self.limit = self._first_time_step()
         self.n_steps = math.ceil(stage.duration_s / self.dt) if dynamic else stage.max_steps
         self.inputs = settings.velocity_inputs if dynamic else ()
@@ -288,6 +302,7 @@ class _StageRun:
         wn, ws = eng.contact_increment_work(self.dt)
         self.ke0, self.se0 = eng.kinetic_energy(), eng.strain_energy()
         self.se0_shadow = self.se0 - 0.5 * wn + 0.5 * ws
+        self.bolts0 = _bolt_strain(eng, self.dt)
         self.out = np.zeros(8)
         self.out[7] = math.inf  # kinetic energy of the previous convergence check
         self.done = 0
@@ -453,7 +468,8 @@ class _StageRun:
 
     def _ledger_closes(self) -> bool:
         """The energy guard: False (status ``unstable``) when the residual exceeds the tolerance."""
-        energy = _energy_ledger(self.eng, self.dt, self.ke0, self.se0, self.se0_shadow, self.removed_j)
+        energy = _energy_ledger(self.eng, self.dt, self.ke0, self.se0, self.se0_shadow, self.removed_j,
+                                self.bolts0)
         err = energy.relative_error
         if err <= self.settings.energy_tolerance:
             return True
@@ -492,7 +508,8 @@ class _StageRun:
         counted = live & (eng.model.area_m2 >= settings.sliver_area_m2)
         boundary = _boundary_blocks(eng, removed)
         slipping, n_open, n_broken = _contact_counts(eng)
-        energy = _energy_ledger(eng, self.dt, self.ke0, self.se0, self.se0_shadow, self.removed_j)
+        energy = _energy_ledger(eng, self.dt, self.ke0, self.se0, self.se0_shadow, self.removed_j,
+                                self.bolts0)
         worst_block, worst_ratio = int(self.out[6]), float(self.out[5])
         status, diagnostic, converged_rest = self._final_status(worst_block, worst_ratio)
         ratio, limit = self.ratio, self.limit
@@ -566,4 +583,5 @@ def run(model, settings: Settings, *,
                   velocity_m_s=eng.vel.copy(), active=eng.active.copy(), history=rec.history(),
                   contacts=eng.contact_table(),
                   frames=rec.frames, block_energy=block_energy, status=status,
-                  diagnostic=diagnostic, info=info, failed=eng.failed.copy())
+                  diagnostic=diagnostic, info=info, failed=eng.failed.copy(),
+                  bolts=bolt_table(eng))

@@ -38,7 +38,8 @@ from . import tolerances as T
 
 __all__ = ["Coulomb", "ContinuouslyYielding", "JointModel", "Material", "InSituStress",
            "Fix", "BoundaryStress", "Sine", "Ricker", "TableHistory", "History", "VelocityInput",
-           "QuietBoundary", "FreeField", "Monitor", "Stage", "Settings", "SIDES"]
+           "QuietBoundary", "FreeField", "Monitor", "BoltProperties", "Bolt", "BoltPattern",
+           "Stage", "Settings", "SIDES"]
 
 
 def _none_is_inf(value: Any) -> Any:
@@ -408,6 +409,121 @@ class Monitor:
 
 
 @spec
+class BoltProperties:
+    """A fully grouted bolt or cable, as a UDEC cable element (Itasca 2004; docs/dem.md §15).
+
+    Steel: an elastic–perfectly-plastic axial spring, axial stiffness E·A (``axial_stiffness_n``,
+    or E and the diameter d: E·πd²/4), yielding at ``yield_force_n`` in tension and
+    ``compressive_yield_force_n`` in compression. Grout: a shear spring along the bolt between the
+    steel and the rock, ``bond_stiffness_n_m2`` (k_bond, force per metre of bolt per metre of
+    slip) and ``bond_strength_n_m`` (s_bond, force per metre of bolt) at which it slips. The 2D
+    model is a section of unit thickness through bolts ``out_of_plane_spacing_m`` apart: every
+    force, stiffness and strength is divided by that spacing.
+    """
+
+    bond_stiffness_n_m2: Annotated[Float, Field(gt=0, le=1e16, description=(
+        "grout shear stiffness k_bond per metre of bolt (N/m per m)"))]
+    bond_strength_n_m: Annotated[Float, Field(gt=0, le=1e12, description=(
+        "grout bond strength s_bond per metre of bolt (N/m)"))]
+    axial_stiffness_n: Annotated[Optional[Float], Field(gt=0, le=1e14, description=(
+        "axial stiffness E·A of one bolt; none: from youngs_modulus_pa and diameter_m"))] = None
+    youngs_modulus_pa: Annotated[Optional[Float], Field(gt=0, le=1e13, description=(
+        "Young's modulus E of the steel (with diameter_m, instead of axial_stiffness_n)"))] = None
+    diameter_m: Annotated[Optional[Float], Field(gt=0, le=10, description=(
+        "bolt diameter d: A = πd²/4 (with youngs_modulus_pa)"))] = None
+    yield_force_n: Annotated[Optional[Float], Field(gt=0, le=1e12, description=(
+        "tensile yield force of one bolt; none: no yield"))] = None
+    compressive_yield_force_n: Annotated[Optional[Float], Field(gt=0, le=1e12, description=(
+        "compressive yield force of one bolt; none: yield_force_n"))] = None
+    out_of_plane_spacing_m: Annotated[Float, Field(gt=0, le=1e3, description=(
+        "spacing of the bolts normal to the section: forces per metre of thickness are those of "
+        "one bolt divided by it"))] = 1.0
+
+    @model_validator(mode="after")
+    def _one_stiffness(self):
+        pair = (self.youngs_modulus_pa is not None, self.diameter_m is not None)
+        given = self.axial_stiffness_n is not None
+        if not ((given and not any(pair)) or (not given and all(pair))):
+            raise field_error(self, "axial_stiffness_n", "give either axial_stiffness_n or both "
+                              "youngs_modulus_pa and diameter_m", self.axial_stiffness_n)
+        return self
+
+    def per_metre(self) -> dict[str, float]:
+        """The kernel's values per metre of thickness: E·A, k_bond, s_bond and the yield forces
+        (tension, compression; inf when none), each divided by the out-of-plane spacing.
+
+        >>> BoltProperties(1e8, 2e5, youngs_modulus_pa=2e11, diameter_m=0.02,
+        ...                out_of_plane_spacing_m=2.0).per_metre()["axial_stiffness_n"]
+        31415926.535897933
+        """
+        ea = (self.axial_stiffness_n if self.axial_stiffness_n is not None
+              else self.youngs_modulus_pa * math.pi * self.diameter_m ** 2 / 4.0)
+        tension = math.inf if self.yield_force_n is None else self.yield_force_n
+        compression = (tension if self.compressive_yield_force_n is None
+                       else self.compressive_yield_force_n)
+        s = self.out_of_plane_spacing_m
+        return {"axial_stiffness_n": ea / s, "bond_stiffness_n_m2": self.bond_stiffness_n_m2 / s,
+                "bond_strength_n_m": self.bond_strength_n_m / s, "yield_force_n": tension / s,
+                "compressive_yield_force_n": compression / s}
+
+
+BoltSegments = Annotated[Int, Field(ge=1, le=10_000, description=(
+    "segments of the bolt (nodes: segments + 1); each node is grouted over its share of the "
+    "length"))]
+BoltStage = Annotated[str, Strict(), Field(min_length=1, max_length=64, description=(
+    "stage at whose start (after its excavation) the bolt is installed"))]
+
+
+@spec
+class Bolt:
+    """One straight bolt from ``start_xy_m`` to ``end_xy_m`` (world frame, m), installed at the start
+    of stage ``stage`` after that stage's excavation: its nodes are grouted into the blocks that
+    contain them then (docs/dem.md §15)."""
+
+    start_xy_m: Annotated[tuple[Coord, Coord], Field(description="first end (x, y) of the bolt")]
+    end_xy_m: Annotated[tuple[Coord, Coord], Field(description="second end (x, y) of the bolt")]
+    stage: BoltStage
+    properties: Annotated[BoltProperties, Field(description="steel and grout")]
+    segments: BoltSegments = 10
+    name: Annotated[Optional[str], Strict(), Field(pattern=r"^[A-Za-z0-9_\-]{1,40}$", description=(
+        "name in bolts.csv; none: bolt<k>"))] = None
+
+    @model_validator(mode="after")
+    def _not_a_point(self):
+        if math.dist(self.start_xy_m, self.end_xy_m) <= 0:
+            raise field_error(self, "end_xy_m", "must differ from start_xy_m", self.end_xy_m)
+        return self
+
+
+Wall = Literal["roof", "floor", "left", "right"]
+
+
+@spec
+class BoltPattern:
+    """Bolts by rule around the opening excavated so far (docs/dem.md §15): at the start of stage
+    ``stage``, one bolt every ``spacing_m`` along the boundary of the opening (the union of the
+    blocks excavated up to and including that stage; only the walls that stage's own excavation
+    exposed when it excavates), normal to the wall and ``length_m`` into the rock. ``walls`` keeps the heads on the roof, floor, left or right walls (by the direction
+    of the wall's normal into the rock: up, down, left, right; none: roof, left and right, as
+    seed 000's patterns); ``box_m`` keeps only heads inside
+    a box — seed 000 pattern 1: 5 m bolts every 1.5 m on the roof and side walls; pattern 2 adds
+    15 m bolts on the weak parts of the walls (two patterns with boxes)."""
+
+    stage: BoltStage
+    length_m: Annotated[Float, Field(gt=0, le=1e4, description="bolt length into the rock")]
+    spacing_m: Annotated[Float, Field(gt=0, le=1e4, description="spacing along the wall")]
+    properties: Annotated[BoltProperties, Field(description="steel and grout")]
+    walls: Annotated[Optional[tuple[Wall, ...]], Field(min_length=1, max_length=4, description=(
+        "walls bolted: roof, floor, left, right (by the direction of the wall's normal into the "
+        "rock); none: roof, left and right"))] = None
+    box_m: Annotated[Optional[tuple[Coord, Coord, Coord, Coord]], Field(description=(
+        "only heads inside this box (x0, y0, x1, y1); none: everywhere on the walls"))] = None
+    segments: BoltSegments = 10
+    name: Annotated[Optional[str], Strict(), Field(pattern=r"^[A-Za-z0-9_\-]{1,30}$", description=(
+        "prefix of the bolts' names in bolts.csv; none: pattern<k>"))] = None
+
+
+@spec
 class Stage:
     """One stage of a run.
 
@@ -517,6 +633,13 @@ class Settings:
         exclude_if=lambda value: value is None)] = None
     monitors: Annotated[tuple[Monitor, ...], Field(
         max_length=1000, description="blocks recorded in history.csv (unique names)")] = ()
+    # left out of dumps (and config hashes) when empty: adding them changed no existing hash
+    bolts: Annotated[tuple[Bolt, ...], Field(
+        max_length=10_000, description="rock bolts and cables (docs/dem.md §15)",
+        exclude_if=lambda value: not value)] = ()
+    bolt_patterns: Annotated[tuple[BoltPattern, ...], Field(
+        max_length=100, description="bolts by rule around the opening (docs/dem.md §15)",
+        exclude_if=lambda value: not value)] = ()
     rounding_m: Annotated[Optional[Float], Field(gt=0, le=1e6, description=(
         "corner rounding d; none: the block model's, else 1 % of the median edge"))] = None
     contact_tolerance_m: Annotated[Optional[Float], Field(gt=0, le=1e6, description=(
@@ -574,7 +697,7 @@ def _check_reference_inputs(settings: Any, stage: Stage) -> None:
 def _check_settings(settings: Any) -> None:
     """The cross-field rules of :class:`Settings`, for it and for anything with its fields (the
     ``[solve]`` section, :class:`rockmass.solve_config.SolveConfig`): a ``default`` joint model,
-    unique stage and monitor names, elastic moduli for a boundary impedance that needs them, no
+    unique stage and monitor names, bolts installed in stages of the run, elastic moduli for a boundary impedance that needs them, no
     side both quiet and free-field, one input history per
     component for damping relative to the inputs."""
     if "default" not in settings.joints:
@@ -585,6 +708,13 @@ def _check_settings(settings: Any) -> None:
         names = [item.name for item in items]
         if len(set(names)) != len(names):
             raise field_error(settings, field, f"names must be unique, got {names}", names)
+    stage_names = [stage.name for stage in settings.stages]
+    for field in ("bolts", "bolt_patterns"):
+        for i, item in enumerate(getattr(settings, field, ())):
+            if item.stage not in stage_names:
+                raise field_error(settings, field, f"{field}[{i}].stage {item.stage!r} is not a "
+                                  f"stage of the run ({', '.join(map(repr, stage_names))})",
+                                  item.stage)
     for stage in settings.stages:
         if stage.kind == "dynamic" and stage.rayleigh_reference == "inputs":
             _check_reference_inputs(settings, stage)

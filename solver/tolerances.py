@@ -167,3 +167,9 @@ SLEEP_CREEP = 1e-3
 #: A sleeping block wakes when its ratio exceeds this multiple of the sleep ratio: a neighbour has
 #: moved. The gap between the two thresholds keeps a block from toggling every step.
 WAKE_FACTOR = 10.0
+
+# --- rock bolts (docs/dem.md §15) ----------------------------------------------------------------
+
+#: A pattern bolt's head starts this fraction of its length inside the rock: on the wall itself,
+#: round-off can leave it in the opening, where no block hosts it.
+BOLT_HEAD_INSET = 1e-6
