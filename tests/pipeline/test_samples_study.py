@@ -17,6 +17,7 @@ STUDIES = sorted(SAMPLES.glob("study_*.toml"))
 
 # cases per sample (a new sample adds its line here)
 EXPECTED = {
+    "study_bolting_seed000.toml": 3,  # no bolts, pattern 1, pattern 2 (seed 000 Fig. 5)
     "study_cavern.toml": 18,         # theta 40/60/90 x 3 spacings x 2 realizations
     "study_dfn_seed001.toml": 6,     # P32 = 1, 2 x 3 realizations
     "study_seed000.toml": 81,        # theta x alpha x spacings (3 each) x 3 realizations
