@@ -10,6 +10,8 @@ Arrays are (row, col) images; nothing here knows about metres.
 
 from __future__ import annotations
 
+import contextlib
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -22,13 +24,18 @@ LUMA_601 = (0.299, 0.587, 0.114)
 FLATTEN_METHODS = ("divide", "subtract", "none")
 
 
-def read_photo(path) -> np.ndarray:
+def read_photo(path, max_pixels: int | None = None) -> np.ndarray:
     """Read a JPEG / PNG / TIFF photograph as stored, after applying its EXIF orientation.
 
     Parameters
     ----------
     path : str or path-like
         The image file.
+    max_pixels : int, optional
+        The pixel count the caller has already allowed for this file (the commands check the
+        header against ``--max-pixels`` first, :mod:`rockmass.image_limits`); Pillow's own
+        decompression-bomb guard is then set to it instead of its default (about 179 MP refused).
+        Default None: Pillow's default guard.
 
     Returns
     -------
@@ -56,7 +63,7 @@ def read_photo(path) -> np.ndarray:
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such file")
     try:
-        with Image.open(path) as img:
+        with _pillow_pixel_limit(Image, max_pixels), Image.open(path) as img:
             img.load()
             img = ImageOps.exif_transpose(img)
             mode = img.mode
@@ -81,6 +88,24 @@ def read_photo(path) -> np.ndarray:
         raise OSError(f"{path}: the image could not be decoded (truncated or corrupt?): {exc}") from exc
     return np.array(array, copy=True)
 
+
+
+@contextlib.contextmanager
+def _pillow_pixel_limit(image_module, max_pixels: int | None):
+    """Pillow's ``Image.MAX_IMAGE_PIXELS`` raised to ``max_pixels`` for the block (Pillow refuses
+    above twice that value and warns above it; the caller's own check is the guard then), and put
+    back afterwards. ``None``: unchanged."""
+    if max_pixels is None:
+        yield
+        return
+    before = image_module.MAX_IMAGE_PIXELS
+    image_module.MAX_IMAGE_PIXELS = max(int(max_pixels), before or 0)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", image_module.DecompressionBombWarning)
+            yield
+    finally:
+        image_module.MAX_IMAGE_PIXELS = before
 
 def to_grey(image, *, name: str = "image") -> np.ndarray:
     """One float32 grey channel in [0, 1] from a grey, RGB or RGBA image of any numeric dtype.

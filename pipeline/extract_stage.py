@@ -60,7 +60,7 @@ def compute(args, document=None):
     from .dfn import trace_map_statistics
     from .fractal import box_count
     from .imaging import extract
-    from .image_limits import check_image_pixels
+    from .image_limits import check_image_pixels, max_pixels
     from .imaging.enhance import read_photo
     from .imaging.extract import STEPS, ExtractParams
     from .progress import step_bar
@@ -70,7 +70,7 @@ def compute(args, document=None):
     t0 = time.perf_counter()
     check_image_pixels(path, getattr(args, "max_pixels", None))  # from the header, before decoding
     try:
-        image = read_photo(path)
+        image = read_photo(path, max_pixels(getattr(args, "max_pixels", None)))
     except OSError as exc:
         raise InputError(f"{path}: cannot read the photograph: {exc.strerror or exc}") from exc
     except ValueError as exc:

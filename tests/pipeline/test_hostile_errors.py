@@ -222,6 +222,16 @@ def test_the_pixel_limit_is_raised_by_the_option_and_the_environment(tmp_path, c
     _fails(["boxcount", str(path)], capsys, 2, "ROCKMASS_MAX_PIXELS", "'lots'")
 
 
+def test_extract_with_a_raised_limit_is_not_stopped_by_pillows_own_guard(tmp_path, capsys):
+    """A 225 MP header (above Pillow's default bomb limit of ~179 MP) with --max-pixels 3e8: the
+    header check passes and Pillow must not refuse it as a bomb (exit 1); the empty data is what
+    fails, as bad input (exit 2 naming the file)."""
+    path = _png_header_only(tmp_path / "huge.png", 15_000, 15_000)
+    err = _fails(["extract", str(path), "--out", str(tmp_path / "out"), "--max-pixels", "3e8"],
+                 capsys, 2, str(path))
+    assert "bomb" not in err.lower() and "above the limit" not in err
+
+
 def test_image_size_reads_png_jpeg_tiff_and_bmp_headers(tmp_path):
     import numpy as np
     from PIL import Image
