@@ -53,6 +53,8 @@ def impact_error(gap_m: float, safety) -> tuple[float, float, int]:
     result = run(drop_model(gap_m), settings)
     h = result.history
     flight = (h["time_s"] > fall) & (h["top_contact_fy_n"] == 0.0) & (h["top_vy_m_s"] > 0)
+    if flight.sum() <= 10:
+        raise RuntimeError(f"gap {gap_m} m, safety {safety}: the block did not rebound")
     dt = result.stages[0].time_step_s
     # velocities live at half steps: the position at the same instant is half a step back
     vy = h["top_vy_m_s"][flight]

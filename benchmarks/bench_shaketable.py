@@ -2,7 +2,7 @@
 top-left block against cycle, its error against the experiment's 4.5 mm and UDEC's figure, with run
 time (issue 16 item 3; docs/dem.md §13, problem 13).
 
-    python benchmarks/bench_shaketable.py [--quick] [--frequency F] [--tables 3,4,5]
+    python benchmarks/bench_shaketable.py [--quick] [--frequency F] [--tables 3,4,5,6]
 
 The model is samples/solve_shaketable.toml (122 × 61 cm, two ±45° sets at 5 cm, a 15.2 cm tunnel,
 Table 1 properties, bottom and sides driven). The Mexico record the experiment used is not in the
@@ -31,7 +31,10 @@ relative to the table after each cycle, and the final value against 4.5 mm (expe
 Table 5 — the same 15 cycles without Rayleigh damping (the paper states none; the sample's 0.5 %
 at 100 Hz damps the blocks' contact vibrations).
 
-``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–5.
+Table 6 — the same 15 cycles with the mass part of the damping on absolute velocity
+(``rayleigh_reference = "absolute"``, the default of a Stage): how much of the table's work it takes.
+
+``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–6.
 """
 
 from __future__ import annotations
@@ -111,8 +114,9 @@ class Sequence:
 
 
 def shaking(model, settings, levels, frequency_hz: float, cycles: int,
-            rayleigh_ratio: float | None = None) -> tuple[dict, float]:
-    """Static stages, then the sample's dynamic stage (its damping, or ``rayleigh_ratio``) for
+            **damping) -> tuple[dict, float]:
+    """Static stages, then the sample's dynamic stage (its damping, or the Stage fields in
+    ``damping``: rayleigh_ratio, rayleigh_reference) for
     ``cycles`` cycles of :class:`TableSine` (ramped over one cycle) at each displacement amplitude
     of ``levels`` in turn. Returns the top-left block's displacement relative to the table after
     each cycle (from its place before shaking), the energy ledger of the shaking, and the wall
@@ -121,8 +125,8 @@ def shaking(model, settings, levels, frequency_hz: float, cycles: int,
     motion = Sequence([TableSine(d, frequency_hz, cycles=cycles) for d in levels], period)
     sample_stage = next(s for s in settings.stages if s.kind == "dynamic")  # its damping
     stage = dataclasses.replace(sample_stage, duration_s=len(levels) * period + 0.05, frames=0)
-    if rayleigh_ratio is not None:
-        stage = dataclasses.replace(stage, rayleigh_ratio=rayleigh_ratio)
+    if damping:
+        stage = dataclasses.replace(stage, **damping)
     inputs = tuple(VelocityInput(v.where, v.component, motion) for v in settings.velocity_inputs)
     shaken = dataclasses.replace(settings, stages=static_stages(settings) + (stage,),
                                  velocity_inputs=inputs)
@@ -156,9 +160,9 @@ def frequency_for(a_c: float, d_m: float) -> float:
 
 
 def fifteen_cycles(model, settings, label: str, frequency_hz: float, cycles: int,
-                   rayleigh_ratio: float | None = None) -> dict:
-    """Table 4 / 5: ``cycles`` cycles at 15.5 mm; prints slip per cycle and its errors."""
-    out, wall = shaking(model, settings, (SLIP_D_M,), frequency_hz, cycles, rayleigh_ratio)
+                   **damping) -> dict:
+    """Tables 4–6: ``cycles`` cycles at 15.5 mm; prints slip per cycle and its errors."""
+    out, wall = shaking(model, settings, (SLIP_D_M,), frequency_hz, cycles, **damping)
     reached = [r for r in out["rows"] if r["slip_mm"] is not None]
     slip = reached[-1]["slip_mm"] * 1e-3 if reached else math.nan
     print(f"\n{label} — {cycles} cycles at 15.5 mm, f = {frequency_hz:.2f} Hz: {wall:.0f} s wall, "
@@ -174,7 +178,7 @@ def fifteen_cycles(model, settings, label: str, frequency_hz: float, cycles: int
     return {"frequency_hz": frequency_hz, "wall_s": wall, **out}
 
 
-def main(quick: bool = False, frequency_hz: float | None = None, tables=(1, 3, 4, 5)) -> None:
+def main(quick: bool = False, frequency_hz: float | None = None, tables=(1, 3, 4, 5, 6)) -> None:
     print(header("bench_shaketable: Ahola et al. (1996) shake table, Varma et al. (2019) §3"))
     model, settings = load()
     results = {}
@@ -214,16 +218,21 @@ def main(quick: bool = False, frequency_hz: float | None = None, tables=(1, 3, 4
         results["fifteen_cycles"] = runs
     if 5 in tables:
         results["no_damping"] = fifteen_cycles(
-            model, settings, "Table 5 (no Rayleigh damping)", frequency_hz, cycles, 0.0)
-    partial = "" if tables == (1, 3, 4, 5) and band is not None else "_tables" + "".join(
+            model, settings, "Table 5 (no Rayleigh damping)", frequency_hz, cycles,
+            rayleigh_ratio=0.0)
+    if 6 in tables:
+        results["absolute_damping"] = fifteen_cycles(
+            model, settings, "Table 6 (mass damping on absolute velocity)", frequency_hz, cycles,
+            rayleigh_reference="absolute")
+    partial = "" if tables == (1, 3, 4, 5, 6) and band is not None else "_tables" + "".join(
         map(str, tables))
     save("bench_shaketable" + ("_quick" if quick else "") + partial, results)
 
 
 def _arguments(argv):
-    """--quick, --frequency F (skip Tables 1-2), --tables 3,4,5."""
+    """--quick, --frequency F (skip Tables 1-2), --tables 3,4,5,6."""
     frequency = float(argv[argv.index("--frequency") + 1]) if "--frequency" in argv else None
-    tables = ((1, 3, 4, 5) if "--tables" not in argv
+    tables = ((1, 3, 4, 5, 6) if "--tables" not in argv
               else tuple(int(t) for t in argv[argv.index("--tables") + 1].split(",")))
     return {"quick": "--quick" in argv, "frequency_hz": frequency, "tables": tables}
 

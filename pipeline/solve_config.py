@@ -77,15 +77,14 @@ from typing import Annotated, Literal
 
 from pydantic import Field, Strict
 
-from .solver.settings import (Bolt, BoltPattern, BoundaryStress, ContinuouslyYielding, Coulomb,
-                              Fix, InSituStress, Material, Monitor, QuietBoundary, Ricker,
-                              Settings, Sine, Stage, TableSine, VelocityInput)
+from .solver.settings import (BoundaryStress, ContinuouslyYielding, Coulomb, Fix, InSituStress,
+                              Material, Monitor, QuietBoundary, Ricker, Settings, Sine, Stage,
+                              TableSine, VelocityInput)
 from .strict import ConfigFile, StrictModel, config_file, in_folder, library_section
 
 __all__ = ["SolveConfig", "SolveDocument", "MaterialConfig", "CoulombConfig", "CYConfig",
            "InSituConfig", "FixConfig", "BoundaryStressConfig", "SineConfig", "RickerConfig",
            "CsvHistoryConfig", "VelocityInputConfig", "QuietConfig", "MonitorConfig",
-           "BoltConfig", "BoltPatternConfig",
            "StageConfig", "read_history_csv"]
 
 # the TOML tables that are the solver's own types (names kept for importers of this module)
@@ -99,8 +98,6 @@ SineConfig = Sine
 RickerConfig = Ricker
 QuietConfig = QuietBoundary
 MonitorConfig = Monitor
-BoltConfig = Bolt
-BoltPatternConfig = BoltPattern
 
 
 class CsvHistoryConfig(StrictModel):

@@ -193,14 +193,18 @@ def _png_header_only(path: Path, width: int, height: int) -> Path:
 @pytest.mark.parametrize("command", [["boxcount"], ["extract", "--m-per-px", "0.01"]])
 def test_an_image_above_the_pixel_limit_is_refused_before_decoding(tmp_path, capsys, monkeypatch,
                                                                    command):
-    from PIL import Image
+    import cv2
+    from PIL import Image, ImageFile
 
     from rockmass.fractal import image as fractal_image
 
     def no_decoding(*args, **kwargs):
-        raise AssertionError("the image was opened for decoding")
+        raise AssertionError("the image was decoded")
 
-    monkeypatch.setattr(Image, "open", no_decoding)
+    # the header may be read (Image.open is lazy); the pixels must not be
+    monkeypatch.setattr(ImageFile.ImageFile, "load", no_decoding)
+    monkeypatch.setattr(Image.Image, "load", no_decoding)
+    monkeypatch.setattr(cv2, "imdecode", no_decoding)
     monkeypatch.setattr(fractal_image, "read_image", no_decoding, raising=False)
     path = _png_header_only(tmp_path / "bomb.png", 30_000, 20_000)
     out = tmp_path / "out"
