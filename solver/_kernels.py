@@ -97,8 +97,9 @@ N_BS_COLUMNS = 9
 
 # --- energy accumulator entries (docs/dem.md §11) -----------------------------------------------
 (E_GRAVITY, E_EXTERNAL, E_LOCAL_DAMP, E_VISCOUS, E_QUIET, E_CONTACT_FREE, E_CONTACT_PRESC,
- E_SLIP, E_BROKEN, E_NEW_BROKEN, E_NEW_SLOTS, E_BOLT_SLIP, E_BOLT_YIELD) = range(13)
-N_ENERGY = 13
+ E_SLIP, E_BROKEN, E_NEW_BROKEN, E_NEW_SLOTS, E_BOLT_SLIP, E_BOLT_YIELD, E_ZONE_INTERNAL,
+ E_ZONE_PLASTIC, E_ZONE_MIXED) = range(16)
+N_ENERGY = 16
 
 # --- return codes of advance() ------------------------------------------------------------------
 RC_DONE, RC_REBUILD, RC_CONVERGED, RC_OVERLAP, RC_NONFINITE, RC_STIFF = range(6)
@@ -1360,4 +1361,385 @@ def advance(n_steps, blocks, pairs, loads, prm, E, out):
             return RC_REBUILD
     out[0] = n_steps
     out[1] = ratio
+    return RC_DONE
+
+
+# ------------------------------------------------------------------------------------------------
+# Deformable blocks: constant-strain triangular zones (docs/dem.md §16). Stresses here are tension
+# positive, as everywhere inside the solver; columns ``ZS_*`` of the zone stress, ``ZM_*`` of the
+# zone-material table (rockmass.solver.zones.material_table).
+# ------------------------------------------------------------------------------------------------
+
+(ZS_XX, ZS_YY, ZS_ZZ, ZS_XY) = range(4)
+N_ZS_COLUMNS = 4
+(ZM_MODEL, ZM_K, ZM_G, ZM_NPHI, ZM_COH, ZM_NPSI, ZM_TEN, ZM_SIGCI, ZM_MB, ZM_S, ZM_A) = range(11)
+N_ZM_COLUMNS = 11
+ZMODEL_ELASTIC, ZMODEL_MC, ZMODEL_HB = 0, 1, 2
+#: plastic state bits of a zone: yielding in shear / tension at the last step, and ever
+ZST_SHEAR_NOW, ZST_TENSION_NOW, ZST_SHEAR_PAST, ZST_TENSION_PAST = 1, 2, 4, 8
+#: Hoek–Brown: linearisations of the yield curve per return at most (docs/dem.md §16.4); they stop
+#: once the minor principal stress moves by less than 1e-10 of the stress scale
+HB_ITERATIONS = 50
+#: Mohr–Coulomb: corrections per return at most (a correction that reorders the principal
+#: stresses is followed by another; two suffice for the small increments of a step)
+MC_CORRECTIONS = 20
+
+
+@njit(cache=True, inline="always")
+def _zone_gradients(xy, tri, z):
+    """Area A and the shape-function gradients (∂N_i/∂x, ∂N_i/∂y) of zone z from the present
+    node positions (docs/dem.md §16.2, eq. (16.1)): 2A = (x_j − x_i)(y_k − y_i) − (x_k − x_i)
+    (y_j − y_i), ∂N_i/∂x = (y_j − y_k)/2A, ∂N_i/∂y = (x_k − x_j)/2A, cyclic in (i, j, k)."""
+    i = tri[z, 0]
+    j = tri[z, 1]
+    k = tri[z, 2]
+    xi, yi = xy[i, 0], xy[i, 1]
+    xj, yj = xy[j, 0], xy[j, 1]
+    xk, yk = xy[k, 0], xy[k, 1]
+    a2 = (xj - xi) * (yk - yi) - (xk - xi) * (yj - yi)
+    inv = 1.0 / a2
+    return (0.5 * a2, (yj - yk) * inv, (xk - xj) * inv, (yk - yi) * inv, (xi - xk) * inv,
+            (yi - yj) * inv, (xj - xi) * inv)
+
+
+@njit(cache=True, inline="always")
+def _principal_in_plane(sxx, syy, sxy):
+    """Centre c, radius r of Mohr's circle and (cos 2θ, sin 2θ) of the major in-plane direction."""
+    c = 0.5 * (sxx + syy)
+    h = 0.5 * (sxx - syy)
+    r = math.sqrt(h * h + sxy * sxy)
+    if r > 0.0:
+        return c, r, h / r, sxy / r
+    return c, 0.0, 1.0, 0.0
+
+
+@njit(cache=True)
+def _mc_correct(s, m, nphi, coh, npsi, ten):
+    """One Mohr–Coulomb correction of the stress ``s`` (tension positive, columns ``ZS_*``) in
+    place; returns the plastic state bits (0: inside the surface). See :func:`_mc_return`."""
+    kk = m[ZM_K]
+    gg = m[ZM_G]
+    a1 = kk + 4.0 * gg / 3.0
+    a2 = kk - 2.0 * gg / 3.0
+    c, r, cos2, sin2 = _principal_in_plane(s[ZS_XX], s[ZS_YY], s[ZS_XY])
+    lo = c - r
+    hi = c + r
+    szz = s[ZS_ZZ]
+    # order the three principal values; zpos: where σ_zz sits (0: σ₁, 1: σ₂, 2: σ₃)
+    if szz <= lo:
+        s1, s2, s3, zpos = szz, lo, hi, 0
+    elif szz >= hi:
+        s1, s2, s3, zpos = lo, hi, szz, 2
+    else:
+        s1, s2, s3, zpos = lo, szz, hi, 1
+    rn = math.sqrt(nphi)
+    fs = s1 - s3 * nphi + 2.0 * coh * rn
+    ft = ten - s3
+    scale = 1e-12 * (abs(s1) + abs(s3) + coh + ten)
+    if fs >= -scale and ft >= -scale:
+        return 0
+    alpha_p = math.sqrt(1.0 + nphi * nphi) + nphi
+    sigma_p = ten * nphi - 2.0 * coh * rn
+    h = s3 - ten + alpha_p * (s1 - sigma_p)
+    bits = 0
+    if fs < 0.0 and h <= 0.0:
+        lam = fs / ((a1 - a2 * npsi) - (a2 - a1 * npsi) * nphi)
+        s1 -= lam * (a1 - a2 * npsi)
+        s2 -= lam * a2 * (1.0 - npsi)
+        s3 -= lam * (a2 - a1 * npsi)
+        bits = ZST_SHEAR_NOW
+    else:
+        lam = ft / a1
+        s1 += lam * a2
+        s2 += lam * a2
+        s3 += lam * a1
+        bits = ZST_TENSION_NOW
+    if zpos == 0:
+        szz, lo, hi = s1, s2, s3
+    elif zpos == 2:
+        lo, hi, szz = s1, s2, s3
+    else:
+        lo, szz, hi = s1, s2, s3
+    # the in-plane pair keeps its directions (lo along the minor axis, hi along the major)
+    c = 0.5 * (lo + hi)
+    r = 0.5 * (hi - lo)
+    s[ZS_XX] = c + r * cos2
+    s[ZS_YY] = c - r * cos2
+    s[ZS_XY] = r * sin2
+    s[ZS_ZZ] = szz
+    return bits
+
+
+@njit(cache=True)
+def _mc_return(s, m, nphi, coh, npsi, ten):
+    """Elastic–perfectly-plastic Mohr–Coulomb with a tension cut-off, one zone's trial stress
+    ``s`` (tension positive, columns ``ZS_*``) corrected in place (docs/dem.md §16.3, after Itasca's
+    FLAC formulation in principal stresses). Returns the plastic state bits of the correction.
+
+    Principal stresses σ₁ ≤ σ₂ ≤ σ₃ (σ₁ the most compressive; σ_zz is one of them in plane strain).
+    Shear yield f_s = σ₁ − σ₃N_φ + 2c√N_φ < 0, tension f_t = σ_t − σ₃ < 0, the region chosen by
+    h = σ₃ − σ_t + α_P(σ₁ − σ_P) (α_P = √(1 + N_φ²) + N_φ, σ_P = σ_t N_φ − 2c√N_φ). Shear flow with
+    N_ψ: λ = f_s/((α₁ − α₂N_ψ) − (α₂ − α₁N_ψ)N_φ), σ₁ −= λ(α₁ − α₂N_ψ), σ₂ −= λα₂(1 − N_ψ),
+    σ₃ −= λ(α₂ − α₁N_ψ); tension: σ₃ = σ_t, σ₁,₂ += α₂(σ_t − σ₃)/α₁ (α₁ = K + 4G/3, α₂ = K − 2G/3).
+    A correction that reorders the principal stresses (near the edges σ₁ = σ₂ or σ₂ = σ₃ of the
+    pyramid) is followed by another from the result, up to ``MC_CORRECTIONS`` in all, so the
+    stress ends on the surface.
+    """
+    bits = 0
+    for _ in range(MC_CORRECTIONS):
+        now = _mc_correct(s, m, nphi, coh, npsi, ten)
+        if now == 0:
+            break
+        bits |= now
+    return bits
+
+
+@njit(cache=True)
+def _hb_return(s, m, npsi, trial):
+    """Generalised Hoek–Brown, σ₁' = σ₃' + σ_ci(m_b σ₃'/σ_ci + s)^a (compression positive,
+    Hoek, Carranza-Torres & Corkum 2002), corrected by Mohr–Coulomb returns on the curve's tangent
+    at the present minor stress, re-linearised from the trial stress until the minor stress settles
+    (at most ``HB_ITERATIONS`` times)
+    (docs/dem.md §16.4): N_φ = 1 + a m_b (m_b σ₃'/σ_ci + s)^(a−1), the tangent's uniaxial strength
+    σ₁'(σ₃') − N_φσ₃' = 2c√N_φ, and the tension cut-off at the curve's tensile strength s σ_ci/m_b.
+    ``trial`` is scratch (4,). Returns the plastic state bits."""
+    sci = m[ZM_SIGCI]
+    mb = m[ZM_MB]
+    ss = m[ZM_S]
+    aa = m[ZM_A]
+    ten = ss * sci / mb
+    floor = 1e-6 * ten  # tangent taken just inside the tensile apex (the slope is infinite there)
+    for q in range(4):
+        trial[q] = s[q]
+    c, r, _c2, _s2 = _principal_in_plane(s[ZS_XX], s[ZS_YY], s[ZS_XY])
+    s3 = max(c + r, s[ZS_ZZ])  # the least compressive principal stress (tension positive)
+    bits = 0
+    for _it in range(HB_ITERATIONS):
+        minor = max(-s3, -ten + floor)  # σ₃' compression positive, inside the apex
+        base = mb * minor / sci + ss
+        nphi = 1.0 + aa * mb * base ** (aa - 1.0)
+        ucs = minor + sci * base ** aa - nphi * minor
+        coh = ucs / (2.0 * math.sqrt(nphi))
+        for q in range(4):
+            s[q] = trial[q]
+        bits = _mc_return(s, m, nphi, coh, npsi, ten)
+        if bits == 0:
+            return 0
+        c, r, _c2, _s2 = _principal_in_plane(s[ZS_XX], s[ZS_YY], s[ZS_XY])
+        s3_new = max(c + r, s[ZS_ZZ])
+        if abs(s3_new - s3) <= 1e-10 * (abs(s3) + sci):
+            break
+        s3 = s3_new
+    return bits
+
+
+@njit(cache=True)
+def zone_stress_update(xy, vel, tri, zmat, mtab, sig, strain, state, eps_p, dt, mixed, node_ev,
+                       node_a, E):
+    """The stress update of every zone after the nodes moved by ``vel`` Δt (docs/dem.md §16.2–
+    §16.4). Books the plastic work σ:Δε_p as E_ZONE_PLASTIC and, with ``mixed``, the work
+    A ½(σ_xx + σ_yy)(ē − e) the mixed volumetric strain ē adds over the zone's own e as
+    E_ZONE_MIXED (the nodes' forces come from the zones' stresses, so this work is done by no
+    force: it is the discretisation's, and the ledger states it, docs/dem.md §16.5).
+
+    Strain increment Δε = ½(∇v + ∇vᵀ)Δt and spin θ = ½(∂v_y/∂x − ∂v_x/∂y)Δt of the constant-strain
+    triangle on the new geometry; with ``mixed`` the volumetric part is replaced by the
+    area-weighted mean over the zones around each of its nodes, averaged over the zone's three
+    nodes (nodal mixed discretisation, Detournay & Dzik 2006: no volumetric locking under plastic
+    flow; ``node_ev``/``node_a`` are scratch of the node count). The stress is rotated by θ
+    (Jaumann), takes the elastic increment Δσ = λ tr(Δε) I + 2G Δε (plane strain, σ_zz included),
+    and is returned to the yield surface of the zone's model (:func:`_mc_return`,
+    :func:`_hb_return`). ``strain`` accumulates the total strain (xx, yy, xy tensor), ``eps_p``
+    the plastic strain magnitude, ``state`` the plastic bits.
+    """
+    nz = len(tri)
+    if mixed:
+        node_ev[:] = 0.0
+        node_a[:] = 0.0
+        for z in range(nz):
+            a, gxi, gyi, gxj, gyj, gxk, gyk = _zone_gradients(xy, tri, z)
+            i = tri[z, 0]
+            j = tri[z, 1]
+            k = tri[z, 2]
+            ev = (vel[i, 0] * gxi + vel[j, 0] * gxj + vel[k, 0] * gxk
+                  + vel[i, 1] * gyi + vel[j, 1] * gyj + vel[k, 1] * gyk) * dt
+            for n in (i, j, k):
+                node_ev[n] += a * ev
+                node_a[n] += a
+    trial = np.empty(4)
+    old = np.empty(4)
+    scratch = np.empty(4)
+    work_p = 0.0
+    for z in range(nz):
+        a, gxi, gyi, gxj, gyj, gxk, gyk = _zone_gradients(xy, tri, z)
+        i = tri[z, 0]
+        j = tri[z, 1]
+        k = tri[z, 2]
+        lxx = (vel[i, 0] * gxi + vel[j, 0] * gxj + vel[k, 0] * gxk) * dt
+        lxy = (vel[i, 0] * gyi + vel[j, 0] * gyj + vel[k, 0] * gyk) * dt
+        lyx = (vel[i, 1] * gxi + vel[j, 1] * gxj + vel[k, 1] * gxk) * dt
+        lyy = (vel[i, 1] * gyi + vel[j, 1] * gyj + vel[k, 1] * gyk) * dt
+        shift = 0.0
+        if mixed:
+            ev = (node_ev[i] / node_a[i] + node_ev[j] / node_a[j] + node_ev[k] / node_a[k]) / 3.0
+            shift = 0.5 * (ev - lxx - lyy)
+            lxx += shift
+            lyy += shift
+        exy = 0.5 * (lxy + lyx)
+        theta = 0.5 * (lyx - lxy)
+        strain[z, 0] += lxx
+        strain[z, 1] += lyy
+        strain[z, 2] += exy
+        m = mtab[zmat[z]]
+        s = sig[z]
+        # rotation (Jaumann), then the elastic trial
+        sxx = s[ZS_XX]
+        syy = s[ZS_YY]
+        sxy = s[ZS_XY]
+        s[ZS_XX] = sxx - 2.0 * theta * sxy
+        s[ZS_YY] = syy + 2.0 * theta * sxy
+        s[ZS_XY] = sxy + theta * (sxx - syy)
+        for q in range(4):
+            old[q] = s[q]
+        kk = m[ZM_K]
+        gg = m[ZM_G]
+        lam = kk - 2.0 * gg / 3.0
+        ev = lxx + lyy
+        s[ZS_XX] += lam * ev + 2.0 * gg * lxx
+        s[ZS_YY] += lam * ev + 2.0 * gg * lyy
+        s[ZS_ZZ] += lam * ev
+        s[ZS_XY] += 2.0 * gg * exy
+        model = int(m[ZM_MODEL])
+        bits = 0
+        if model != ZMODEL_ELASTIC:
+            for q in range(4):
+                trial[q] = s[q]
+            if model == ZMODEL_MC:
+                bits = _mc_return(s, m, m[ZM_NPHI], m[ZM_COH], m[ZM_NPSI], m[ZM_TEN])
+            else:
+                bits = _hb_return(s, m, m[ZM_NPSI], scratch)
+            if bits != 0:
+                # plastic strain D⁻¹(σ_trial − σ) and its work σ:Δε_p (docs/dem.md §16.5)
+                dxx = trial[ZS_XX] - s[ZS_XX]
+                dyy = trial[ZS_YY] - s[ZS_YY]
+                dzz = trial[ZS_ZZ] - s[ZS_ZZ]
+                dxy = trial[ZS_XY] - s[ZS_XY]
+                p = (dxx + dyy + dzz) / 3.0
+                exx = p / (3.0 * kk) + (dxx - p) / (2.0 * gg)
+                eyy = p / (3.0 * kk) + (dyy - p) / (2.0 * gg)
+                ezz = p / (3.0 * kk) + (dzz - p) / (2.0 * gg)
+                gxy = dxy / gg  # engineering shear strain
+                work_p += a * (s[ZS_XX] * exx + s[ZS_YY] * eyy + s[ZS_ZZ] * ezz
+                               + s[ZS_XY] * gxy)
+                eps_p[z] += math.sqrt(exx * exx + eyy * eyy + ezz * ezz + 0.5 * gxy * gxy)
+                bits |= bits << 2  # "now" bits also set the "past" bits
+        state[z] = (state[z] & (ZST_SHEAR_PAST | ZST_TENSION_PAST)) | bits
+        if shift != 0.0:  # mid-step in-plane mean stress × the added volumetric strain 2·shift
+            E[E_ZONE_MIXED] += a * 0.5 * (old[ZS_XX] + old[ZS_YY] + s[ZS_XX] + s[ZS_YY]) * shift
+    E[E_ZONE_PLASTIC] += work_p
+
+
+@njit(cache=True)
+def zone_forces(xy, tri, sig, f, fabs):
+    """Nodal forces of the zones' stresses, f_i −= A σ·∇N_i (docs/dem.md §16.2, eq. (16.2)),
+    added to ``f``; ``fabs`` receives the magnitude of each contribution (the applied force of the
+    equilibrium ratio)."""
+    for z in range(len(tri)):
+        a, gxi, gyi, gxj, gyj, gxk, gyk = _zone_gradients(xy, tri, z)
+        sxx = sig[z, ZS_XX]
+        syy = sig[z, ZS_YY]
+        sxy = sig[z, ZS_XY]
+        for n, gx, gy in ((tri[z, 0], gxi, gyi), (tri[z, 1], gxj, gyj), (tri[z, 2], gxk, gyk)):
+            fx = -a * (sxx * gx + sxy * gy)
+            fy = -a * (sxy * gx + syy * gy)
+            f[n, 0] += fx
+            f[n, 1] += fy
+            fabs[n] += math.sqrt(fx * fx + fy * fy)
+
+
+@njit(cache=True)
+def zone_nodes_step(xy, vel, f, fext, fabs, mass, inv_mass, mode, presc, weight, alpha_local,
+                    alpha_mass, dt, E):
+    """Central-difference step of the zone nodes (docs/dem.md §16.6): per degree of freedom the
+    force ``f`` (internal, and contacts when coupled), the external force ``fext`` and the weight,
+    local damping −α|F|sign(v) and mass damping −α_M m v; fixed dofs (``mode`` 1) keep zero
+    velocity, prescribed ones (2) move at ``presc``. ``inv_mass`` may be scaled (static stages);
+    ``mass`` is the true lumped mass (the kinetic energy). Returns (Σ|unbalanced force|,
+    Σ applied force, kinetic energy, max speed). Work booked with the mid-step velocity (eq.
+    (11.2)): ``f`` as E_ZONE_INTERNAL, ``fext`` as E_EXTERNAL, the weight as E_GRAVITY, and the
+    damping forces."""
+    unb = 0.0
+    app = 0.0
+    ke = 0.0
+    vmax = 0.0
+    for n in range(len(xy)):
+        fn2 = 0.0
+        for d in range(2):
+            v_old = vel[n, d]
+            if mode[n, d] == 1:
+                vel[n, d] = 0.0
+                continue
+            if mode[n, d] == 2:
+                vel[n, d] = presc[n, d]
+                xy[n, d] += presc[n, d] * dt
+                continue
+            fv = -alpha_mass * mass[n] * v_old
+            ff = f[n, d] + fext[n, d] + weight[n, d] + fv
+            fd = 0.0
+            if alpha_local > 0.0 and v_old != 0.0:
+                fd = -alpha_local * abs(ff) * (1.0 if v_old > 0.0 else -1.0)
+            v_new = v_old + (ff + fd) * inv_mass[n] * dt
+            w = 0.5 * (v_old + v_new) * dt
+            E[E_ZONE_INTERNAL] += f[n, d] * w
+            E[E_EXTERNAL] += fext[n, d] * w
+            E[E_GRAVITY] += weight[n, d] * w
+            E[E_LOCAL_DAMP] += fd * w
+            E[E_VISCOUS] += fv * w
+            vel[n, d] = v_new
+            xy[n, d] += v_new * dt
+            fn2 += ff * ff
+            ke += 0.5 * mass[n] * v_new * v_new
+            if abs(v_new) > vmax:
+                vmax = abs(v_new)
+        unb += math.sqrt(fn2)
+        app += (fabs[n] + math.sqrt(fext[n, 0] ** 2 + fext[n, 1] ** 2)
+                + math.sqrt(weight[n, 0] ** 2 + weight[n, 1] ** 2))
+    return unb, app, ke, vmax
+
+
+@njit(cache=True)
+def advance_zones(n_steps, xy, vel, tri, zmat, mtab, sig, strain, state, eps_p, mixed, fext,
+                  mass, inv_mass, mode, presc, weight, alpha_local, alpha_mass, dt, tol_ratio,
+                  check_every, E, out):
+    """Steps of a model of zones only (no contacts): :func:`zone_forces`, :func:`zone_nodes_step`,
+    :func:`zone_stress_update` (the stress always belongs to the present positions), until the unbalanced-force ratio Σ|F_unb|/Σ|F_applied| is below
+    ``tol_ratio`` at a check (every ``check_every`` steps, with the kinetic energy falling) or
+    ``n_steps``. ``out`` receives [steps, ratio, kinetic energy, max speed]; returns
+    ``RC_CONVERGED``, ``RC_DONE`` or ``RC_NONFINITE``. The plastic work goes to E_ZONE_PLASTIC."""
+    nn = len(xy)
+    f = np.zeros((nn, 2))
+    fabs = np.zeros(nn)
+    node_ev = np.zeros(nn)
+    node_a = np.zeros(nn)
+    ke_prev = np.inf
+    for step in range(n_steps):
+        f[:] = 0.0
+        fabs[:] = 0.0
+        zone_forces(xy, tri, sig, f, fabs)
+        unb, app, ke, vmax = zone_nodes_step(xy, vel, f, fext, fabs, mass, inv_mass, mode, presc,
+                                             weight, alpha_local, alpha_mass, dt, E)
+        zone_stress_update(xy, vel, tri, zmat, mtab, sig, strain, state, eps_p, dt, mixed,
+                           node_ev, node_a, E)
+        ratio = unb / app if app > 0.0 else 0.0
+        out[0] = step + 1
+        out[1] = ratio
+        out[2] = ke
+        out[3] = vmax
+        if not math.isfinite(ratio) or not math.isfinite(vmax):
+            return RC_NONFINITE
+        if tol_ratio > 0.0 and (step + 1) % check_every == 0:
+            falling = ke <= ke_prev
+            ke_prev = ke
+            if ratio < tol_ratio and falling:
+                return RC_CONVERGED
     return RC_DONE
