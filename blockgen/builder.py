@@ -291,19 +291,20 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
         return collapse(node(segments, grid))
 
     noded = renode(snap_to_grid(np.concatenate(all_segs), grid))
-    kind, src = label_segments(noded, sources, label_m)
     # 3. dangling ends
     ext, parent, n_dangling = dangling_extensions(noded, grid, 2 * size)
     report["dangling"]["n_dangling_ends"] = int(n_dangling)
     if n_dangling and dangling != "drop":
-        ext_kind = np.full(len(ext), KIND_GLUED) if dangling == "glued" else kind[parent]
+        # an extension takes the label of the segment it continues (only those are labelled here:
+        # the whole network is labelled once its blocks are final)
+        kind, src = label_segments(noded[parent], sources, label_m)
+        ext_kind = np.full(len(ext), KIND_GLUED) if dangling == "glued" else kind
         for k in np.unique(ext_kind):
             sel = ext_kind == k
-            sources.add(ext[sel], int(k), src[parent[sel]], priority=LabelPriority.EXTENSION)
+            sources.add(ext[sel], int(k), src[sel], priority=LabelPriority.EXTENSION)
         report["dangling"]["n_extended"] = int(len(ext))
         report["dangling"]["extended_length_m"] = float(np.hypot(*(ext[:, 1] - ext[:, 0]).T).sum())
         noded = renode(np.concatenate([noded, ext]))
-        kind, src = label_segments(noded, sources, label_m)
     faces = polygonize_segments(noded)
     if dangling == "drop" and n_dangling:
         kept = _ring_edges(faces)[0]

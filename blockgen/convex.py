@@ -36,8 +36,9 @@ def reflex_vertices(xy: np.ndarray, reflex_sin: float, reflex_m: float = 0.0) ->
     ``h = −(e_in × e_out) / |b − a|`` (:mod:`rockmass.blockgen.tolerances`: a collinear vertex moved
     off its line by snap-rounding is not reflex).
     """
-    e_in = xy - np.roll(xy, 1, axis=0)
-    e_out = np.roll(xy, -1, axis=0) - xy
+    # np.roll's neighbours by concatenation (np.roll costs ~10 µs a call; this runs per ring)
+    e_in = xy - np.concatenate([xy[-1:], xy[:-1]])
+    e_out = np.concatenate([xy[1:], xy[:1]]) - xy
     return np.flatnonzero(is_reflex(e_in, e_out, reflex_sin, reflex_m))
 
 

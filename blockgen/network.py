@@ -11,6 +11,7 @@ then potential cracks.
 from __future__ import annotations
 
 import enum
+import math
 
 import numpy as np
 import shapely
@@ -191,27 +192,94 @@ def label_segments(segments: np.ndarray, sources: Sources, label_m: float):
     return out_kind, out_src
 
 
-def _ray_hits(origins, directions, segments, max_len):
-    """Distance along each ray to the first segment it crosses beyond a tiny start offset."""
-    tree = shapely.STRtree(shapely.linestrings(segments))
-    rays = shapely.linestrings(np.stack([origins, origins + directions * max_len], axis=1))
-    r, s = tree.query(rays, predicate="intersects")
-    p, d = origins[r], directions[r]
-    a, b = segments[s, 0], segments[s, 1]
+def _crossing_distance(origins, directions, segments):
+    """Distance t along each ray (origin p, unit direction d) to the line of its paired segment
+    [a, b]: t = ((a − p) × e) / (d × e) with e = b − a; inf where d ∥ e (collinear or parallel)."""
+    p, d = origins, directions
+    a, b = segments[:, 0], segments[:, 1]
     e = b - a
     denom = d[:, 0] * e[:, 1] - d[:, 1] * e[:, 0]
     w = a - p
     with np.errstate(divide="ignore", invalid="ignore"):
         t = (w[:, 0] * e[:, 1] - w[:, 1] * e[:, 0]) / denom
-    t = np.where(np.abs(denom) > 0, t, np.inf)
-    t = np.where(t > max_len * 1e-9, t, np.inf)
+    return np.where(np.abs(denom) > 0, t, np.inf)
+
+
+def _mean_free_path(segments):
+    """π·A / (2·L): the mean distance a ray travels before it crosses one of isotropic lines of
+    total length L spread over the area A (here the segments' bounding box). Only the first ray
+    length of :func:`_ray_hits` depends on it, never the hits."""
+    lo, hi = segments.reshape(-1, 2).min(axis=0), segments.reshape(-1, 2).max(axis=0)
+    total = float(np.hypot(*(segments[:, 1] - segments[:, 0]).T).sum())
+    area = float(np.prod(hi - lo))
+    return math.pi * area / (2 * total) if total > 0 and area > 0 else float(np.max(hi - lo))
+
+
+def _ray_hits(origins, directions, segments, max_len, first_len=None, growth=4.0):
+    """Distance along each ray to the first segment it crosses beyond a tiny start offset.
+
+    Parameters
+    ----------
+    origins, directions : (n, 2) float64
+        Ray starts and unit directions.
+    segments : (m, 2, 2) float64
+        The lines a ray can hit.
+    max_len : float
+        Longest ray; a ray that crosses nothing within it gets inf. Crossings closer than
+        ``max_len · 1e-9`` to the start (the ray's own segment) do not count.
+    first_len : float, optional
+        Length of the first, bounded rays; default twice the network's mean free path
+        (:func:`_mean_free_path`). ``first_len = max_len`` casts every ray at full length at once.
+    growth : float, default 4
+        Each round lengthens the rays that have not hit yet by this factor, up to ``max_len``.
+
+    Returns
+    -------
+    t : (n,) float64
+        Distance to the first crossing (inf: none within ``max_len``).
+    n_pairs : int
+        (ray, segment) pairs the spatial index reported over all rounds — the work done, which
+        grows with the total length of the rays cast, not with n · m.
+
+    Notes
+    -----
+    One STRtree (shapely/GEOS) over the segments; rays are cast bounded and only the rays without
+    a hit are cast again, longer. A crossing at distance t < ℓ lies on the bounded ray of length ℓ
+    as well as on the full one, so the nearest crossing found on the bounded ray is the nearest on
+    the full ray: the hits are those of one domain-long ray per end (``first_len = max_len``), at a
+    cost near-linear in the number of rays when most hit within a few mean free paths.
+    """
+    origins = np.asarray(origins, np.float64)
+    directions = np.asarray(directions, np.float64)
     best = np.full(len(origins), np.inf)
-    np.minimum.at(best, r, t)
-    return best
+    if not len(origins) or not len(segments):
+        return best, 0
+    tree = shapely.STRtree(shapely.linestrings(segments))
+    length = min(max_len, 2 * _mean_free_path(segments) if first_len is None else first_len)
+    todo = np.arange(len(origins))
+    n_pairs = 0
+    while len(todo):
+        p, d = origins[todo], directions[todo]
+        rays = shapely.linestrings(np.stack([p, p + d * length], axis=1))
+        r, s = tree.query(rays, predicate="intersects")
+        n_pairs += len(r)
+        t = _crossing_distance(p[r], d[r], segments[s])
+        t = np.where(t > max_len * 1e-9, t, np.inf)
+        hit = np.full(len(todo), np.inf)
+        np.minimum.at(hit, r, t)
+        best[todo] = hit
+        if length >= max_len:
+            break
+        todo = todo[~np.isfinite(hit)]
+        length = min(max_len, length * growth)
+    return best, n_pairs
 
 
 def dangling_extensions(segments: np.ndarray, grid: float, max_len: float):
     """Dangling ends (nodes of degree 1) and the segments that extend them to the first line hit.
+
+    Each end casts a ray along its own segment; the first crossing within ``max_len`` is found by
+    bounded rays on a spatial index (:func:`_ray_hits`), with the hits of domain-long rays.
 
     Returns
     -------
@@ -232,7 +300,7 @@ def dangling_extensions(segments: np.ndarray, grid: float, max_len: float):
     other = segments[seg, 1 - ends % 2]
     d = tip - other
     d /= np.hypot(d[:, 0], d[:, 1])[:, None]
-    t = _ray_hits(tip, d, segments, max_len)
+    t, _ = _ray_hits(tip, d, segments, max_len)
     ok = np.isfinite(t)
     ext = np.stack([tip[ok], tip[ok] + d[ok] * t[ok, None]], axis=1)
     return ext, seg[ok], len(ends)

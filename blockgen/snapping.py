@@ -140,6 +140,12 @@ def _one_pass(noded, kind, src, moved, faces, region, min_edge_m, grid_m, reflex
             if n >= 0:
                 pinned_dirs.setdefault(int(n), []).append(d)
 
+    # the network segments at each node of a short edge (CSR by node id), for the report
+    flat = seg_id.ravel()
+    at_node = np.flatnonzero(flat >= 0)
+    by_node = at_node[np.argsort(flat[at_node], kind="stable")] // 2
+    seg_ptr = np.concatenate([[0], np.cumsum(np.bincount(flat[at_node], minlength=len(ends)))])
+
     def corner(n):
         dirs = pinned_dirs[n]
         return len(dirs) < 2 or any(abs(dirs[0][0] * d[1] - dirs[0][1] * d[0]) > reflex_sin
@@ -179,7 +185,8 @@ def _one_pass(noded, kind, src, moved, faces, region, min_edge_m, grid_m, reflex
                 moves[u] = moves[v] = p
                 busy.update(touched)
                 new_faces.update(zip(touched, rings))
-                segs = np.flatnonzero(np.isin(seg_id, [u, v]).any(axis=1))
+                segs = np.concatenate([by_node[seg_ptr[u]:seg_ptr[u + 1]],
+                                       by_node[seg_ptr[v]:seg_ptr[v + 1]]])
                 changes.append({"edge_m": length, "from_xy_m": [xy[u].tolist(), xy[v].tolist()],
                                 "to_xy_m": [float(p[0]), float(p[1])], "n_blocks": len(touched),
                                 "n_blocks_removed": sum(r is None for r in rings),
@@ -236,7 +243,7 @@ def _collinear_on_outline(target, mover, xy, pinned_dirs, reflex_sin):
 
 def _mean_width(xy):
     """2·area / perimeter of a ring (the sliver measure of :mod:`rockmass.blockgen.builder`)."""
-    perimeter = float(np.sum(np.hypot(*(np.roll(xy, -1, axis=0) - xy).T)))
+    perimeter = float(np.sum(np.hypot(*(np.concatenate([xy[1:], xy[:1]]) - xy).T)))
     return 2.0 * abs(signed_area(xy)) / perimeter if perimeter > 0 else 0.0
 
 
@@ -251,7 +258,9 @@ def _try(p, u, v, rings, regions, reflex_sin, reflex_m, min_width=0.0):
     for (ring_xy, ids), reg in zip(rings, regions):
         before[reg] = before.get(reg, 0.0) + signed_area(ring_xy)
         merged = (ids == u) | (ids == v)
-        keep = ~(merged & np.roll(merged, 1))  # one vertex for u, v adjacent (cyclic)
+        # one vertex for u, v adjacent (cyclic; the previous flag by concatenation, not np.roll,
+        # which costs several times more on a small ring)
+        keep = ~(merged & np.concatenate([merged[-1:], merged[:-1]]))
         if int((merged & keep).sum()) > 1:
             return None  # u and v both on this block but not as one edge: it would be pinched
         if keep.sum() < 3:

@@ -1,8 +1,18 @@
 """Numba kernels of the fractal stage: cell traversal of segments, polygons, and box counting.
 
 All kernels take plain C-contiguous arrays of one dtype (float64 coordinates, int64 indices and
-counts, uint8 masks), write into arrays the caller allocated and do no checks. They live in one file
-because numba's on-disk cache does not see edits to jitted helpers in other files.
+counts, uint8 masks, uint64 bit rows), write into arrays the caller allocated and do no checks.
+They live in one file because numba's on-disk cache does not see edits to jitted helpers in other
+files.
+
+Bit rows (raster box counting and the thick-line test)
+------------------------------------------------------
+A mask is packed 64 pixels to a word (``rockmass.fractal.image._pack_rows``: bit c of a row is bit
+c % 64 of word c // 64), so a row operation — OR with another row,
+a shift by some columns, a population count — handles 64 pixels at once (the thick-line test,
+``image._line_counts``, does the same in numpy). The raster count grows the
+OR window of each box size from the previous one, and reads every grid offset off it; its cost does
+not depend on how many pixels are traces, nor much on the number of offsets.
 
 The cell rule (shared by rasterisation and exact vector counting)
 -----------------------------------------------------------------
@@ -17,7 +27,8 @@ whose interior cells are found from cell centres instead.
 """
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.extending import intrinsic
 
 _PIECE_EPS = 1e-9  # pieces shorter than this (box units) are corner touches, not crossings
 
@@ -231,79 +242,111 @@ def fold_and_count(marks, nbx, nby):
     return total
 
 
-@njit(cache=True)
-def line_statistics(mask):
-    """One pass over a (h, w) uint8 mask: (trace pixels, pixels in a full 2x2 block, interior pixels).
+@intrinsic
+def _popcount(typingctx, word):
+    """Set bits of a uint64 as an int64 (LLVM ``ctpop``: one instruction where the CPU has one)."""
+    if not (isinstance(word, types.Integer) and word.bitwidth == 64 and not word.signed):
+        return None
 
-    A pixel is interior when its four edge neighbours are all traces (pixels outside the image
-    count as background). Used to tell 1-pixel lines from thick lines and filled areas.
-    """
-    h, w = mask.shape
-    n = 0
-    in_block = 0
-    interior = 0
-    for r in range(h):
-        for c in range(w):
-            if mask[r, c] == 0:
-                continue
-            n += 1
-            if (0 < r < h - 1 and 0 < c < w - 1 and mask[r - 1, c] and mask[r + 1, c]
-                    and mask[r, c - 1] and mask[r, c + 1]):
-                interior += 1
-            for dr in (-1, 0):
-                for dc in (-1, 0):
-                    r0 = r + dr
-                    c0 = c + dc
-                    if (r0 >= 0 and c0 >= 0 and r0 + 1 < h and c0 + 1 < w and mask[r0, c0]
-                            and mask[r0 + 1, c0] and mask[r0, c0 + 1] and mask[r0 + 1, c0 + 1]):
-                        in_block += 1
-                        break
-                else:
-                    continue
-                break
-    return n, in_block, interior
+    def codegen(context, builder, signature, args):
+        return builder.ctpop(args[0])
+
+    return types.int64(types.uint64), codegen
 
 
 @njit(cache=True)
-def count_occupied_boxes(mask, sizes, off_r, off_c, counts):
-    """Count occupied boxes of a square uint8 ``mask`` (n, n) for every size and grid offset.
+def _grow_window(src, dst, n, b, row):
+    """``dst`` = the cyclic OR window of side a + b from ``src``, that of side a >= b.
 
-    sizes : (n_sizes,) int64 box sides in pixels, each dividing n; off_r, off_c : (n_sizes,
-    n_offsets) int64 shifts of the box grid in pixels (0 <= off < size). A shifted grid is applied
-    cyclically (the frame is a torus): box (a, b) covers rows [a*s - off_r, (a+1)*s - off_r) modulo
-    n, so every grid has exactly (n/s)^2 whole boxes and no ring of partial boxes at the frame's
-    edge. counts : (n_sizes, n_offsets) int64, written. A summed-area table makes each box an O(1)
-    test, so the cost does not depend on the number of trace pixels.
-    No checks: sizes divide n, offsets in range.
+    A window of side a at (r, c) is the OR of pixels (r .. r + a - 1 mod n, c .. c + a - 1). Its
+    union with the windows at (r + b, c), (r, c + b) and (r + b, c + b) is the window of side
+    a + b when b <= a: rows first (whole words), then columns (a shift of b bits across words).
+    ``row`` is scratch of one row's words.
     """
-    n = mask.shape[0]
-    sat = np.zeros((n + 1, n + 1), dtype=np.int32)  # n <= 16384: at most 2.7e8 pixels
+    nw = src.shape[1]
+    q = b >> 6
+    p = np.uint64(b & 63)
+    back = np.uint64(63 - (b & 63))  # << (64 - p) written as (<< 1) << back: defined for p = 0
+    one = np.uint64(1)
+    inner = nw - q - 1  # words whose source words both lie inside the row
     for r in range(n):
-        row_sum = 0
-        for c in range(n):
-            row_sum += mask[r, c] != 0
-            sat[r + 1, c + 1] = sat[r, c + 1] + row_sum
-    for a in range(sizes.shape[0]):
+        r2 = r + b
+        if r2 >= n:
+            r2 -= n
+        for w in range(nw):
+            row[w] = src[r, w] | src[r2, w]
+        for w in range(inner):
+            dst[r, w] = row[w] | (row[w + q] >> p) | ((row[w + q + 1] << one) << back)
+        for w in range(max(inner, 0), nw):
+            dst[r, w] = row[w] | (row[w + q] >> p) if w + q < nw else row[w]
+
+
+@njit(cache=True)
+def count_occupied_boxes(bits, sizes, order, off_r, off_c, counts):
+    """Count occupied boxes of a square mask (n, n) for every size and grid offset.
+
+    bits : (n, nw) uint64 bit rows of the mask with its first columns repeated after the last, up
+    to ``width = n + max(s - 1)`` over the sizes that give at least 2 boxes a side
+    (``image._pack_rows``), so that a box wrapping round the right edge is one run of bits;
+    overwritten (it becomes the OR window).
+    sizes : (n_sizes,) int64 box sides in pixels, each dividing n.
+    order : (n_sizes,) int64 the indices that sort ``sizes`` ascending (``np.argsort``, given by
+    the caller: numba's own sort would add about 2 s of compilation).
+    off_r, off_c : (n_sizes, n_offsets) int64 shifts of the box grid in pixels (0 <= off < size).
+    A shifted grid is applied cyclically (the frame is a torus): box (a, b) covers rows
+    [a*s - off_r, (a+1)*s - off_r) modulo n, so every grid has exactly (n/s)^2 whole boxes and no
+    ring of partial boxes at the frame's edge.
+    counts : (n_sizes, n_offsets) int64, written.
+
+    One pass over the sizes in ascending order grows the OR window of side s (the window of the
+    previous size widened by b <= its side, 64 pixels per operation); a box of side s is occupied
+    iff the window at its top-left pixel is set. The boxes of one grid are every s-th window row
+    and column from ((s - off) mod s), so each (size, offset) costs (n/s) rows of masked
+    population counts, whatever the image holds. No checks: sizes divide n, offsets in range.
+    """
+    n = bits.shape[0]
+    nw = bits.shape[1]
+    full = n >> 6
+    rest = np.uint64(n & 63)
+    pixels = 0  # trace pixels: bits before column n
+    for r in range(n):
+        for w in range(full):
+            pixels += _popcount(bits[r, w])
+        if rest:
+            pixels += _popcount(bits[r, full] & ((np.uint64(1) << rest) - np.uint64(1)))
+    win = bits
+    spare = np.empty((n, nw), dtype=np.uint64)
+    row = np.empty(nw, dtype=np.uint64)
+    lattice = np.empty(nw, dtype=np.uint64)
+    side = 1
+    for a in order:
         s = sizes[a]
         m = n // s
+        if s == 1 or m == 1:
+            value = pixels if s == 1 else min(pixels, 1)
+            for b in range(off_r.shape[1]):
+                counts[a, b] = value
+            continue
+        while side < s:
+            step = min(side, s - side)
+            _grow_window(win, spare, n, step, row)
+            win, spare = spare, win
+            side += step
         for b in range(off_r.shape[1]):
-            orow = off_r[a, b]
-            ocol = off_c[a, b]
-            if s == 1:
-                counts[a, b] = sat[n, n]
-                continue
-            nbr = (n + orow + s - 1) // s
-            nbc = (n + ocol + s - 1) // s
-            occ = np.zeros((nbr, nbc), dtype=np.uint8)
-            for i in range(nbr):
-                r0 = max(i * s - orow, 0)
-                r1 = min((i + 1) * s - orow, n)
-                for j in range(nbc):
-                    c0 = max(j * s - ocol, 0)
-                    c1 = min((j + 1) * s - ocol, n)
-                    if sat[r1, c1] - sat[r0, c1] - sat[r1, c0] + sat[r0, c0] > 0:
-                        occ[i, j] = 1
-            counts[a, b] = fold_and_count(occ, m, m)
+            r0 = (s - off_r[a, b]) % s
+            c0 = (s - off_c[a, b]) % s
+            for w in range(nw):
+                lattice[w] = 0
+            for j in range(m):
+                c = c0 + j * s
+                lattice[c >> 6] |= np.uint64(1) << np.uint64(c & 63)
+            used = ((c0 + (m - 1) * s) >> 6) + 1
+            total = 0
+            for i in range(m):
+                r = r0 + i * s
+                for w in range(used):
+                    total += _popcount(win[r, w] & lattice[w])
+            counts[a, b] = total
     return counts
 
 

@@ -42,9 +42,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .fit import LineFit, fit_loglog, fit_range_mask, local_slopes
+from .fit import LineFit, fit_loglog, fit_range_mask, local_slopes, loglog_slopes
 from .framing import Frame, as_ring, as_segments, clip_segments_to_ring, frame_for, _ring_area
-from .image import divisors, prepare_binary_image
+from .image import _pack_rows, divisors, prepare_binary_image
 from .rasterize import (check_grid, check_line_rule, rasterize_polygon,
                         rasterize_segments_in_frame)
 
@@ -252,14 +252,24 @@ def _raster_shifts(sizes: np.ndarray, offsets: np.ndarray) -> np.ndarray:
 
 
 def _count_raster_mask(mask: np.ndarray, sizes: np.ndarray, offsets: np.ndarray) -> np.ndarray:
-    """Occupied boxes ``(n_sizes, n_offsets)`` of a square uint8 mask."""
+    """Occupied boxes ``(n_sizes, n_offsets)`` of a square uint8 mask on the grids of ``offsets``."""
+    off = _raster_shifts(sizes, offsets)
+    return _count_raster_shifts(mask, sizes, off[:, :, 1], off[:, :, 0])
+
+
+def _count_raster_shifts(mask: np.ndarray, sizes: np.ndarray, off_r, off_c) -> np.ndarray:
+    """Occupied boxes ``(n_sizes, n_offsets)`` of a square mask on grids shifted cyclically by
+    ``off_r``, ``off_c`` ``(n_sizes, n_offsets)`` whole pixels (0 <= shift < size)."""
     from . import _kernels
 
-    off = _raster_shifts(sizes, offsets)
-    off_r = np.ascontiguousarray(off[:, :, 1])
-    off_c = np.ascontiguousarray(off[:, :, 0])
-    counts = np.zeros((sizes.size, offsets.shape[0]), dtype=np.int64)
-    _kernels.count_occupied_boxes(mask, sizes, off_r, off_c, counts)
+    n = mask.shape[0]
+    tiled = sizes[sizes <= n // 2]  # sizes with 2 or more boxes a side: their boxes may wrap
+    bits = _pack_rows(mask, n + (int(tiled.max()) - 1 if tiled.size else 0))
+    counts = np.zeros((sizes.size, off_r.shape[1]), dtype=np.int64)
+    sizes = np.ascontiguousarray(sizes, dtype=np.int64)
+    _kernels.count_occupied_boxes(bits, sizes, np.argsort(sizes),
+                                  np.ascontiguousarray(off_r, dtype=np.int64),
+                                  np.ascontiguousarray(off_c, dtype=np.int64), counts)
     return counts
 
 
@@ -299,8 +309,8 @@ def _fit_all(sizes_px, counts, face, totals, in_fit):
         fit_counts = counts.astype(np.float64)
     if np.any(fit_counts[in_fit] == 0):
         raise ValueError("no trace inside the face: the count is empty")
-    fits = [fit_loglog(sizes_px[in_fit], fit_counts[in_fit, b]) for b in range(counts.shape[1])]
-    return fits[0], fit_counts[:, 0], np.array([f.dimension for f in fits])
+    fit = fit_loglog(sizes_px[in_fit], fit_counts[in_fit, 0])
+    return fit, fit_counts[:, 0], loglog_slopes(sizes_px[in_fit], fit_counts[in_fit])
 
 
 def box_count(data, *, kind: str = "auto", grid: int = 360, method: str = "raster", sizes_px=None,

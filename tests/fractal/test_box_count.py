@@ -106,7 +106,7 @@ def test_face_boxes_match_shapely_polygon_overlap():
 
 @pytest.mark.parametrize("seed", [4, 5, 6])
 def test_vector_and_supercover_raster_agree_exactly_at_zero_offset(seed):
-    """Two counting paths (pixel marks + summed-area table, and per-size traversal) that share the
+    """Two counting paths (pixel marks + bit-packed OR windows, and per-size traversal) that share the
     traversal rule; each is checked against shapely separately above."""
     seg = random_network(200, seed=seed)
     raster = box_count(seg, method="raster", n_offsets=1)
@@ -155,6 +155,18 @@ def test_fit_matches_numpy_polyfit_and_textbook_stderr():
     assert fit.stderr == pytest.approx(stderr, rel=1e-10)
     assert fit.ci95[0] < fit.dimension < fit.ci95[1]
     assert fit.ci95[1] - fit.dimension == pytest.approx(2.4469 * stderr, rel=1e-4)  # t(0.975, 6)
+
+
+def test_offset_slopes_are_bit_for_bit_those_of_the_full_fit():
+    """The slopes of all offsets at once equal fit_loglog's slope column by column (seed 42)."""
+    from rockmass.fractal.fit import loglog_slopes
+
+    rng = np.random.default_rng(42)
+    sizes = divisors(360)[:21].astype(float)
+    counts = np.maximum(1.0, np.round(1e5 * sizes[:, None] ** -rng.uniform(1.0, 2.0, 8)
+                                      * np.exp(rng.normal(0, 0.05, (sizes.size, 8)))))
+    expected = [fit_loglog(sizes, counts[:, b]).dimension for b in range(8)]
+    assert loglog_slopes(sizes, counts).tolist() == expected
 
 
 def test_default_fit_range_stops_at_a_quarter_of_the_grid():
@@ -266,13 +278,81 @@ def test_thick_lines_are_skeletonised_and_reported():
     assert r_never.dimension > r_thin.dimension + 0.05  # 5-px lines bias D high (REFERENCE §1)
 
 
-@pytest.mark.parametrize("density", [0.05, 0.3, 0.7])
-def test_line_statistics_kernel_matches_numpy_oracle(density):
-    from rockmass.fractal import _kernels
+def _any_shifts(sizes, rng, k=5):
+    """Pixel shifts (rows, cols) ``(n_sizes, k + 3)``: the corners 0 and size - 1, then random."""
+    rows = [np.r_[0, s - 1, 0, rng.integers(0, s, k)] for s in sizes]
+    cols = [np.r_[0, s - 1, s - 1, rng.integers(0, s, k)] for s in sizes]
+    return np.array(rows), np.array(cols)
 
-    rng = np.random.default_rng(int(density * 100))
-    mask = (rng.random((37, 53)) < density).astype(np.uint8)
-    assert _kernels.line_statistics(mask) == naive_line_statistics(mask)
+
+def _reference_images():
+    from rockmass.fractal import reference
+
+    return [("sierpinski_triangle", reference.sierpinski_triangle(7)),
+            ("sierpinski_carpet", reference.sierpinski_carpet(4)),
+            ("cantor_dust", reference.cantor_dust(4)),
+            ("vicsek", reference.vicsek(4)),
+            ("triangle in 360", reference.embed(reference.sierpinski_triangle(8), 360)),
+            ("filled square", reference.filled_square(60)),
+            ("empty", np.zeros((30, 30), np.uint8))]
+
+
+@pytest.mark.parametrize("n", [12, 60, 64, 90, 128, 360])
+@pytest.mark.parametrize("density", [0.002, 0.05, 0.5, 0.98])
+def test_occupied_box_kernel_matches_rolled_numpy_at_any_shift(n, density):
+    """The bit-window kernel against roll + reshape + any on random images (seeded by n and the
+    density), every divisor size (1 and n included, in shuffled order) and any whole-pixel shift."""
+    from rockmass.fractal.boxcount import _count_raster_shifts
+
+    rng = np.random.default_rng(n * 1000 + int(density * 1000))
+    image = (rng.random((n, n)) < density).astype(np.uint8) * np.uint8(rng.choice([1, 255]))
+    sizes = rng.permutation(divisors(n))
+    off_r, off_c = _any_shifts(sizes, rng)
+    counts = _count_raster_shifts(image, sizes, off_r, off_c)
+    expected = [[naive_offset_boxes(image, int(s), int(r), int(c)) for r, c in zip(rr, cc)]
+                for s, rr, cc in zip(sizes, off_r, off_c)]
+    assert counts.tolist() == expected
+
+
+@pytest.mark.parametrize("name, image", _reference_images(), ids=lambda v: v if isinstance(v, str) else "")
+def test_occupied_box_kernel_matches_rolled_numpy_on_reference_fractals(name, image):
+    from rockmass.fractal.boxcount import _count_raster_shifts
+
+    rng = np.random.default_rng(31)
+    sizes = divisors(image.shape[0])
+    off_r, off_c = _any_shifts(sizes, rng)
+    counts = _count_raster_shifts(image, sizes, off_r, off_c)
+    expected = [[naive_offset_boxes(image, int(s), int(r), int(c)) for r, c in zip(rr, cc)]
+                for s, rr, cc in zip(sizes, off_r, off_c)]
+    assert counts.tolist() == expected
+
+
+@pytest.mark.parametrize("shape", [(37, 53), (1, 64), (2, 65), (64, 128), (129, 63), (360, 360)])
+@pytest.mark.parametrize("density", [0.05, 0.3, 0.7, 1.0])
+def test_line_counts_match_numpy_oracle(shape, density):
+    """Bit rows against whole-array numpy, across word boundaries (widths 53, 63-65, 128, 360)."""
+    from rockmass.fractal.image import _line_counts
+
+    rng = np.random.default_rng(int(density * 100) + shape[1])
+    mask = (rng.random(shape) < density).astype(np.uint8)
+    assert _line_counts(mask) == naive_line_statistics(mask)
+
+
+@pytest.mark.parametrize("name, image", _reference_images(), ids=lambda v: v if isinstance(v, str) else "")
+def test_line_counts_match_numpy_oracle_on_reference_fractals(name, image):
+    from rockmass.fractal.image import _line_counts
+
+    assert _line_counts(image) == naive_line_statistics(image)
+
+
+def test_line_counts_without_numpy_bitwise_count(monkeypatch):
+    """numpy < 2.0 has no ``bitwise_count``: the unpacked-bytes fallback gives the same counts."""
+    from rockmass.fractal.image import _line_counts
+
+    mask = (np.random.default_rng(41).random((70, 130)) < 0.4).astype(np.uint8)
+    expected = naive_line_statistics(mask)
+    monkeypatch.delattr(np, "bitwise_count", raising=False)
+    assert _line_counts(mask) == expected
 
 
 def test_grey_image_with_threshold_and_invert():
