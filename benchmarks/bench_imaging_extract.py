@@ -9,8 +9,9 @@
    and border extension (``link_gap_px = 0``, ``border_extend_px = 0``): the fragmentation they
    remove shows in dP20 and the node-count error.
 2. Throughput at 2, 12 and 24 MP (moderate faces; the 12 and 24 MP faces are the same network at a
-   finer pixel), with accuracy and peak memory (ru_maxrss of a fresh process per size). Target
-   >= 1 MP/s on 2 cores, <= 2 GB at 24 MP.
+   finer pixel), with accuracy and peak memory (ru_maxrss of a fresh process per size); the learned
+   detector (``detector="learned"``) at 12 and 24 MP too. Target >= 1 MP/s on 2 cores (issue 22:
+   >= 2 MP/s whole process at 12-24 MP), <= 2 GB at 24 MP.
 3. Run time against error for the main knobs: down-sampling (max_megapixels) and filter scales.
 Rows also go to benchmarks/results/bench_imaging_extract.json.
 """
@@ -58,18 +59,19 @@ def mean_row(rows, **labels):
     return {**labels, **out}
 
 
-def child(size_mp: float) -> None:
+def child(size_mp: float, detector: str = "ridge") -> None:
     """One throughput case in this (fresh) process; prints a JSON row."""
     import resource
 
-    from rockmass.imaging.extract import extract  # noqa: F401  (warm imports, numba cache)
+    from rockmass.imaging.extract import ExtractParams
 
-    run_case("moderate", 1, shape_px=(200, 300), m_per_px=0.04)  # warm-up: imports and caches
+    params = ExtractParams(detector=detector)
+    run_case("moderate", 1, shape_px=(200, 300), m_per_px=0.04, params=params)  # warm-up: imports, caches
     h = int(round(np.sqrt(size_mp * 1e6 / 1.5)))
     w = int(round(1.5 * h))
     scale = 12.0 / w  # same 12 m x 8 m face at every size
     # the generator draws joints 1-6 px wide at any size, so the default joint width stays right
-    row = run_case("moderate", 1, shape_px=(h, w), m_per_px=scale)
+    row = run_case("moderate", 1, shape_px=(h, w), m_per_px=scale, params=params)
     row["peak_MB"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     row["MP_per_s"] = row["MP"] / row["time_s"]
     print(json.dumps(row))
@@ -93,11 +95,12 @@ def main(quick: bool = False) -> None:
     print(table(accuracy, COLUMNS + [("worst_angle_err_deg", ".2f"), ("worst_abs_dP21_%", ".1f")]))
 
     throughput = []
-    for size in (2.0, 12.0, 24.0):
-        out = subprocess.run([sys.executable, __file__, "--child", str(size)], capture_output=True,
-                             text=True, check=True)
+    for detector, size in [("ridge", 2.0), ("ridge", 12.0), ("ridge", 24.0), ("learned", 12.0),
+                           ("learned", 24.0)]:
+        out = subprocess.run([sys.executable, __file__, "--child", str(size), detector],
+                             capture_output=True, text=True, check=True)
         row = json.loads(out.stdout.strip().splitlines()[-1])
-        row.update(level="moderate", setting=f"{size:g} MP")
+        row.update(level="moderate", setting=f"{detector}, {size:g} MP")
         throughput.append(row)
     print("\n2. throughput (moderate face, fresh process per size; peak = ru_maxrss incl. face generation)")
     print(table(throughput, [("setting", "s"), ("MP", ".1f"), ("time_s", ".2f"), ("MP_per_s", ".2f"),
@@ -127,6 +130,6 @@ def main(quick: bool = False) -> None:
 
 if __name__ == "__main__":
     if len(sys.argv) > 2 and sys.argv[1] == "--child":
-        child(float(sys.argv[2]))
+        child(float(sys.argv[2]), *sys.argv[3:4])
     else:
         main(quick="--quick" in sys.argv)

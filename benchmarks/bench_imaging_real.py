@@ -1,21 +1,30 @@
 """Photo -> traces on real labelled photographs (validation only), and on synthetic faces.
 
-    python benchmarks/bench_imaging_real.py [--quick] [--detectors ridge,learned] [--no-synthetic]
+    python benchmarks/bench_imaging_real.py [--quick] [--detectors ridge,learned] [--splits val,train]
+                                            [--no-synthetic] [--no-settings]
 
-1. Real faces: ``../shared/data/rock-face-fractures/val`` (44 natural rock faces, 300-400 px, with
+1. Real faces: ``../shared/data/rock-face-fractures`` (natural rock faces, 300-400 px, with
    hand-traced major fractures painted red about 5 px wide; AGPL-3.0, read from the shared data
-   folder, never copied into the package and never trained on). Labels are skeletonised (the red
-   strokes only; the label files' 1-px white frame is not a label), the extracted traces are drawn
-   as 1-px lines, and each image is scored by :func:`rockmass.imaging.metrics.raster_match` at a
-   5 px tolerance (docs/imaging.md §8, eqs. (8.5)-(8.6)). Rows give the mean over images of F1,
+   folder, never copied into the package and never trained on). ``val/`` (44 images) is only
+   measured; ``train/`` (99) is where the learned detector's thresholds and trace filters were
+   chosen, printed beside it so the two can be compared. Labels are skeletonised (the red strokes
+   only; the label files' 1-px white frame is not a label), the extracted traces are drawn as 1-px
+   lines, and each image is scored by :func:`rockmass.imaging.metrics.raster_match` at a 5 px
+   tolerance (docs/imaging.md §8, eqs. (8.5)-(8.6)). Rows give the mean over images of F1,
    precision and recall (F1 = 0 for an image with nothing drawn), the pooled ("micro") F1 over all
    pixels, dP21 = drawn / labelled line length - 1 over all images (lengths as 1-px line pixel
-   counts, %), and the extraction time per image. When the folder is absent the section is skipped with a
-   message (exit code 0). ``ROCKMASS_REAL_DATA`` points at another copy.
+   counts, %), dP20 = number of traces / number of labelled traces - 1 over all images (labelled
+   traces: the label skeleton's branches chained straight through junctions, as the chain does,
+   those of 10 px or more; %), the extraction time per image and the MP/s of the input. Besides
+   the defaults, the learned detector is run at a few other settings (not with ``--no-settings``):
+   the defaults of the last session and the steps added since, one at a time. When the folder is
+   absent the section is skipped with a message (exit code 0). ``ROCKMASS_REAL_DATA`` points at
+   another copy.
 2. Synthetic faces, the two generators (1000 x 1500 px, 0.008 m/px; seeds 1-3, not the tuning seeds
    100+ nor the training seeds of the learned model, 10_000+): the chain's own "moderate" faces
    (:func:`rockmass.imaging.synthetic_face`) and field-like faces
-   (:func:`rockmass.imaging.synthetic_field.field_face`), buffered F1 at 3 px, dP21, run time.
+   (:func:`rockmass.imaging.synthetic_field.field_face`), buffered F1 at 3 px, dP21, dP20, run time;
+   the learned detector also at the last session's setting (not with ``--no-settings``).
 
 3. Throughput (not with ``--quick``): one 12 MP moderate face (4000 x 3000 px, processed
    down-sampled to the default 4 MP), whole ``extract`` call per detector, MP/s of the input.
@@ -41,10 +50,26 @@ DATA = Path(os.environ.get("ROCKMASS_REAL_DATA",
                            / "rock-face-fractures")).resolve()
 TOLERANCE_PX = 5.0
 
-REAL_COLUMNS = [("detector", "s"), ("setting", "s"), ("images", "d"), ("F1", ".3f"), ("P", ".3f"),
-                ("R", ".3f"), ("F1_pooled", ".3f"), ("dP21_pct", "+.0f"), ("s_per_image", ".2f")]
+REAL_COLUMNS = [("split", "s"), ("detector", "s"), ("setting", "s"), ("images", "d"), ("F1", ".3f"),
+                ("P", ".3f"), ("R", ".3f"), ("F1_pooled", ".3f"), ("dP21_pct", "+.0f"),
+                ("dP20_pct", "+.0f"), ("s_per_image", ".2f"), ("MP_per_s", ".2f")]
 SYNTH_COLUMNS = [("detector", "s"), ("faces", "s"), ("F1", ".3f"), ("P", ".3f"), ("R", ".3f"),
-                 ("dP21_%", "+.1f"), ("time_s", ".2f")]
+                 ("dP21_%", "+.1f"), ("dP20_%", "+.1f"), ("time_s", ".2f")]
+#: Settings of the learned detector measured besides its defaults on the real faces: the defaults
+#: of the previous round (hysteresis 0.85 / 0.97, 50 px floor, no hole filling or trace filters),
+#: then the steps added since, one at a time (docs/imaging.md §3.1).
+LEARNED_SETTINGS = (
+    ("session-7 defaults (0.85/0.97, 50 px)",
+     dict(prob_low=0.85, fill_holes_px=0, min_trace_length_px=50.0, min_trace_contrast=float("-inf"),
+          min_trace_width=0.0)),
+    ("+ holes, 0.80/0.97, 70 px",
+     dict(min_trace_contrast=float("-inf"), min_trace_width=0.0)),
+    ("+ width >= 1 joint width (3 px)", dict(min_trace_contrast=float("-inf"))),
+    ("+ contrast >= 0.20", dict(min_trace_contrast=0.20)),
+    ("+ contrast >= 0.30", dict(min_trace_contrast=0.30)),
+)
+#: Labelled branches shorter than this are not counted as traces (pixels).
+LABEL_MIN_TRACE_PX = 10.0
 
 
 def label_skeleton(path: Path) -> np.ndarray:
@@ -57,6 +82,18 @@ def label_skeleton(path: Path) -> np.ndarray:
         raise OSError(f"{path}: cannot read the label image")
     red = (bgr[..., 2] > 128) & (bgr[..., 1] < 100) & (bgr[..., 0] < 100)
     return skeletonize(red)
+
+
+def label_trace_count(truth: np.ndarray) -> int:
+    """Number of labelled traces: the skeleton's branches, spurs under 5 px pruned, chained straight
+    through junctions as the extraction chain does (its default turn limit), those of at least
+    :data:`LABEL_MIN_TRACE_PX`."""
+    from rockmass.imaging import link, skeleton_graph
+    from rockmass.imaging.extract import ExtractParams
+
+    graph = skeleton_graph.prune_spurs(skeleton_graph.build_graph(truth), 5.0)
+    chains = skeleton_graph.chain_traces(graph, max_turn_deg=ExtractParams().max_turn_deg)
+    return sum(link.polyline_length_px(c) >= LABEL_MIN_TRACE_PX for c in chains)
 
 
 def real_pairs(split: str = "val") -> list[tuple[Path, Path]]:
@@ -72,15 +109,17 @@ def score_real(pairs, params, joint_width_px: float) -> dict:
     from rockmass.imaging.extract import extract
     from rockmass.imaging.metrics import raster_counts, render_traces
 
-    counts, elapsed = [], 0.0
+    counts, elapsed, megapixels, n_traces = [], 0.0, 0.0, np.zeros(2)
     for image_path, label_path in pairs:
         truth = label_skeleton(label_path)
         image = cv2.imread(str(image_path), cv2.IMREAD_COLOR)[..., ::-1]  # RGB, as read_photo
         t0 = time.perf_counter()
         result = extract(image, m_per_px=1.0, joint_width_px=joint_width_px, params=params)
         elapsed += time.perf_counter() - t0
+        megapixels += truth.size / 1e6
         drawn = render_traces(result.traces, truth.shape, 1.0)
         counts.append(raster_counts(drawn, truth, tolerance_px=TOLERANCE_PX))
+        n_traces += (result.traces.n_traces, label_trace_count(truth))
     c = np.array(counts, dtype=float).reshape(-1, 4)  # matched drawn, drawn, matched true, true
     with np.errstate(invalid="ignore", divide="ignore"):
         p, r = c[:, 0] / c[:, 1], c[:, 2] / c[:, 3]
@@ -89,7 +128,8 @@ def score_real(pairs, params, joint_width_px: float) -> dict:
     return dict(images=len(pairs), F1=float(np.nanmean(f)), P=float(np.nanmean(p)),
                 R=float(np.nanmean(r)), F1_pooled=float(2 * pp * pr / max(pp + pr, 1e-12)),
                 dP21_pct=float(100 * (c[:, 1].sum() / max(c[:, 3].sum(), 1) - 1)),
-                s_per_image=elapsed / max(len(pairs), 1))
+                dP20_pct=float(100 * (n_traces[0] / max(n_traces[1], 1) - 1)),
+                s_per_image=elapsed / max(len(pairs), 1), MP_per_s=megapixels / max(elapsed, 1e-9))
 
 
 def score_synthetic(make_face, seeds, params) -> dict:
@@ -105,9 +145,10 @@ def score_synthetic(make_face, seeds, params) -> dict:
         elapsed = time.perf_counter() - t0
         acc = trace_accuracy(result.traces, face.truth,
                              m_per_px=face.m_per_px / result.scale.work_factor)
-        rows.append((acc.f1, acc.precision, acc.recall, 100 * acc.p21_rel_error, elapsed))
-    f1, p, r, dp21, t = np.mean(rows, axis=0)
-    return {"F1": f1, "P": p, "R": r, "dP21_%": dp21, "time_s": t}
+        rows.append((acc.f1, acc.precision, acc.recall, 100 * acc.p21_rel_error,
+                     100 * acc.p20_rel_error, elapsed))
+    f1, p, r, dp21, dp20, t = np.mean(rows, axis=0)
+    return {"F1": f1, "P": p, "R": r, "dP21_%": dp21, "dP20_%": dp20, "time_s": t}
 
 
 def main(argv=None) -> int:
@@ -121,29 +162,38 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="12 real images, one synthetic seed")
     parser.add_argument("--detectors", default="ridge,learned",
                         help="comma-separated ExtractParams.detector values (default both)")
+    parser.add_argument("--splits", default="val,train",
+                        help="comma-separated folders of the labelled set (default val,train)")
     parser.add_argument("--no-synthetic", action="store_true", help="real images only")
+    parser.add_argument("--no-settings", action="store_true",
+                        help="real images at the defaults only (not the other learned settings)")
     args = parser.parse_args(argv)
     detectors = [d.strip() for d in args.detectors.split(",") if d.strip()]
+    splits = [d.strip() for d in args.splits.split(",") if d.strip()]
 
-    print(header("photo -> traces on real labelled faces (val) and synthetic faces"))
+    print(header("photo -> traces on real labelled faces and synthetic faces"))
     print(f"learned model: {MODEL_FILE.name}, {MODEL_FILE.stat().st_size} bytes")
     payload: dict = {"data": str(DATA), "tolerance_px": TOLERANCE_PX, "real": [], "synthetic": []}
-    pairs = real_pairs("val") if (DATA / "val" / "images").is_dir() else []
-    if not pairs:
-        print(f"\n1. real faces: skipped, no labelled images at {DATA / 'val'} "
-              "(set ROCKMASS_REAL_DATA to a copy of rock-face-fractures)")
-    else:
+    settings = [("defaults", {})]
+    for split in splits:
+        pairs = real_pairs(split) if (DATA / split / "images").is_dir() else []
+        if not pairs:
+            print(f"\n1. real faces: skipped, no labelled images at {DATA / split} "
+                  "(set ROCKMASS_REAL_DATA to a copy of rock-face-fractures)")
+            continue
         pairs = pairs[:12] if args.quick else pairs
-        settings = [("defaults, joint width 3", {}, 3.0)]
         rows = []
         for detector in detectors:
-            for label, extra, width in settings:
-                row = score_real(pairs, ExtractParams(detector=detector, **extra), width)
-                rows.append({"detector": detector, "setting": label, **row})
-        print(f"\n1. real faces: {DATA / 'val'} ({len(pairs)} images, labels skeletonised, "
-              f"{TOLERANCE_PX:g} px tolerance; F1, P, R are means over images)")
+            extra_settings = LEARNED_SETTINGS if detector == "learned" and not args.no_settings else ()
+            for label, extra in (*settings, *extra_settings):
+                row = score_real(pairs, ExtractParams(detector=detector, **extra), 3.0)
+                rows.append({"split": split, "detector": detector, "setting": label, **row})
+        role = ("only measured, never tuned on" if split == "val"
+                else "the learned detector's settings were chosen here")
+        print(f"\n1. real faces: {DATA / split} ({len(pairs)} images, {role}; labels skeletonised, "
+              f"{TOLERANCE_PX:g} px tolerance, joint width 3 px; F1, P, R are means over images)")
         print(table(rows, REAL_COLUMNS))
-        payload["real"] = rows
+        payload["real"] += rows
 
     if not args.no_synthetic:
         from rockmass.imaging.synthetic import synthetic_face
@@ -159,6 +209,10 @@ def main(argv=None) -> int:
             for detector in detectors:
                 rows.append({"detector": detector, "faces": f"{name}, seeds {seeds}",
                              **score_synthetic(make, seeds, ExtractParams(detector=detector))})
+                if detector == "learned" and not args.no_settings:
+                    label, extra = LEARNED_SETTINGS[0]
+                    rows.append({"detector": f"learned, {label}", "faces": f"{name}, seeds {seeds}",
+                                 **score_synthetic(make, seeds, ExtractParams(detector=detector, **extra))})
         print("\n2. synthetic faces (1000 x 1500 px; buffered F1 at 3 px, means over seeds)")
         print(table(rows, SYNTH_COLUMNS))
         payload["synthetic"] = rows

@@ -9,6 +9,11 @@ Public names (each module's docstring gives the formulas and sources)
     GeoJSON or CSV by suffix (:mod:`rockmass.dfn.traceio`).
 :func:`read_geojson`, :func:`write_geojson`, :func:`read_csv`, :func:`write_csv`
     The explicit readers and writers (:mod:`rockmass.dfn.geojson_io`, :mod:`rockmass.dfn.csv_io`).
+Frames (:mod:`rockmass.dfn.frames`)
+    The CRS of a map (:func:`crs_kind`; geographic ones refused by :func:`check_crs`), the local CRS
+    that names a face frame in files (:func:`local_crs_wkt`), and the convention of trace angles in
+    outputs: azimuth clockwise from North on a map, counter-clockwise from +u on a face
+    (:func:`angle_convention`, :func:`to_convention`).
 :func:`signed_area`, :func:`polygon_area`
     The shoelace area of a polygon ring (:mod:`rockmass.dfn.polygon`), the one polygon-area formula
     of every stage that may import dfn (docs/fractures.md §1.3).
@@ -52,6 +57,8 @@ if TYPE_CHECKING:
     from .geojson_io import read_geojson, write_geojson
     from .traceio import read_traces, write_traces
     from .tracemap import TraceMap
+    from .frames import ANGLE_CONVENTIONS, DEGREE_EXTENT, MAP_FRAME, angle_convention, check_crs, crs_kind
+    from .frames import default_frame, is_rockmass_local_crs, local_crs_wkt, to_convention
     from .polygon import polygon_area, signed_area
     from .sets2d import trace_angles_deg, fit_sets_2d, fit_axial_mixture, JointSets2D
     from .intensity import sampling_window, SamplingWindow, clipped_lengths_m, trace_intensity, TraceIntensity, scanline_survey, ScanlineSurvey
@@ -59,7 +66,7 @@ if TYPE_CHECKING:
     from .mauldon import InscribedCircles, MauldonCircles, inscribed_circles, mauldon_circles
     from .topology import trace_topology, TraceTopology
     from .trace_stats import trace_map_statistics
-    from .orientation import angle_between, dip_from_normal, dip_from_pole_trend_plunge, dip_from_strike, normal_from_dip, pole_from_dip, pole_trend_plunge, strike_from_dip, to_lower_hemisphere, trend_plunge_from_vector, vector_from_trend_plunge
+    from .orientation import angle_between, dip_text, dip_from_normal, dip_from_pole_trend_plunge, dip_from_strike, normal_from_dip, pole_from_dip, pole_trend_plunge, strike_from_dip, to_lower_hemisphere, trend_plunge_from_vector, vector_from_trend_plunge
     from .fisher import FisherFit, confidence_cone, fisher_angle_cdf, fisher_angle_pdf, fisher_density, fit_fisher, orientation_tensor, sample_fisher, variability_cone
     from .stereology import C13_ISOTROPIC, C23_ISOTROPIC, P32Solution, c13, c13_from_angle, c23, c23_from_angle, p10_from_p32, p21_from_p32, p32_from_p10, p32_from_p21, solve_p32, terzaghi_weights
     from .sizes import ConstantSize, ExponentialSize, LognormalSize, PowerLawSize, SizeDistribution, mean_trace_length, p20_from_p30, p30_from_p32, p32_from_p30, radius_exponent_from_trace, trace_exponent_from_radius
@@ -108,6 +115,17 @@ _SOURCES = {
     "TraceTopology": "topology",
     "trace_map_statistics": "trace_stats",
     "angle_between": "orientation",
+    "dip_text": "orientation",
+    "ANGLE_CONVENTIONS": "frames",
+    "DEGREE_EXTENT": "frames",
+    "MAP_FRAME": "frames",
+    "angle_convention": "frames",
+    "check_crs": "frames",
+    "crs_kind": "frames",
+    "default_frame": "frames",
+    "is_rockmass_local_crs": "frames",
+    "local_crs_wkt": "frames",
+    "to_convention": "frames",
     "dip_from_normal": "orientation",
     "dip_from_pole_trend_plunge": "orientation",
     "dip_from_strike": "orientation",

@@ -45,6 +45,7 @@ from typing import IO
 import numpy as np
 
 from .atomic import atomic_open
+from .frames import check_crs, default_frame, is_rockmass_local_crs
 from .tracemap import TraceMap, _describe_traces, _plural, _require_trace_map, _resolve_frame
 
 __all__ = ["read_csv", "write_csv"]
@@ -158,9 +159,13 @@ class _Parser:
             polylines, columns = self._segments(header, lower, records)
         else:
             polylines, columns = self._polylines(header, lower, records)
-        frame = _resolve_frame(self.metadata.get("frame"), frame, self.name)
+        crs = self.metadata.get("crs") or None
+        check_crs(crs, np.concatenate(polylines) if polylines else np.zeros((0, 2)), self.name)
+        if is_rockmass_local_crs(crs):
+            crs = None
+        frame = _resolve_frame(self.metadata.get("frame"), frame, self.name, default_frame(crs))
         try:
-            return TraceMap.from_polylines(polylines, columns, frame=frame, crs=self.metadata.get("crs") or None)
+            return TraceMap.from_polylines(polylines, columns, frame=frame, crs=crs)
         except ValueError as exc:
             raise ValueError(f"{self.name}: {exc}") from exc
 

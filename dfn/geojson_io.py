@@ -29,13 +29,23 @@ Reading
   ids are the trace indices 0..n-1.
 - The top-level foreign members ``"frame"`` (a string) and ``"crs"`` (a string, or the legacy
   ``{"type": "name", "properties": {"name": ...}}`` / ``{"type": "EPSG", "properties": {"code": ...}}``
-  objects) are read; the name is kept verbatim.
+  objects) are read; the name is kept verbatim. A geographic CRS (``OGC:CRS84``, ``EPSG:4326``, any
+  longitude / latitude) is an error saying how to reproject, and so is a file without ``crs`` and
+  ``frame`` whose coordinates look like degrees over less than 0.1 unit (RFC 7946's WGS 84 default;
+  :func:`rockmass.dfn.frames.check_crs`). The local CRS the writer names a face frame with is
+  recognised and gives the map no CRS. A file that names no frame is in frame ``"map"`` when it has
+  a (projected) CRS, else ``"face"``; the frame decides the angle convention of the statistics
+  (:func:`rockmass.dfn.frames.angle_convention`).
 
 Writing
 -------
 One LineString feature per trace with its attributes as properties (``id`` first; NaN written as
 null, since JSON has no NaN), then the window as a Polygon feature with ``"role": "window"``, with
-``frame`` and ``crs`` (legacy named form, which GDAL/QGIS read) as top-level members. Coordinates are
+``frame``, ``angle_convention`` (what an angle attribute such as ``angle_deg`` means in this frame,
+:func:`rockmass.dfn.frames.angle_convention`; ignored on reading) and ``crs`` (legacy named form,
+which GDAL/QGIS read) as top-level members. A map without a
+CRS gets the WKT ``LOCAL_CS`` of its frame (:func:`rockmass.dfn.frames.local_crs_wkt`) as ``crs``, so
+GIS tools read it as a local engineering frame, not as WGS 84. Coordinates are
 written with Python's shortest round-trip float repr, so reading the file back gives identical
 float64 values. One feature per line keeps the file diff-friendly.
 
@@ -53,6 +63,7 @@ import numpy as np
 import shapely
 
 from .atomic import atomic_open
+from .frames import angle_convention, check_crs, default_frame, is_rockmass_local_crs, local_crs_wkt
 from .tracemap import _MAX_LISTED, TraceMap, _as_window, _describe_traces, _require_trace_map, _resolve_frame
 
 __all__ = ["read_geojson", "write_geojson"]
@@ -105,7 +116,7 @@ def read_geojson(path: str | os.PathLike[str], *, frame: str | None = None) -> T
     doc = _load_json(path, name)
     features = _feature_list(doc, name)
     crs = _read_crs(doc.get("crs"), name)
-    frame = _resolve_frame(_read_frame(doc.get("frame"), name), frame, name)
+    file_frame = _read_frame(doc.get("frame"), name)
     polylines: list[np.ndarray] = []
     records: list[dict[str, Any]] = []
     window, window_index, split_any = None, None, False
@@ -146,6 +157,12 @@ def read_geojson(path: str | os.PathLike[str], *, frame: str | None = None) -> T
     if split_any:
         for record in records:
             record.setdefault("part", -1)
+    every_xy = polylines + ([] if window is None else [window])
+    check_crs(crs, np.concatenate(every_xy) if every_xy else np.zeros((0, 2)), name,
+              rfc7946_default="crs" not in doc and file_frame is None)
+    if is_rockmass_local_crs(crs):
+        crs = None  # the face frame as rockmass writes it: no GIS CRS
+    frame = _resolve_frame(file_frame, frame, name, default_frame(crs))
     try:
         return TraceMap.from_polylines(polylines, _columns(records), window=window, frame=frame, crs=crs)
     except ValueError as exc:
@@ -403,9 +420,12 @@ def write_geojson(trace_map: TraceMap, path: str | os.PathLike[str]) -> None:
                 f"{name}: attribute 'role' is 'window' for traces {_describe_traces(clash, ids)}; "
                 "they would be read back as the sampling window"
             )
-    head: dict[str, Any] = {"type": "FeatureCollection", "frame": trace_map.frame}
-    if trace_map.crs is not None:
-        head["crs"] = {"type": "name", "properties": {"name": trace_map.crs}}
+    head: dict[str, Any] = {"type": "FeatureCollection", "frame": trace_map.frame,
+                            "angle_convention": angle_convention(trace_map.frame)}
+    # a map without a GIS CRS (a face frame) names a local engineering CRS, so that a GIS does not
+    # take it for WGS 84 longitude / latitude (RFC 7946's default)
+    crs = trace_map.crs if trace_map.crs is not None else local_crs_wkt(trace_map.frame)
+    head["crs"] = {"type": "name", "properties": {"name": crs}}
     xy, offsets = trace_map.xy_m, trace_map.offsets
     with atomic_open(path) as handle:
         handle.write(json.dumps(head, ensure_ascii=False)[:-1] + ', "features": [')

@@ -52,7 +52,10 @@ ROUNDING_FRACTION = 1e-9
 
 P20_RULES = ("endpoints", "midpoints")
 
-WINDOW_SOURCES = ("argument", "trace_map", "bounding_box")
+WINDOW_SOURCES = ("argument", "trace_map", "bounding_box", "convex_hull")
+
+#: The explicit stand-ins for an unrecorded window that :func:`sampling_window` accepts by name.
+WINDOW_CHOICES = {"bbox": "bounding_box", "hull": "convex_hull"}
 
 #: Number of scanlines laid across the window when no line spacing is given.
 DEFAULT_SCANLINES = 10
@@ -115,10 +118,10 @@ class SamplingWindow:
     ----------
     polygon : shapely.Polygon
         Valid polygon without holes, coordinates in metres in the trace map's frame.
-    source : {"argument", "trace_map", "bounding_box"}
-        Given explicitly, the map's own ``window_xy_m``, or the axis-aligned bounding box of the
-        trace vertices (a stand-in when nobody recorded the window: it makes the outermost traces
-        look censored and P20, P21 slightly high).
+    source : {"argument", "trace_map", "bounding_box", "convex_hull"}
+        Given explicitly, the map's own ``window_xy_m``, or the axis-aligned bounding box or the
+        convex hull of the trace vertices (stand-ins when nobody recorded the window: they make the
+        outermost traces look censored and P20, P21 high where the mapped area was larger).
     """
 
     polygon: shapely.Polygon
@@ -153,14 +156,17 @@ def sampling_window(trace_map: TraceMap, window: Any = None) -> SamplingWindow:
     ----------
     trace_map : TraceMap
         The traces.
-    window : (k, 2) array_like of float, shapely.Polygon or SamplingWindow, optional
+    window : (k, 2) array_like of float, shapely.Polygon, SamplingWindow, "bbox" or "hull", optional
         Exterior ring of the window in metres (k >= 3, non-zero area, no holes, not
-        self-intersecting). Default None: the map's ``window_xy_m``, else the traces' bounding box.
+        self-intersecting); or ``"bbox"`` / ``"hull"``: the bounding box / convex hull of the trace
+        vertices, chosen explicitly. Default None: the map's ``window_xy_m``, else the traces'
+        bounding box (:func:`~rockmass.dfn.trace_map_statistics` refuses that silent default).
 
     Returns
     -------
     SamplingWindow
-        The polygon and its ``source`` (``"argument"``, ``"trace_map"`` or ``"bounding_box"``).
+        The polygon and its ``source`` (``"argument"``, ``"trace_map"``, ``"bounding_box"`` or
+        ``"convex_hull"``).
 
     Raises
     ------
@@ -178,6 +184,9 @@ def sampling_window(trace_map: TraceMap, window: Any = None) -> SamplingWindow:
     _require_trace_map(trace_map)
     if isinstance(window, SamplingWindow):
         return window
+    if isinstance(window, str):
+        _choice(window, tuple(WINDOW_CHOICES), "window")
+        return _traces_hull(trace_map) if window == "hull" else _traces_box(trace_map)
     if window is not None:
         try:
             ring = _as_window(window)
@@ -186,6 +195,11 @@ def sampling_window(trace_map: TraceMap, window: Any = None) -> SamplingWindow:
         return SamplingWindow(_valid_polygon(ring, "window"), "argument")
     if trace_map.window_xy_m is not None:
         return SamplingWindow(_valid_polygon(trace_map.window_xy_m, "trace_map.window_xy_m"), "trace_map")
+    return _traces_box(trace_map)
+
+
+def _traces_box(trace_map: TraceMap) -> SamplingWindow:
+    """The traces' axis-aligned bounding box as the window."""
     if trace_map.n_traces == 0:
         raise ValueError("window: an empty trace map (0 traces) has no bounding box; pass window=...")
     xmin, ymin, xmax, ymax = trace_map.bounds()
@@ -195,6 +209,18 @@ def sampling_window(trace_map: TraceMap, window: Any = None) -> SamplingWindow:
             f"(x {xmin}..{xmax}, y {ymin}..{ymax}); pass window=... (the sampled polygon)"
         )
     return SamplingWindow(shapely.box(xmin, ymin, xmax, ymax), "bounding_box")
+
+
+def _traces_hull(trace_map: TraceMap) -> SamplingWindow:
+    """The convex hull of the trace vertices as the window."""
+    if trace_map.n_traces == 0:
+        raise ValueError("window: an empty trace map (0 traces) has no convex hull; pass window=...")
+    hull = shapely.convex_hull(shapely.multipoints(trace_map.xy_m))
+    if not isinstance(hull, shapely.Polygon) or hull.area == 0.0:
+        raise ValueError("window: the traces' convex hull has zero area (every vertex on one line); "
+                         "pass window=... (the sampled polygon)")
+    shapely.prepare(hull)
+    return SamplingWindow(hull, "convex_hull")
 
 
 def _valid_polygon(ring: np.ndarray, name: str) -> shapely.Polygon:

@@ -37,6 +37,7 @@ from numpy.typing import ArrayLike
 
 __all__ = [
     "angle_between",
+    "dip_text",
     "dip_from_normal",
     "dip_from_pole_trend_plunge",
     "dip_from_strike",
@@ -430,3 +431,21 @@ def angle_between(u: ArrayLike, v: ArrayLike, *, axial: bool = True) -> np.ndarr
     dot = np.sum(a * b, axis=-1)
     cross = np.linalg.norm(np.cross(a, b), axis=-1)
     return np.degrees(np.arctan2(cross, np.abs(dot) if axial else dot))
+
+
+def dip_text(dip_deg: float | None, dip_direction_deg: float | None) -> str:
+    """A plane as geologists write it, dip / dip direction in whole degrees: ``"69/029"``.
+
+    The one format of set orientations in every rockmass output (command lines and report), so
+    that the same set reads the same everywhere (issue 19). ``"undefined"`` when either is None.
+
+    Examples
+    --------
+    >>> dip_text(68.97, 29.02), dip_text(5.4, 359.7), dip_text(None, 10.0)
+    ('69/029', '05/000', 'undefined')
+    """
+    if dip_deg is None or dip_direction_deg is None:
+        return "undefined"
+    dip = int(round(float(dip_deg)))
+    direction = int(round(float(dip_direction_deg))) % 360
+    return f"{dip:02d}/{direction:03d}"

@@ -70,13 +70,13 @@ def rose_petals(angles_deg, weights, bin_deg: float = 10.0):
 
 
 def rose_diagram(angles_deg, weights, path, *, bin_deg: float = 10.0, set_means_deg=None,
-                 title: str | None = None) -> None:
+                 title: str | None = None, convention: str = "face") -> None:
     """Write an equal-area, axial, length-weighted rose diagram of trace angles.
 
     Parameters
     ----------
     angles_deg : (n,) array_like
-        Trace angles, counter-clockwise from +u (the face's right), 0–180 (axial).
+        Trace angles, 0–180 (axial), in ``convention``.
     weights : (n,) array_like
         Trace lengths (or any non-negative weights); NaN angles and zero weights are skipped.
     path : path-like
@@ -86,7 +86,15 @@ def rose_diagram(angles_deg, weights, path, *, bin_deg: float = 10.0, set_means_
     set_means_deg : array_like, optional
         Mean angles of the joint sets, drawn as lines through the centre.
     title : str, optional
+    convention : {"face", "azimuth"}, default "face"
+        ``"face"``: counter-clockwise from +u (the face's right), 0° drawn to the right;
+        ``"azimuth"``: clockwise from North, 0° drawn up and angles growing clockwise, as a map
+        user reads a rose (:mod:`rockmass.dfn.frames`). The figure says which.
     """
+    from .frames import ANGLE_CONVENTIONS
+
+    if convention not in ANGLE_CONVENTIONS:
+        raise ValueError(f"convention must be one of {', '.join(map(repr, ANGLE_CONVENTIONS))}, got {convention!r}")
     edges, radii = rose_petals(angles_deg, weights, bin_deg)
     fig = _figure((5.0, 5.2))
     ax = fig.add_subplot(projection="polar")
@@ -98,13 +106,19 @@ def rose_diagram(angles_deg, weights, path, *, bin_deg: float = 10.0, set_means_
     for k, mean in enumerate(means):  # a diameter through the centre at the set's mean angle
         t = np.radians(mean)
         ax.plot([t, t, t + np.pi], [top, 0.0, top], color=f"C{k % 10}", lw=1.5,
-                label=f"set {k}: {mean:.0f}°")
+                label=f"set {k}: {mean:03.0f}°" if convention == "azimuth" else f"set {k}: {mean:.0f}°")
     if len(means):
         ax.legend(fontsize=7, loc="lower left", bbox_to_anchor=(-0.1, -0.12))
-    ax.set_theta_zero_location("E")
-    ax.set_theta_direction(1)
+    if convention == "azimuth":
+        ax.set_theta_zero_location("N")
+        ax.set_theta_direction(-1)
+    else:
+        ax.set_theta_zero_location("E")
+        ax.set_theta_direction(1)
     ax.set_yticklabels([])
     ax.set_title(title or "trace orientations (length-weighted, equal-area, axial)", fontsize=9)
+    ax.set_xlabel("azimuth, clockwise from North" if convention == "azimuth"
+                  else "angle, counter-clockwise from +u (face frame)", fontsize=8)
     fig.savefig(path, dpi=120)
 
 
@@ -124,7 +138,8 @@ def plot_trace_map(trace_map, path, *, set_ids=None, title: str | None = None,
     _set_legend(ax, set_ids)
     ax.autoscale()
     ax.set_aspect("equal")
-    ax.set_xlabel(f"u ({unit})")
-    ax.set_ylabel(f"v ({unit})")
+    is_map = trace_map.frame == "map"
+    ax.set_xlabel(f"{'easting x' if is_map else 'u'} ({unit})")
+    ax.set_ylabel(f"{'northing y' if is_map else 'v'} ({unit})")
     ax.set_title(title or "traces by set", fontsize=10)
     fig.savefig(path, dpi=120)

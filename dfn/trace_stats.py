@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import shapely
 
+from .frames import angle_convention, to_convention
 from .intensity import (
     P20_RULES,
     _choice,
@@ -85,9 +86,11 @@ def trace_map_statistics(
     trace_map : TraceMap
         The traces, at least one reaching the window. Traces that miss the window are left out
         (counted under ``diagnostics``).
-    window : array_like, shapely.Polygon or SamplingWindow, optional
-        Sampling window; default None: the map's window, else the traces' bounding box
-        (``result.window.source`` says which).
+    window : array_like, shapely.Polygon, SamplingWindow, "bbox" or "hull", optional
+        Sampling window (the mapped area): a polygon, or ``"bbox"`` / ``"hull"`` to take the traces'
+        bounding box / convex hull, an explicit choice that ``result.window.source`` names. Default
+        None: the map's own window; a map without one is an error (issue 19: the area is never
+        chosen silently, it changes P20 and P21 by the ratio of the areas).
     n_sets : int, optional
         Number of joint sets; default None: chosen by BIC over 1..5.
     snap_tolerance_m : float, optional
@@ -139,10 +142,16 @@ def trace_map_statistics(
     Raises
     ------
     ValueError
-        An empty map, no trace reaching the window, or a bad argument (the message names it).
+        An empty map, a map without a window and no ``window``, no trace reaching the window, or a
+        bad argument (the message names it).
 
     Notes
     -----
+    Angles (per trace, set means, scanline directions) are given in the convention of the map's
+    frame, ``result.angle_convention`` (:func:`~rockmass.dfn.frames.angle_convention`): azimuths
+    clockwise from North, 0-180°, for a map (``frame == "map"``, as fractopo), counter-clockwise from
+    +u, 0-180°, on a face or section. The set fit itself works on the axial angles either way.
+
     The trace lengths are those inside the window (clipped), so the raw mean length, P21 and the
     censored flags describe the same observations; the set fit weights each trace by that length.
     Connections per trace use Sanderson & Nixon's node-count :math:`N_L = (N_I + N_Y)/2`, as fractopo
@@ -177,6 +186,11 @@ def trace_map_statistics(
         scanline_spacing_m = _real_at_least(
             scanline_spacing_m, "scanline_spacing_m", "distance between scanlines", above_zero=True
         )
+    if window is None and trace_map.window_xy_m is None:
+        raise ValueError(
+            "window: the trace map has no sampling window (the mapped area) and none was given; pass "
+            "window=<polygon> (the area that was mapped), or window='bbox' / window='hull' to take "
+            "the traces' bounding box / convex hull (P20 and P21 scale with 1 / area)")
     resolved = sampling_window(trace_map, window)
     reaches = shapely.intersects(trace_map.to_shapely(), resolved.polygon)
     if not reaches.any():
@@ -197,10 +211,12 @@ def trace_map_statistics(
     angles = trace_angles_deg(traces, method=angle_method)
     sets = _fit_sets(traces, angles, lengths, n_sets, angle_method, resolution_deg, seed)
     u = _Units(length_unit)
+    convention = angle_convention(trace_map.frame)
     if isinstance(sets, JointSets2D):
         membership = sets.membership
         set_summaries = tuple(
-            _set_summary(traces, sets, s, resolved, p20_rule, tolerance, scanline_spacing_m, circle, circles, u)
+            _set_summary(traces, sets, s, resolved, p20_rule, tolerance, scanline_spacing_m, circle, circles, u,
+                         convention)
             for s in range(sets.n_sets)
         )
         selection = SetSelection(sets.selected_by, {str(k): _number(v) for k, v in sets.bic.items()})
@@ -230,7 +246,7 @@ def trace_map_statistics(
             unit=u.length,
             censored=topology.censored,
             set_id=membership,
-            angle_deg=angles,
+            angle_deg=to_convention(angles, convention),
             connections=topology.connections,
             end_class=topology.end_class,
         ),
@@ -256,6 +272,9 @@ def trace_map_statistics(
             seed=_number(seed),
             scanline_spacing=None if scanline_spacing_m is None else Parameter.of(scanline_spacing_m, u.length),
         ),
+        frame=trace_map.frame,
+        crs=trace_map.crs,
+        angle_convention=convention,
         diagnostics=Diagnostics(
             traces_outside_window=int(trace_map.n_traces - traces.n_traces),
             zero_length_traces=int(np.count_nonzero(traces.degenerate_traces())),
@@ -313,7 +332,7 @@ def _mauldon_parameters(
 
 
 def _set_summary(
-    traces, sets: JointSets2D, s: int, window, p20_rule, tolerance, spacing, circle, circles, u
+    traces, sets: JointSets2D, s: int, window, p20_rule, tolerance, spacing, circle, circles, u, convention
 ) -> SetSummary:
     members = traces.subset(sets.membership == s)
     intensity = trace_intensity(members, window=window, p20_rule=p20_rule, edge_tolerance_m=tolerance)
@@ -321,7 +340,7 @@ def _set_summary(
     lengths = clipped_lengths_m(members, window)
     return SetSummary(
         index=s,
-        mean_angle=Parameter.of(sets.mean_angle_deg[s], "deg"),
+        mean_angle=Parameter.of(float(to_convention(sets.mean_angle_deg[s], convention)), "deg"),
         circular_spread=Parameter.of(sets.spread_deg[s], "deg", "the set has no preferred direction"),
         kappa=Parameter.of(sets.kappa[s], "-"),
         kappa_capped=bool(sets.kappa_capped[s]),
@@ -331,7 +350,7 @@ def _set_summary(
         mauldon=_mauldon_parameters(members, circle, circles, tolerance, u),
         mean_spacing=Parameter.of(survey.mean_spacing_m, u.length, survey.reason),
         scanline_p10=Parameter.of(survey.p10_per_m, u.per_length, "the scanlines have zero length"),
-        scanline_angle=Parameter.of(survey.scanline_angle_deg, "deg"),
+        scanline_angle=Parameter.of(float(to_convention(survey.scanline_angle_deg, convention)), "deg"),
         scanline_count=Parameter.of(int(survey.offsets_m.size), "-"),
         scanline_length=Parameter.of(survey.total_length_m, u.length),
         scanline_intersections=Parameter.of(survey.total_intersections, "-"),

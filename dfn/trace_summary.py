@@ -163,7 +163,8 @@ class SetSummary:
     index : int
         The set's number, as in :attr:`TraceTable.set_id`.
     mean_angle, circular_spread : Parameter
-        Mean trace angle and circular spread, deg.
+        Mean trace angle (in the result's ``angle_convention``: azimuth on a map, counter-clockwise
+        from +u on a face) and circular spread, deg.
     kappa : Parameter
         von Mises concentration of the fitted axial mixture.
     kappa_capped : bool
@@ -258,7 +259,8 @@ class TraceTable:
     set_id : (N,) int ndarray
         Index of the trace's set, -1 when it has none.
     angle_deg : (N,) float ndarray
-        Trace angle, deg; NaN for a trace without direction (None in the JSON document).
+        Trace angle, deg, in the result's ``angle_convention``; NaN for a trace without direction
+        (None in the JSON document).
     connections : (N,) int ndarray
         Y and X nodes on the trace.
     end_class : (N,) ndarray
@@ -316,7 +318,8 @@ class WindowSummary:
     Attributes
     ----------
     source : str
-        Where it came from: ``"argument"``, ``"map"`` or ``"bounding_box"``.
+        Where it came from: ``"argument"`` (given), ``"trace_map"`` (the map's own window), or the
+        explicit stand-ins ``"bounding_box"`` / ``"convex_hull"`` of the traces.
     area : float
         Its area, in ``unit`` squared.
     unit : str
@@ -444,6 +447,13 @@ class TraceMapStatistics:
         The sampling window.
     settings : StatisticsSettings
         The settings used.
+    frame : str
+        The map's frame (``"map"``, ``"face"``, ``"plane"``, ...).
+    crs : str or None
+        The map's coordinate reference system; None for a face or section frame.
+    angle_convention : str
+        ``"azimuth"`` or ``"face"`` (:data:`rockmass.dfn.frames.ANGLE_CONVENTIONS`): the convention of
+        every angle of the result (per trace, set means, scanline directions).
     diagnostics : Diagnostics
         Counts that flag suspicious input.
     """
@@ -464,12 +474,18 @@ class TraceMapStatistics:
     traces: TraceTable
     window: WindowSummary
     settings: StatisticsSettings
+    frame: str
+    crs: str | None
+    angle_convention: str
     diagnostics: Diagnostics
 
     def to_dict(self) -> dict:
         """The JSON document: parameters under their fractopo names, then ``"Node Counts"``,
-        ``"sets"``, ``"set_selection"``, ``"traces"``, ``"window"``, ``"settings"`` and
+        ``"sets"``, ``"set_selection"``, ``"traces"``, ``"window"``, ``"settings"``, ``"frame"``,
+        ``"crs"``, ``"angle_convention"`` with its meaning in ``"angle_convention_text"``, and
         ``"diagnostics"`` (a new dict on each call)."""
+        from .frames import ANGLE_CONVENTIONS
+
         return {
             "Number of Traces": self.n_traces.to_dict(),
             "Area": self.area.to_dict(),
@@ -487,5 +503,9 @@ class TraceMapStatistics:
             "traces": self.traces.to_dict(),
             "window": self.window.to_dict(),
             "settings": self.settings.to_dict(),
+            "frame": self.frame,
+            "crs": self.crs,
+            "angle_convention": self.angle_convention,
+            "angle_convention_text": ANGLE_CONVENTIONS[self.angle_convention],
             "diagnostics": self.diagnostics.to_dict(),
         }

@@ -63,15 +63,16 @@ def _require_trace_map(value: Any, name: str = "trace_map") -> None:
         raise TypeError(f"{name} must be a rockmass.dfn.TraceMap, got {type(value).__name__}")
 
 
-def _resolve_frame(file_frame: str | None, frame: str | None, name: str) -> str:
-    """The frame a reader gives its map: the file's, else the ``frame`` argument, else ``"face"``.
+def _resolve_frame(file_frame: str | None, frame: str | None, name: str, default: str = "face") -> str:
+    """The frame a reader gives its map: the file's, else the ``frame`` argument, else ``default``
+    (``"face"``; ``"map"`` for a file with a GIS CRS, :func:`rockmass.dfn.frames.default_frame`).
 
     A file naming another frame than the one asked for is an error (naming the file ``name``), not a
     silent relabelling.
     """
     if frame is not None and file_frame is not None and frame != file_frame:
         raise ValueError(f"{name}: frame: the file's frame is {file_frame!r} but frame={frame!r} was asked for")
-    return file_frame or frame or "face"
+    return file_frame or frame or default
 
 
 def _as_xy(value: Any, name: str) -> np.ndarray:

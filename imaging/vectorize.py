@@ -11,7 +11,8 @@ import numpy as np
 
 from .frame import check_scale, rc_to_uv
 
-__all__ = ["simplify_polylines", "axial_angle_deg", "image_window_uv_m", "mean_along", "to_trace_map"]
+__all__ = ["simplify_polylines", "axial_angle_deg", "image_window_uv_m", "mean_along", "trace_contrast",
+           "band_width_px", "to_trace_map"]
 
 
 def simplify_polylines(polylines_rc_px, tolerance_px: float) -> list[np.ndarray]:
@@ -119,6 +120,44 @@ def mean_along(polylines_rc_px, image, *, step_px: float = 0.5) -> np.ndarray:
         c = np.clip(np.round(np.interp(t, arc, rc[:, 1])).astype(np.int64), 0, w - 1)
         out[i] = values[r, c].mean() if values.size else np.nan
     return out
+
+
+def trace_contrast(polylines_rc_px, flat, *, mask=None) -> np.ndarray:
+    r"""How much darker than the face each trace is: :math:`1 - \bar I / \operatorname{med}(I)`,
+    with :math:`\bar I` the mean of the flattened image along the trace (:func:`mean_along`) and
+    the median over the image (over ``mask`` when given).
+
+    0.25 means a quarter darker than the typical face; negative values are brighter than it.
+
+    Examples
+    --------
+    >>> img = np.ones((5, 10)); img[2] = 0.6
+    >>> trace_contrast([[(2, 0), (2, 9)], [(0, 0), (0, 9)]], img).round(2).tolist()
+    [0.4, 0.0]
+    """
+    values = np.asarray(flat, dtype=np.float64)
+    inside = values[np.asarray(mask, dtype=bool)] if mask is not None else values
+    reference = float(np.median(inside)) if inside.size else 0.0
+    if not reference > 0:
+        return np.zeros(len(polylines_rc_px))
+    return 1.0 - mean_along(polylines_rc_px, values) / reference
+
+
+def band_width_px(polylines_rc_px, binary) -> np.ndarray:
+    """Mean width (pixels) of the binary mask along each trace: twice the Euclidean distance from
+    the trace's pixels to the nearest pixel outside the mask, averaged along it (:func:`mean_along`).
+
+    Examples
+    --------
+    >>> b = np.zeros((11, 20), bool); b[3:8] = True
+    >>> band_width_px([[(5, 2), (5, 17)]], b).round(1).tolist()
+    [6.0]
+    """
+    import cv2
+
+    inside = np.asarray(binary, dtype=bool)
+    half = cv2.distanceTransform(inside.view(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    return 2.0 * mean_along(polylines_rc_px, half)
 
 
 def to_trace_map(polylines_rc_px, *, height_px: int, m_per_px: float, window_uv_m=None,

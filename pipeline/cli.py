@@ -11,6 +11,7 @@ OpenCV, scikit-image) are imported inside each subcommand's handler, never at st
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from .errors import EXIT_BAD_INPUT, EXIT_FAILURE, RunError
@@ -51,6 +52,11 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)  # usage errors exit with code 2 by argparse's own rule
     args.argv = ["rockmass", *(sys.argv[1:] if argv is None else argv)]  # for manifests
+    out = getattr(args, "out", None)
+    if out and os.path.lexists(out) and not os.path.isdir(out):  # bad input, found before any work
+        _error(args.command, "error", f"{out}: --out names an existing file, not a folder; give a "
+                                      "folder (created if missing) or move the file away")
+        return EXIT_BAD_INPUT
     try:
         return int(args.handler(args) or 0)
     except RunError as exc:  # a failure while running, e.g. outputs that could not be written

@@ -21,8 +21,9 @@ from __future__ import annotations
 import argparse
 
 from .dfn_stage import produce
+from .outputs import print_json
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "document", "run", "summary_text"]
 
 
 def add_parser(subparsers) -> argparse.ArgumentParser:
@@ -36,25 +37,52 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, help="root seed (overrides dfn.seed)")
     p.add_argument("--realizations", type=int, help="number of realizations (overrides dfn.realizations)")
     p.add_argument("--first", type=int, default=0, help="index of the first realization (default 0)")
+    p.add_argument("--json", action="store_true",
+                   help="print the fitted sets (with [dfn.fit]) and every realization's summary as JSON "
+                        "on stdout")
     p.set_defaults(handler=run)
     return p
 
 
-def run(args) -> int:
-    """Handler of ``rockmass dfn``."""
-    _, _, _, results, _, fit = produce(args, args.out)
+def document(seed, results, fit) -> dict:
+    """The ``--json`` document: root seed, ``fitted`` (fitted.json's content, None without
+    ``[dfn.fit]``) and per realization its index, summary.json and validation.json (None without
+    ``validate``): what the files hold."""
+    from .dfn_stage import validation_document
+
+    return {"seed": seed, "fitted": None if fit is None else fit.as_dict(),
+            "realizations": [{"index": index, "summary": summary,
+                              "validation": validation_document(rows, index) if rows else None}
+                             for index, _, summary, rows in results]}
+
+
+def summary_text(seed, results, fit) -> str:
+    """The lines printed without ``--json``: fitted sets, then one line per realization."""
+    from .dfn.orientation import dip_text
+
+    lines = []
     if fit is not None:
         for s in fit.sets:
             size = "no size law" if s.size is None or not s.size.ok else s.size.family
-            print(f"fitted {s.name}: dip {s.mean_dip_deg:.1f}/{s.mean_dip_direction_deg:05.1f}, kappa "
-                  f"{s.kappa:.3g}, P32 {s.p32:.4g} ± {s.p32_sd:.2g} m²/m³, {size}")
+            lines.append(f"fitted {s.name}: dip/dip direction {dip_text(s.mean_dip_deg, s.mean_dip_direction_deg)}, "
+                         f"kappa {s.kappa:.3g}, P32 {s.p32:.4g} ± {s.p32_sd:.2g} m²/m³, {size}")
     for index, _, summary, rows in results:
         total = summary["total"]
         check = "" if not rows else f"; validation {sum(r['ok'] for r in rows)}/{len(rows)} within tolerance"
-        print(f"realization {index}: {total['count']} fractures, P32 {total['achieved_p32']:.4g} "
-              f"(target {total['target_p32']:.4g}) m²/m³{check}")
+        lines.append(f"realization {index}: {total['count']} fractures, P32 {total['achieved_p32']:.4g} "
+                     f"(target {total['target_p32']:.4g}) m²/m³{check}")
         for sec in summary.get("sections", []):
             sd = "" if sec["p21_sd"] is None else f" ± {sec['p21_sd']:.2g}"
-            print(f"  {sec['name']}: {sec['traces']} traces, P21 {sec['p21']:.4g}{sd} m/m² "
-                  f"(expected P32/C23 {sec['p21_expected']:.4g})")
+            lines.append(f"  {sec['name']}: {sec['traces']} traces, P21 {sec['p21']:.4g}{sd} m/m² "
+                         f"(expected P32/C23 {sec['p21_expected']:.4g})")
+    return "\n".join(lines)
+
+
+def run(args) -> int:
+    """Handler of ``rockmass dfn``."""
+    _, _, seed, results, _, fit = produce(args, args.out)
+    if args.json:
+        print_json(document(seed, results, fit))
+    else:
+        print(summary_text(seed, results, fit))
     return 0

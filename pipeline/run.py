@@ -330,12 +330,21 @@ def plan_run(config_path, out_dir, document=None) -> RunPlan:
                 _check_file(config_path, f"solve.velocity_inputs[{i}].history.file", hp)
                 stage_files["solve"].append(hp)
 
+    from .traces_stage import AREA_CHOICES
+
+    area = run.area_value(config_path)
+    if "traces" in needed and area is not None and area not in AREA_CHOICES:  # a file
+        _check_file(config_path, "run.area", Path(area))
+        stage_files["traces"].append(Path(area))
     read = {p for name in needed for p in stage_files[name]}  # files only unneeded stages read
     _check_contents(config_path, [c for c in contents if c[1] in read])  # are not read
+    if "traces" in needed:
+        _check_area(config_path, traces_file if photo is None else None, area)
 
     sections = {
         "extract": {"imaging": _dump(document.imaging), "run.trace_sets": run.trace_sets},
-        "traces": {"run.trace_sets": run.trace_sets},
+        # run.area only when given: the hash of a run without it is what it was before issue 19
+        "traces": {"run.trace_sets": run.trace_sets, **({"run.area": run.area} if run.area else {})},
         "boxcount": {"fractal": _dump(document.fractal)},
         "scanline": {"run.scanline_sets": run.scanline_sets},
         "dfn": {"dfn": _dump(document.dfn)},
@@ -359,6 +368,33 @@ def plan_run(config_path, out_dir, document=None) -> RunPlan:
             plans.append(sp)
     return RunPlan(config_path=config_path, document=document, stages=plans, trace_map=trace_map,
                    scanline=scanline, out_dir=out_dir, config=as_written, digests=digests)
+
+
+def _check_area(config_path, traces_file: Path | None, area: str | None) -> None:
+    """The traces stage has an area (issue 19): ``run.area`` (a polygon file in the map's CRS,
+    or "bbox" / "hull") or the window polygon of the ``[run] traces`` file (``traces_file``; None
+    for a photo's traces, which always have one). Bad input names ``run.area``."""
+    from .traces_stage import AREA_CHOICES, area_window
+
+    if traces_file is None and (area is None or area in AREA_CHOICES):
+        return
+    trace_map = None
+    if traces_file is not None:
+        from .inputs import read_trace_file
+
+        with reading(traces_file, "run.traces", config=config_path):
+            trace_map = read_trace_file(traces_file)
+    if trace_map is None or trace_map.n_traces == 0:
+        if area is not None and area not in AREA_CHOICES:  # a photo's traces: check the polygon alone
+            from .inputs import read_polygon_file
+
+            with reading(area, "run.area", config=config_path):
+                read_polygon_file(area, "run.area")
+        return
+    try:
+        area_window(trace_map, area, traces_file, "run.area")
+    except InputError as exc:
+        raise _problem(config_path, "run.area", str(exc)) from None
 
 
 def _references(run_document, trace_map) -> tuple[set[str], set[str]]:
@@ -477,8 +513,9 @@ def _run_stage_from(plan: RunPlan, stage: StagePlan, folder: Path, argv) -> dict
     elif stage.name == "traces":
         from .traces_stage import produce
 
-        produce(_ns(plan, argv, file=str(plan.trace_map), area=None, n_sets=run.trace_sets,
-                    snap_tolerance_m=None, out=str(folder)), folder)
+        produce(_ns(plan, argv, file=str(plan.trace_map), area=run.area_value(plan.config_path),
+                    area_option="run.area", n_sets=run.trace_sets, snap_tolerance_m=None,
+                    out=str(folder)), folder)
     elif stage.name == "boxcount":
         from .boxcount_stage import produce
 

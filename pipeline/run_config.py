@@ -21,7 +21,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated, Literal
 
-from pydantic import Field, field_validator
+from pydantic import Field, Strict, field_validator
 
 from .strict import ConfigFile, StrictModel, config_file
 
@@ -54,6 +54,12 @@ class RunConfig(StrictModel):
         Default: every stage the inputs and sections allow.
     trace_sets, scanline_sets : int, optional
         Number of joint sets (1-5) of the trace and scanline statistics; default chosen by BIC.
+    area : str, optional
+        The mapped area of the trace statistics (``rockmass traces --area``): a GeoJSON file with
+        one polygon (relative to the config file, in the trace map's CRS), or ``"bbox"`` /
+        ``"hull"`` for the traces' bounding box / convex hull, named in the outputs. Default: the
+        trace map's own window polygon (a photo's traces always have one: the image or the ROI); a
+        ``traces`` file without a window needs ``area`` (issue 19: never a silent bounding box).
     """
 
     photo: ConfigFile | None = None
@@ -62,6 +68,8 @@ class RunConfig(StrictModel):
     stages: Annotated[list[StageName], Field(min_length=1, max_length=len(STAGES))] | None = None
     trace_sets: int | None = Field(None, ge=1, le=5)
     scanline_sets: int | None = Field(None, ge=1, le=5)
+    # a file or "bbox" / "hull": not a ConfigFile (the choices are not files)
+    area: Annotated[str, Strict(), Field(min_length=1, max_length=4096)] | None = None
 
     @field_validator("stages")
     @classmethod
@@ -70,6 +78,15 @@ class RunConfig(StrictModel):
             twice = sorted({s for s in value if value.count(s) > 1})
             raise ValueError(f"each stage at most once, got {', '.join(twice)} twice")
         return value
+
+    def area_value(self, config_path) -> str | None:
+        """``area`` for the traces stage: ``"bbox"`` / ``"hull"`` as written, a file resolved
+        against the config's folder, or None."""
+        from .traces_stage import AREA_CHOICES
+
+        if self.area is None or self.area in AREA_CHOICES:
+            return self.area
+        return str(config_file(config_path, self.area))
 
     def path(self, key: str, config_path) -> Path | None:
         """The file of ``key`` (``photo``, ``traces``, ``scanline``) resolved against the config's

@@ -270,7 +270,14 @@ def _intensity_rows_scanline(run: _Run) -> list[list[str]]:
 
 def _intensity_rows_traces(run: _Run, stage: str) -> list[list[str]]:
     stats = _stage_statistics(run, stage)
-    rows = []
+    window = stats.get("window") or {}
+    area = ((stats.get("input") or {}).get("area") or {}).get("text") or {
+        "trace_map": "the map's window polygon", "argument": "a given polygon",
+        "bounding_box": "the traces' bounding box", "convex_hull": "the traces' convex hull",
+    }.get(window.get("source"), "")
+    # issue 19: the area P20 and P21 are per unit of is named, whatever it is
+    rows = [["area", fmt(_value(stats.get("Area") or {})), str((stats.get("Area") or {}).get("unit", "")),
+             f"{stage}: {area}"]]
     for measure, key in (("P20", "Areal Frequency P20"), ("P21", "Fracture Intensity P21"),
                          ("P21 (Mauldon)", "Fracture Intensity (Mauldon)")):
         entry = stats.get(key) or {}
@@ -352,7 +359,10 @@ def _set_laws(run: _Run) -> dict[str, tuple[str, str, str]]:
 
 
 def _orientation_text(o: dict) -> str:
-    text = f"{o.get('distribution', '')} {fmt(o.get('dip_deg'), 3)}/{fmt(o.get('dip_direction_deg'), 3)}"
+    from .dfn.orientation import dip_text
+
+    # dip/dip direction as the command line prints them (issue 19: the report said 69/29)
+    text = f"{o.get('distribution', '')} {dip_text(o.get('dip_deg'), o.get('dip_direction_deg'))}"
     return text + (f", κ {fmt(o.get('kappa'), 3)}" if o.get("kappa") is not None else "")
 
 

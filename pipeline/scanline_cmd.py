@@ -54,9 +54,11 @@ def summary_text(summary: dict) -> str:
              f"(Terzaghi {total['p10_terzaghi_per_m']:.3g} /m), RQD {total['rqd_direct_percent']:.1f} % "
              f"(Priest-Hudson {total['rqd_priest_hudson_percent']:.1f} %), "
              f"{summary['set_selection']['n_sets']} set(s) by {summary['set_selection']['selected_by']}"]
+    from .dfn.orientation import dip_text
+
     for s in summary["sets"]:
         mean = ("mean undefined" if s["mean_dip_deg"] is None else
-                f"{s['mean_dip_deg']:.0f}/{s['mean_dip_direction_deg']:03.0f}")
+                dip_text(s["mean_dip_deg"], s["mean_dip_direction_deg"]))
         lines.append(f"  set {s['set']}: {mean}, kappa {_fmt(s['kappa'])}, a95 {_fmt(s['alpha95_deg'], '.1f', '°')}, "
                      f"{s['n_intersections']} hits, P10 {s['p10_per_m']:.3g} /m (Terzaghi "
                      f"{s['p10_terzaghi_per_m']:.3g}), mean spacing {_fmt(s['spacing_m']['mean_m'], '.3g', ' m')}")

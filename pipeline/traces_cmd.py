@@ -26,8 +26,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         description="Joint sets, intensities (P20, P21), trace lengths with censoring, Mauldon "
                     "estimators, topology and the box-counting dimension of a trace map.")
     p.add_argument("file", help="traces (.geojson, .json or .csv)")
-    p.add_argument("--area", help="sampling window: a GeoJSON file with one polygon (default: the "
-                                  "map's own window, else the traces' bounding box)")
+    p.add_argument("--area", metavar="POLYGON.geojson|bbox|hull",
+                   help="the mapped area: a GeoJSON file with one polygon (in the map's CRS), or "
+                        "'bbox' / 'hull' to take the traces' bounding box / convex hull, named in "
+                        "every output (default: the map's own window polygon; a map without one "
+                        "needs --area)")
     p.add_argument("--sets", type=int, dest="n_sets",
                    help="number of joint sets (default: chosen by BIC over 1-5)")
     p.add_argument("--snap-tolerance", type=float, dest="snap_tolerance_m",
@@ -45,12 +48,21 @@ def summary_text(summary: dict) -> str:
         text = "undefined" if q["value"] is None else format(q["value"], fmt)
         return text if q.get("unit") in (None, "-") else f"{text} {q['unit']}"
 
+    area = summary.get("input", {}).get("area") or {}
     lines = [f"{value('Number of Traces', 'd')} traces, P20 = {value('Areal Frequency P20')}, "
              f"P21 = {value('Fracture Intensity P21')}, mean length {value('Trace Mean Length')}, "
              f"D_box = {value('Box-counting Dimension', '.4f')}"]
+    if area:
+        lines.append(f"  area {value('Area')}: {area['text']}")
+    azimuth = summary.get("angle_convention") == "azimuth"
+    crs = summary.get("crs")
+    lines.append(f"  angles: {summary.get('angle_convention_text', '')}"
+                 + (f"; crs {crs}" if crs else f"; {summary.get('frame', 'face')} frame, no CRS"))
     for s in summary["sets"]:
         spread = s["Circular Spread"]["value"]
-        lines.append(f"  set {s['Set']}: mean angle {s['Mean Angle']['value']:.1f}°, spread "
+        mean = s["Mean Angle"]["value"]
+        mean_text = f"azimuth {mean:05.1f}°" if azimuth else f"mean angle {mean:.1f}°"
+        lines.append(f"  set {s['Set']}: {mean_text}, spread "
                      f"{'undefined' if spread is None else format(spread, '.1f') + '°'}, "
                      f"{s['Number of Traces']['value']} traces")
     return "\n".join(lines)

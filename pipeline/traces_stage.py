@@ -14,10 +14,10 @@ import time
 from pathlib import Path
 
 from .errors import InputError, reading, reads
-from .inputs import read_polygon_file, read_trace_file
+from .inputs import read_trace_file
 from .outputs import output_set, plot_text
 
-__all__ = ["dimension_entry", "compute", "produce"]
+__all__ = ["AREA_CHOICES", "area_window", "dimension_entry", "compute", "produce"]
 
 
 def dimension_entry(result) -> dict:
@@ -27,31 +27,73 @@ def dimension_entry(result) -> dict:
             "offsets_min": result.offset_range[0], "offsets_max": result.offset_range[1]}
 
 
+#: ``--area`` (and ``[run] area``) values that choose a stand-in for an unrecorded area.
+AREA_CHOICES = {"bbox": "the traces' bounding box", "hull": "the convex hull of the traces"}
+
+
+def area_window(trace_map, area, file, option: str = "--area"):
+    """The sampling window the statistics use, and the ``input.area`` entry that names it.
+
+    ``area``: None (the map's own window polygon; a map without one is bad input, issue 19: the area
+    is never chosen silently), ``"bbox"`` / ``"hull"`` (an explicit stand-in), or a GeoJSON file
+    with one polygon, in the map's CRS. ``option`` names the setting in messages: ``--area`` or
+    ``run.area`` (then spelled as a config key). Returns ``(SamplingWindow, entry)``.
+    """
+    from .dfn.intensity import sampling_window
+
+    if area is None:
+        if trace_map.window_xy_m is None:
+            spell = ((lambda v: f'area = "{v}" in [run]') if option == "run.area"
+                     else (lambda v: f"{option} {v}"))
+            raise InputError(
+                f"{file}: the trace map has no sampling area (no window polygon in the file), and "
+                "trace statistics need one: P20 and P21 are per unit of the area that was mapped. "
+                f"Give {spell('AREA.geojson')} (a polygon of the mapped area), or choose a stand-in "
+                f"explicitly: {spell('bbox')} (the traces' bounding box) or {spell('hull')} (their "
+                "convex hull); the outputs then name it")
+        window = sampling_window(trace_map)
+        entry = {"choice": "map_window", "file": None,
+                 "text": "the map's own window polygon"}
+    elif area in AREA_CHOICES:
+        window = sampling_window(trace_map, area)
+        entry = {"choice": area, "file": None,
+                 "text": f"{AREA_CHOICES[area]} ({option} {area}), a stand-in for the mapped area"}
+    else:
+        with reading(area, option):
+            polygon = read_trace_file(Path(area), option)
+        if polygon.window_xy_m is None:
+            raise InputError(f"{area}: the {option} file holds no polygon (a GeoJSON Polygon feature "
+                             "is expected)")
+        if polygon.crs != trace_map.crs:
+            raise InputError(f"{area}: the {option} polygon is in crs {polygon.crs!r} but the trace "
+                             f"map {file} is in {trace_map.crs!r}; give both in one CRS")
+        window = sampling_window(trace_map, polygon.window_xy_m)
+        entry = {"choice": "file", "file": str(area), "text": f"the polygon of {area}"}
+    return window, {**entry, "value": window.area_m2, "unit": "m²", "source": window.source}
+
+
 @reads("file")
 def compute(args):
-    """Read and analyse; return (summary dict, trace map, timings)."""
+    """Read and analyse; return (summary dict, trace map with the window used, timings)."""
     from .dfn import trace_map_statistics
     from .fractal import box_count
 
     t0 = time.perf_counter()
     trace_map = read_trace_file(Path(args.file))
-    window = None
-    if args.area:
-        with reading(args.area, "--area"):
-            window = read_polygon_file(args.area, "--area")
     if trace_map.n_traces == 0:
         raise InputError(f"{args.file}: the map holds no traces")
-    if window is not None:
-        trace_map = trace_map.with_window(window)
+    window, area = area_window(trace_map, args.area, args.file, getattr(args, "area_option", "--area"))
     t1 = time.perf_counter()
-    summary = trace_map_statistics(trace_map, n_sets=args.n_sets,
+    summary = trace_map_statistics(trace_map, window=window, n_sets=args.n_sets,
                                    snap_tolerance_m=args.snap_tolerance_m).to_dict()
     t2 = time.perf_counter()
-    dimension = box_count(trace_map)  # the map's window (if any) is the face mask
+    if window.source != "bounding_box":  # the window is the face mask of the box count
+        trace_map = trace_map.with_window(window.polygon)
+    dimension = box_count(trace_map)
     t3 = time.perf_counter()
     summary["Box-counting Dimension"] = dimension_entry(dimension)
     summary["input"] = {"path": str(args.file), "n_traces": int(trace_map.n_traces),
-                        "frame": trace_map.frame, "crs": trace_map.crs}
+                        "frame": trace_map.frame, "crs": trace_map.crs, "area": area}
     timings = {"read_s": t1 - t0, "statistics_s": t2 - t1, "box_count_s": t3 - t2}
     return summary, trace_map, timings
 
@@ -77,15 +119,18 @@ def produce(args, out_dir=None):
         with output_set(out_dir) as out, ExitStack() as stack:
             paths = {name: stack.enter_context(atomic_path(out / name))
                      for name in ("rose.png", "traces.png", "summary.json", "manifest.json")}
-            rose_diagram(np.array(traces["angle_deg"], dtype=float),
+            rose_diagram(np.array([np.nan if a is None else a for a in traces["angle_deg"]], dtype=float),
                          np.array(traces["length"], dtype=float), paths["rose.png"],
-                         set_means_deg=set_means, title=f"{plot_text(Path(args.file).name)}: trace orientations")
+                         set_means_deg=set_means, convention=summary["angle_convention"],
+                         title=f"{plot_text(Path(args.file).name)}: trace orientations")
             plot_trace_map(trace_map, paths["traces.png"], set_ids=np.array(traces["set"]),
                            title=f"{plot_text(Path(args.file).name)}: traces by set")
             atomic_write_json(paths["summary.json"], summary)
             manifest = build_manifest(
-                command=args.argv, inputs=[args.file] + ([args.area] if args.area else []),
-                config={"n_sets": args.n_sets, "snap_tolerance_m": args.snap_tolerance_m},
+                command=args.argv,
+                inputs=[args.file] + ([args.area] if args.area and args.area not in AREA_CHOICES else []),
+                config={"n_sets": args.n_sets, "snap_tolerance_m": args.snap_tolerance_m,
+                        "area": args.area},
                 timings_s=timings)
             atomic_write_json(paths["manifest.json"], manifest)
     return summary

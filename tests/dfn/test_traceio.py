@@ -166,7 +166,8 @@ def test_hand_written_geojson_reads_as_documented(tmp_path):
     assert np.array_equal(tm.attributes["aperture_mm"], [0.5, np.nan, 1.0], equal_nan=True)  # gap -> NaN
     assert tm.attributes["note"].tolist() == ["open", "", ""]  # null / absent string -> ''
     assert tm.window_xy_m.tolist() == [[0, 0], [10, 0], [10, 10], [0, 10]]
-    assert (tm.crs, tm.frame) == ("urn:ogc:def:crs:EPSG::32633", "face")
+    # issue 19: a file with a projected CRS and no frame member is a map (easting, northing)
+    assert (tm.crs, tm.frame) == ("urn:ogc:def:crs:EPSG::32633", "map")
 
 
 @pytest.mark.parametrize(

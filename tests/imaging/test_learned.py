@@ -129,3 +129,43 @@ def test_fit_mlp_separates_two_linearly_separable_classes():
     mean, std, weights, biases = fit_mlp(x, y, hidden=(8,), epochs=40, batch=256, seed=4)
     stage = Stage(mean=mean, std=std, weights=weights, biases=biases)
     assert np.mean((stage.predict(x.T) > 0.5) == (y > 0.5)) > 0.97
+
+
+def test_trace_filters_default_per_detector_and_are_checked():
+    learned, ridge = ExtractParams(detector="learned"), ExtractParams()
+    assert [learned.resolved(n) for n in ("fill_holes_px", "min_trace_length_px",
+                                          "min_trace_contrast", "min_trace_width")] == [400, 70.0, 0.25, 1.0]
+    assert [ridge.resolved(n) for n in ("fill_holes_px", "min_trace_length_px",
+                                        "min_trace_contrast", "min_trace_width")] == [0, 20.0, None, None]
+    assert ExtractParams(detector="learned", min_trace_contrast=0.1).resolved("min_trace_contrast") == 0.1
+    for bad, field in ((dict(min_trace_contrast=1.5), "min_trace_contrast"),
+                       (dict(min_trace_contrast=float("nan")), "min_trace_contrast"),
+                       (dict(min_trace_width=-1.0), "min_trace_width"),
+                       (dict(fill_holes_px=-3), "fill_holes_px"), (dict(fill_holes_px=2.5), "fill_holes_px")):
+        with pytest.raises(ValueError, match=field):
+            ExtractParams(**bad)
+
+
+def _two_line_face(faint=0.85, dark=0.45, shape=(160, 240), seed=5):
+    """Textured rock with a dark 6 px joint (row 50) and a faint one (row 110): grey ratio to the
+    rock ``dark`` and ``faint``."""
+    rng = np.random.default_rng(seed)
+    image = 150 + 5 * cv2.GaussianBlur(rng.standard_normal(shape).astype(np.float32), (0, 0), 1.0)
+    image[47:53] *= dark
+    image[108:112] *= faint
+    return np.clip(image, 0, 255).astype(np.uint8)
+
+
+def test_contrast_filter_drops_a_faint_line_and_keeps_the_dark_one():
+    image = _two_line_face()
+    loose = ExtractParams(detector="learned", min_trace_contrast=float("-inf"))
+    kept = extract(image, m_per_px=1.0, params=loose).traces
+    contrast = kept.attributes["contrast"]
+    rows = [float(np.median(160 - 0.5 - kept.polyline(i)[:, 1])) for i in range(kept.n_traces)]
+    faint = [c for r, c in zip(rows, contrast) if abs(r - 109.5) <= 3]
+    strong = [c for r, c in zip(rows, contrast) if abs(r - 50) <= 3]
+    assert strong and faint, "both lines are traced without the contrast filter"
+    assert min(strong) > 0.25 > max(faint)  # the grey ratios 0.45 and 0.85, seen through flattening
+    filtered = extract(image, m_per_px=1.0, params=ExtractParams(detector="learned")).traces
+    rows = [float(np.median(160 - 0.5 - filtered.polyline(i)[:, 1])) for i in range(filtered.n_traces)]
+    assert any(abs(r - 50) <= 3 for r in rows) and not any(abs(r - 109.5) <= 3 for r in rows)

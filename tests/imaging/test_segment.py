@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from rockmass.imaging.segment import remove_small_objects, robust_thresholds, roi_mask, segment_ridges
+from rockmass.imaging.segment import (fill_holes, remove_small_objects, robust_thresholds, roi_mask,
+                                      segment_ridges)
 
 
 def test_thresholds_are_median_plus_k_robust_sigmas_of_gaussian_noise():
@@ -73,3 +74,17 @@ def test_hysteresis_mask_keeps_only_pieces_holding_a_strong_pixel():
     assert mask[2].sum() == 16 and mask[6].sum() == 0 and mask.sum() == 16
     with pytest.raises(ValueError, match="low"):
         hysteresis_mask(response, low=0.9, high=0.5)
+
+
+def test_fill_holes_closes_a_band_with_a_speck_so_it_thins_to_one_line():
+    from rockmass.imaging.skeleton_graph import build_graph, skeletonize
+
+    band = np.zeros((30, 80), bool)
+    band[10:20, 5:75] = True
+    band[13:17, 30:40] = False  # a brighter rib inside a wide dark band
+    band[0:3, 0:3] = False  # background at the border is never a hole
+    looped = build_graph(skeletonize(band))
+    filled = fill_holes(band, 100)
+    assert filled[13:17, 30:40].all() and not filled[:5].any()
+    assert np.array_equal(fill_holes(band, 40), band)  # the 40 px hole is not under 40
+    assert build_graph(skeletonize(filled)).n_branches < looped.n_branches

@@ -330,7 +330,8 @@ def test_dfn_table_gives_every_set_of_every_realization(run_dir):
             spec = next(c for c in config if c["name"] == s["name"])
             orientation = row[header.index("orientation (dip/dip dir.)")]
             o = spec["orientation"]
-            assert f"{o['dip_deg']:g}/{o['dip_direction_deg']:g}" in orientation
+            # dip/dip direction as the command line prints them (issue 19): "50/270"
+            assert f"{round(o['dip_deg']):02d}/{round(o['dip_direction_deg']) % 360:03d}" in orientation
             assert f"r_min_m {spec['size']['r_min_m']:g}" in row[header.index("size law (radius)")]
 
 
@@ -403,7 +404,9 @@ def test_fitted_dfn_sets_show_the_fitted_orientation_and_size_law(run_dir, tmp_p
         row, o = rows[s["name"]], s["orientation"]
         assert row[header.index("from")] == "fitted"
         orientation = row[header.index("orientation (dip/dip dir.)")]
-        assert f"{o['dip_deg']:.3g}/{o['dip_direction_deg']:.3g}, κ {o['kappa']:.3g}" in orientation
+        # issue 19: "79/009" as `rockmass dfn` and `rockmass scanline` print it (was "79.1/9.49")
+        assert (f"{round(o['dip_deg']):02d}/{round(o['dip_direction_deg']) % 360:03d}, κ {o['kappa']:.3g}"
+                in orientation)
         law = row[header.index("size law (radius)")]
         assert law.startswith(s["size"]["family"])
         assert f"alpha {s['size']['params']['alpha']:.4g}" in law
