@@ -24,7 +24,7 @@ __all__ = ["prepare", "solve", "build_outputs", "produce"]
 #: rather than kept as the user's: the frames of an earlier solve (``blocks_0000.vtu`` …; a
 #: ParaView series must not mix two runs, issue 18) and outputs written only for some models
 #: (``bolts.csv``). A new optional output belongs here.
-_OWNED = (r"blocks_\d{4,}\.vtu", r"bolts\.csv")
+_OWNED = (r"blocks_\d{4,}\.vtu", r"bolts\.csv", r"zones\.csv")
 
 
 def prepare(config_path, document=None, model=None):
@@ -105,8 +105,11 @@ def _monitor_summary(result, model, settings) -> dict:
 
     hist = result.history
     out = {}
+    chosen = result.info.get("monitor_blocks", {})  # zoned models: the runner's piece
     for m in settings.monitors:
-        block = m.block if m.block is not None else block_at_point(model, m.point_xy_m)
+        block = chosen.get(m.name)
+        if block is None:
+            block = m.block if m.block is not None else block_at_point(model, m.point_xy_m)
         entry = {"block": int(block), "region": int(model.region[block]),
                  "centroid_xy_m": [float(v) for v in model.centroid_xy_m[block]], "stages": []}
         ux_all = hist.get(f"{m.name}_ux_m")
@@ -146,6 +149,7 @@ def build_outputs(model, settings, result, timings) -> dict:
     """Everything ``rockmass solve`` writes, in memory: name -> str (text) or meshio Mesh."""
     import numpy as np
 
+    from .solver.deformable import zone_rows
     from .solver.vtu import frame_mesh, pvd_text
 
     files: dict = {}
@@ -160,11 +164,15 @@ def build_outputs(model, settings, result, timings) -> dict:
     history = result.history or {"time_s": np.zeros(0), "stage": np.zeros(0, str)}
     files["history.csv"] = csv_text(history)
     be = result.block_energy
-    files["block_energy.csv"] = csv_text({
-        "block_id": np.arange(model.n_blocks), "region": model.region,
+    per_block = {"block_id": np.arange(model.n_blocks), "region": model.region}
+    if result.zones:  # the result's blocks are the pieces: say whose they are
+        per_block["parent_block"] = result.zones["parent_block"]
+    files["block_energy.csv"] = csv_text(per_block | {
         "volume_m3": be["volume_m3"], "mass_kg": be["mass_kg"],
         "peak_velocity_m_s": be["peak_velocity_m_s"],
         "peak_kinetic_energy_j": be["peak_kinetic_energy_j"]})
+    if result.zones:  # docs/dem.md §16: stress, strain and plastic state per zone
+        files["zones.csv"] = csv_text(zone_rows(result.zones))
     contacts = result.contacts or {}
     files["contacts.csv"] = csv_text(contacts) if contacts else "block_a,block_b\n"
     if result.bolts:  # docs/dem.md §15: per bolt node, axial force, yield, bond slip
@@ -200,6 +208,8 @@ def produce(args, out_dir, document=None, model=None, progress=None):
         result = solve(model, settings, args.config, progress or bar)
     timings["solve_s"] = time.perf_counter() - t0
     t1 = time.perf_counter()
+    if result.pieces is not None:  # deformable blocks: the outputs index the model's pieces
+        model = result.pieces
     files = build_outputs(model, settings, result, timings)
     timings["outputs_s"] = time.perf_counter() - t1
     doc = files["result.json"]

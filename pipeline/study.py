@@ -74,7 +74,7 @@ CSV_COLUMNS = ("d_box", "d_box_r2", "d_box_stderr", "d_box_offset_sd", "p21_per_
                "crown_displacement_m", "left_wall_displacement_m", "right_wall_displacement_m",
                "invert_displacement_m", "failed_blocks", "failed_area_m2", "failed_mechanisms",
                "worst_ratio", "converged", "solve_status", "steps", "broken_contacts",
-               "detached_blocks", "status", "error", "wall_time_s")
+               "detached_blocks", "plastic_area_m2", "status", "error", "wall_time_s")
 
 #: A case's outcome (results.csv ``status``), in the order reports list them.
 OUTCOMES = ("ok", "failed_blocks", "not_converged", "unstable", "overlap", "error")
@@ -428,7 +428,11 @@ def _solve(document, config_path, model) -> dict:
            "converged": bool(converged), "solve_status": str(result.status),
            "steps": int(sum(s.steps for s in result.stages)),
            "broken_contacts": int(last.broken_contacts),
-           "detached_blocks": int(last.detached_blocks), "stages": stages,
+           "detached_blocks": int(last.detached_blocks),
+           # deformable blocks (docs/dem.md §16): the area of the zones that yielded; none if rigid
+           "plastic_area_m2": (result.zone_summary()["plastic_area_m2"] if result.zones
+                               else None),
+           "stages": stages,
            "diagnostic": result.diagnostic, "outcome": outcome, "reason": reason}
     return out
 

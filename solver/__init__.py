@@ -1,4 +1,5 @@
-"""The distinct element (DEM) core: rigid polygonal blocks on joint contacts (2D, unit thickness).
+"""The distinct element (DEM) core: polygonal blocks on joint contacts (2D, unit thickness), rigid or
+deformable (meshed into triangular zones, :mod:`rockmass.solver.zones`, docs/dem.md §16).
 
 Public names
 ------------
@@ -9,8 +10,10 @@ Public names
 :class:`VelocityInput`, :class:`Sine`, :class:`TableSine`, :class:`Ricker`,
 :class:`TableHistory`,
 :class:`QuietBoundary`, :class:`FreeField`, :class:`Monitor`, :class:`Bolt`,
-:class:`BoltPattern`, :class:`BoltProperties`
+:class:`BoltPattern`, :class:`BoltProperties`, :class:`Deformable`
     What a run needs besides the blocks (:mod:`rockmass.solver.settings`).
+:class:`Elastic`, :class:`MohrCoulomb`, :class:`HoekBrown`
+    The zones' constitutive models of deformable blocks (:mod:`rockmass.solver.zones`).
 :class:`Result`, :class:`StageResult`, :class:`Frame`
     What it returns (:mod:`rockmass.solver.result`).
 :class:`Engine`
@@ -19,7 +22,9 @@ Public names
 Also: :mod:`rockmass.solver.failure` (blocks that keep moving in a static stage: detected,
 classified as fall / slide / rotation, taken out) and :mod:`rockmass.solver.monitoring` (points
 fixed on the excavation boundary: crown, walls, invert), :mod:`rockmass.solver.bolts` (rock bolts:
-cable elements grouted into the blocks, docs/dem.md §15), :mod:`rockmass.solver.vtu` (the frames as
+cable elements grouted into the blocks, docs/dem.md §15), :mod:`rockmass.solver.zones` and
+:mod:`rockmass.solver.deformable` (deformable blocks: zones, constitutive models, the zoned
+model, docs/dem.md §16), :mod:`rockmass.solver.vtu` (the frames as
 ParaView files: ``blocks_NNNN.vtu`` and ``blocks.pvd``) and :mod:`rockmass.solver.tolerances` (the
 numeric policy, each constant with its reason). The formulas are in docs/dem.md.
 
@@ -29,13 +34,16 @@ The numba kernels (:mod:`rockmass.solver._kernels`) load on first use of :func:`
 
 from .result import Frame, Result, StageResult
 from .settings import (Bolt, BoltPattern, BoltProperties, BoundaryStress, ContinuouslyYielding,
-                       Coulomb, Fix, FreeField, InSituStress, Material, Monitor, QuietBoundary,
-                       Ricker, Settings, Sine, Stage, TableHistory, TableSine, VelocityInput)
+                       Coulomb, Deformable, Fix, FreeField, InSituStress, Material, Monitor,
+                       QuietBoundary, Ricker, Settings, Sine, Stage, TableHistory, TableSine,
+                       VelocityInput)
+from .zones import Elastic, HoekBrown, MohrCoulomb
 
 __all__ = ["run", "Engine", "Settings", "Stage", "Material", "Coulomb", "ContinuouslyYielding",
            "InSituStress", "Fix", "BoundaryStress", "VelocityInput", "Sine", "TableSine", "Ricker",
            "TableHistory", "QuietBoundary", "FreeField", "Monitor", "Bolt", "BoltPattern",
-           "BoltProperties", "Result", "StageResult", "Frame"]
+           "BoltProperties", "Deformable", "Elastic", "MohrCoulomb", "HoekBrown", "Result",
+           "StageResult", "Frame"]
 
 
 def __getattr__(name):  # numba only when a run starts

@@ -55,6 +55,9 @@ PX, PY  x_c    contact point (world frame)                                      
 NX, NY  n      unit normal, from ``pa`` to ``pb``                                     1
 USP     u_p    accumulated plastic shear displacement Σ|Δu_s^p|                       m, ≥ 0
 NEW            1: activated since :func:`advance` last checked its stiffness          flag
+FNA            F_n applied at the last update, dashpots included (deformable blocks   N/m
+               take their contact forces from it, docs/dem.md §16.8)
+FSA            F_s applied at the last update, dashpots included                      N/m
 ======  =====  =====================================================================  ==========
 
 The normal closure the joint law sees is u_n = δ + u_0 + u_d (eq. (4.3)). Forces (eq. (4.5)): on
@@ -69,8 +72,8 @@ from numba import njit
 
 # --- slot state columns (table above) -----------------------------------------------------------
 (ACT, U0, DIL, TAU, PHIM, RREV, DIR, COORD, BRK, LEN, FN, FS, SLIP, OVL, PX, PY, NX, NY, USP,
- NEW) = range(20)
-N_SLOT_COLUMNS = 20
+ NEW, FNA, FSA) = range(22)
+N_SLOT_COLUMNS = 22
 
 # --- world vertex table columns (world_vertices) ------------------------------------------------
 W_X, W_Y, W_NX, W_NY, W_CX, W_CY, W_TAN, W_RAD = range(8)
@@ -138,10 +141,13 @@ RC_DONE, RC_REBUILD, RC_CONVERGED, RC_OVERLAP, RC_NONFINITE, RC_STIFF = range(6)
 N_PRM = 29
 
 #: Per-block arrays (the blocks' geometry, inertia, degrees of freedom and motion) and the world
-#: vertex scratch table ``wv`` (columns ``W_*``) the kernels fill.
+#: vertex scratch table ``wv`` (columns ``W_*``) the kernels fill. A block that is a zone of a
+#: deformable block has its zone's index in ``zone_of`` (else -1): its vertices, centroid
+#: motion, spin and strain rate ``srate`` (ε̇_xx, ε̇_yy, ε̇_xy) follow the zone's nodes
+#: (:class:`Zoning`, docs/dem.md §16.8).
 Blocks = namedtuple("Blocks", ["loc", "lgeo", "off", "radius", "mass", "inv_mass", "mode",
                                "dof_input", "active", "movable", "pos", "rot", "vel", "omg",
-                               "asleep", "calm", "wv"])
+                               "asleep", "calm", "wv", "zone_of", "srate"])
 
 #: The pair list with its slot state ``S``, joint-model table ``props``, per-pair forces ``fpair``
 #: (fx_a, fy_a, m_a, fx_b, fy_b, m_b), the per-block CSR ``bp_ptr``/``bp_idx`` of
@@ -158,6 +164,18 @@ Pairs = namedtuple("Pairs", ["pa", "pb", "pprop", "pref", "pinit", "init_brk", "
 #: (N, ``N_BS_COLUMNS``) (:func:`bolt_step`).
 Loads = namedtuple("Loads", ["gravity", "ext_f", "ext_a", "ext_b", "quiet_edges", "presc_val",
                              "ff_edges", "ff_elem", "ff_state", "bolt_node", "bolt_state"])
+
+#: The zones of deformable blocks (docs/dem.md §16): nodes (positions ``xy``, velocities, true and
+#: integration masses, dof modes 0 free / 1 fixed / 2 prescribed with the ``presc_val`` column in
+#: ``node_input``, external forces ``fext``), zones (``tri``, material row ``zmat`` of ``mtab``,
+#: stress ``sig`` (``ZS_*``), strain, plastic state and strain, ``live`` flag, the block that
+#: stands for each zone in the contact search ``zone_block``), ``mixed`` (1,) the nodal mixed
+#: discretisation flag, and scratch (``fint``, ``fcon``, ``fabs``, ``node_ev``, ``node_a``,
+#: ``presc``). Empty arrays when the model has no deformable block.
+Zoning = namedtuple("Zoning", ["xy", "vel", "mass", "inv_mass", "mode", "node_input", "fext",
+                               "tri", "zmat", "mtab", "sig", "strain", "state", "eps_p", "live",
+                               "zone_block", "mixed", "fint", "fcon", "fabs", "node_ev", "node_a",
+                               "presc"])
 
 
 @njit(cache=True)
@@ -183,9 +201,10 @@ def world_vertices(loc, lgeo, off, pos, rot, active, wv):
 
 
 @njit(cache=True)
-def broad_phase(wv, off, active, movable, margin):
+def broad_phase(wv, off, active, movable, group, margin):
     """Candidate pairs (a < b) whose bounding boxes, grown by ``margin``, overlap (sweep and prune
-    along x). Pairs of two blocks that cannot move are left out. Returns sorted (pa, pb)."""
+    along x). Pairs of two blocks that cannot move are left out, and pairs of one ``group`` ≥ 0
+    (the zones of one deformable block, held together by their nodes). Returns sorted (pa, pb)."""
     nb = len(off) - 1
     lo = np.empty((nb, 2))
     hi = np.empty((nb, 2))
@@ -224,6 +243,8 @@ def broad_phase(wv, off, active, movable, margin):
             if lo[b, 1] > hi[a, 1] or lo[a, 1] > hi[b, 1]:
                 continue
             if not movable[a] and not movable[b]:
+                continue
+            if group[a] >= 0 and group[a] == group[b]:
                 continue
             if n == cap:
                 cap *= 2
@@ -505,6 +526,20 @@ def _relative_motion(xa, ya, vxa, vya, wa, xb, yb, vxb, vyb, wb, px, py, tx, ty,
 
 
 @njit(cache=True, inline="always")
+def _strain_rate_velocity(srate, a, b, pos, px, py):
+    """The part of b's velocity relative to a's at (px, py) that comes from the strain rates of
+    zones (docs/dem.md §16.8): ε̇_b (p − c_b) − ε̇_a (p − c_a), ε̇ = ``srate`` rows (xx, yy, xy);
+    rigid blocks have zero rows."""
+    rax = px - pos[a, 0]
+    ray = py - pos[a, 1]
+    rbx = px - pos[b, 0]
+    rby = py - pos[b, 1]
+    dvx = (srate[b, 0] * rbx + srate[b, 2] * rby) - (srate[a, 0] * rax + srate[a, 2] * ray)
+    dvy = (srate[b, 2] * rbx + srate[b, 1] * rby) - (srate[a, 2] * rax + srate[a, 1] * ray)
+    return dvx, dvy
+
+
+@njit(cache=True, inline="always")
 def _stiffness_dashpot(prop, length, beta, vrx, vry, nx, ny, tx, ty, dt, fn, fs, slipping, E):
     """Add the stiffness-proportional Rayleigh dashpots β K v_rel to a slot's forces (docs/dem.md
     §8, eq. (8.4)) and book their work; returns the damped (F_n, F_s). A slipping slot gets no
@@ -638,7 +673,7 @@ def contact_forces(blocks, pairs, still, prm, E):
     inlined by numba, they made the narrow phase 25–40 % slower (measured on 3000 blocks).
     """
     (_loc, _lgeo, off, radius, _mass, _inv_mass, _mode, _dof_input, _active, _movable, pos, _rot,
-     vel, omg, _asleep, _calm, wv) = blocks
+     vel, omg, _asleep, _calm, wv, zone_of, srate) = blocks
     pa, pb, pprop, pref, pinit, init_brk, props, S, fpair, _ptr, _idx, _rpos, _rrot = pairs
     dt, ctol, hyst, rounding = prm[PRM_DT], prm[PRM_CTOL], prm[PRM_HYST], prm[PRM_ROUNDING]
     beta, tiny = prm[PRM_BETA], prm[PRM_TINY]
@@ -830,6 +865,11 @@ def contact_forces(blocks, pairs, still, prm, E):
             vrx, vry, dus = _relative_motion(pos[a, 0], pos[a, 1], vel[a, 0], vel[a, 1], omg[a],
                                              pos[b, 0], pos[b, 1], vel[b, 0], vel[b, 1], omg[b],
                                              px, py, tx, ty, dt)
+            if zone_of[a] >= 0 or zone_of[b] >= 0:  # a zone's velocity also strains (§16.8)
+                dvx, dvy = _strain_rate_velocity(srate, a, b, pos, px, py)
+                vrx += dvx
+                vry += dvy
+                dus += (dvx * tx + dvy * ty) * dt
             _update_slot(S, p, k, prop, pdel[q], dus, length, cy_clamp, cy_slipping_f, E)
             S[p, k, COORD] = pco[q]
             S[p, k, PX] = px
@@ -841,6 +881,8 @@ def contact_forces(blocks, pairs, still, prm, E):
             if beta > 0.0 and fn != 0.0:  # closed contacts, glued ones in tension included
                 fn, fs = _stiffness_dashpot(prop, length, beta, vrx, vry, nx, ny, tx, ty, dt, fn,
                                             fs, S[p, k, SLIP] != 0.0, E)
+            S[p, k, FNA] = fn
+            S[p, k, FSA] = fs
             _add_slot_force(fpair, p, fn, fs, nx, ny, px, py, pos[a, 0], pos[a, 1], pos[b, 0],
                             pos[b, 1])
             if pdel[q] > max_ovl:
@@ -1152,7 +1194,7 @@ def _put_to_sleep(b, mass, vel, omg, E):
 
 
 @njit(cache=True)
-def advance(n_steps, blocks, pairs, loads, prm, E, out):
+def advance(n_steps, blocks, pairs, loads, zoning, prm, E, out):
     """Central-difference steps (docs/dem.md §2, eqs. (2.1)–(2.4)). Stops early with a return
     code: converged, rebuild needed (a block moved more than ``PRM_REBUILD`` × the margin since the
     last broad phase), overlap above the limit, a non-finite value, or a new contact too stiff for
@@ -1163,7 +1205,9 @@ def advance(n_steps, blocks, pairs, loads, prm, E, out):
     entry 7 is also read as the kinetic energy of the previous check (``inf`` at a stage's start).
 
     Arguments: ``blocks`` (:class:`Blocks`), ``pairs`` (:class:`Pairs`), ``loads``
-    (:class:`Loads`), the float64 parameter vector ``prm`` (indices ``PRM_*``), the energy
+    (:class:`Loads`), ``zoning`` (:class:`Zoning`: the deformable blocks' zones and nodes, stepped
+    by :func:`zone_step`; their blocks are not integrated as rigid bodies), the float64 parameter
+    vector ``prm`` (indices ``PRM_*``), the energy
     accumulators ``E`` (``E_*``) and ``out`` (8,).
 
     Equilibrium (static stages, tested every ``PRM_CHECK_EVERY`` steps; docs/dem.md §10) needs all
@@ -1190,7 +1234,7 @@ def advance(n_steps, blocks, pairs, loads, prm, E, out):
     move.
     """
     (loc, lgeo, off, radius, mass, inv_mass, mode, dof_input, active, movable, pos, rot, vel, omg,
-     asleep, calm, wv) = blocks
+     asleep, calm, wv, zone_of, _srate) = blocks
     pa, pb, pprop, _pref, _pinit, _brk, props, S, fpair, bp_ptr, bp_idx, ref_pos, ref_rot = pairs
     (gravity, ext_f, ext_a, ext_b, quiet_edges, presc_val, ff_edges, ff_elem, ff_state,
      bolt_node, bolt_state) = loads
@@ -1210,8 +1254,11 @@ def advance(n_steps, blocks, pairs, loads, prm, E, out):
     fe = np.zeros(3)
     ratio = np.inf
     ke_prev = out[7]
+    zoned = len(zoning.tri) > 0
     for step in range(n_steps):
         world_vertices(loc, lgeo, off, pos, rot, active, wv)
+        if zoned:
+            zone_world_vertices(zoning, off, lgeo, wv)
         max_ovl, max_pair = contact_forces(blocks, pairs, asleep, prm, E)
         if max_ovl > ovl_limit:
             out[0] = step
@@ -1243,8 +1290,16 @@ def advance(n_steps, blocks, pairs, loads, prm, E, out):
                 presc_val[step, ref_col[1]] if ref_col[1] >= 0 else 0.0, E, bf)
         moved = False
         vmax = 0.0
+        if zoned:  # docs/dem.md §16.8
+            z_unb, z_app, z_ke, z_vmax, moved = zone_step(
+                zoning, blocks, pairs, presc_val, step, gravity, alpha_local, alpha_mass, ref_col,
+                dt, rebuild_fraction * margin, bf if len(bolt_node) else bf[:0], E)
+            sum_unb += z_unb
+            sum_app += z_app
+            ke += z_ke
+            vmax = z_vmax
         for b in range(nb):
-            if not active[b] or not movable[b]:
+            if not active[b] or not movable[b] or zone_of[b] >= 0:
                 continue
             # contact forces gathered over the block's pairs in the fixed CSR order (deterministic)
             fc[0] = bf[b, 0]  # bolts act like contacts: in the contact force and its work
@@ -1534,8 +1589,8 @@ def _hb_return(s, m, npsi, trial):
 
 
 @njit(cache=True)
-def zone_stress_update(xy, vel, tri, zmat, mtab, sig, strain, state, eps_p, dt, mixed, node_ev,
-                       node_a, E):
+def zone_stress_update(xy, vel, tri, zmat, mtab, sig, strain, state, eps_p, live, dt, mixed,
+                       node_ev, node_a, E):
     """The stress update of every zone after the nodes moved by ``vel`` Δt (docs/dem.md §16.2–
     §16.4). Books the plastic work σ:Δε_p as E_ZONE_PLASTIC and, with ``mixed``, the work
     A ½(σ_xx + σ_yy)(ē − e) the mixed volumetric strain ē adds over the zone's own e as
@@ -1550,13 +1605,16 @@ def zone_stress_update(xy, vel, tri, zmat, mtab, sig, strain, state, eps_p, dt, 
     (Jaumann), takes the elastic increment Δσ = λ tr(Δε) I + 2G Δε (plane strain, σ_zz included),
     and is returned to the yield surface of the zone's model (:func:`_mc_return`,
     :func:`_hb_return`). ``strain`` accumulates the total strain (xx, yy, xy tensor), ``eps_p``
-    the plastic strain magnitude, ``state`` the plastic bits.
+    the plastic strain magnitude, ``state`` the plastic bits. Zones not ``live`` (excavated) are
+    left alone.
     """
     nz = len(tri)
     if mixed:
         node_ev[:] = 0.0
         node_a[:] = 0.0
         for z in range(nz):
+            if not live[z]:
+                continue
             a, gxi, gyi, gxj, gyj, gxk, gyk = _zone_gradients(xy, tri, z)
             i = tri[z, 0]
             j = tri[z, 1]
@@ -1571,6 +1629,8 @@ def zone_stress_update(xy, vel, tri, zmat, mtab, sig, strain, state, eps_p, dt, 
     scratch = np.empty(4)
     work_p = 0.0
     for z in range(nz):
+        if not live[z]:
+            continue
         a, gxi, gyi, gxj, gyj, gxk, gyk = _zone_gradients(xy, tri, z)
         i = tri[z, 0]
         j = tri[z, 1]
@@ -1640,11 +1700,13 @@ def zone_stress_update(xy, vel, tri, zmat, mtab, sig, strain, state, eps_p, dt, 
 
 
 @njit(cache=True)
-def zone_forces(xy, tri, sig, f, fabs):
-    """Nodal forces of the zones' stresses, f_i −= A σ·∇N_i (docs/dem.md §16.2, eq. (16.2)),
-    added to ``f``; ``fabs`` receives the magnitude of each contribution (the applied force of the
-    equilibrium ratio)."""
+def zone_forces(xy, tri, sig, live, f, fabs):
+    """Nodal forces of the ``live`` zones' stresses, f_i −= A σ·∇N_i (docs/dem.md §16.2, eq.
+    (16.2)), added to ``f``; ``fabs`` receives the magnitude of each contribution (the applied
+    force of the equilibrium ratio)."""
     for z in range(len(tri)):
+        if not live[z]:
+            continue
         a, gxi, gyi, gxj, gyj, gxk, gyk = _zone_gradients(xy, tri, z)
         sxx = sig[z, ZS_XX]
         syy = sig[z, ZS_YY]
@@ -1658,16 +1720,16 @@ def zone_forces(xy, tri, sig, f, fabs):
 
 
 @njit(cache=True)
-def zone_nodes_step(xy, vel, f, fext, fabs, mass, inv_mass, mode, presc, weight, alpha_local,
-                    alpha_mass, dt, E):
+def zone_nodes_step(xy, vel, fint, fcon, fext, fabs, mass, inv_mass, mode, presc, gravity,
+                    alpha_local, alpha_mass, vref_x, vref_y, dt, E):
     """Central-difference step of the zone nodes (docs/dem.md §16.6): per degree of freedom the
-    force ``f`` (internal, and contacts when coupled), the external force ``fext`` and the weight,
-    local damping −α|F|sign(v) and mass damping −α_M m v; fixed dofs (``mode`` 1) keep zero
-    velocity, prescribed ones (2) move at ``presc``. ``inv_mass`` may be scaled (static stages);
-    ``mass`` is the true lumped mass (the kinetic energy). Returns (Σ|unbalanced force|,
-    Σ applied force, kinetic energy, max speed). Work booked with the mid-step velocity (eq.
-    (11.2)): ``f`` as E_ZONE_INTERNAL, ``fext`` as E_EXTERNAL, the weight as E_GRAVITY, and the
-    damping forces."""
+    zones' forces ``fint``, the contacts' ``fcon``, the external forces ``fext`` and the weight
+    m g (true mass), local damping −α|F|sign(v) and mass damping −α_M m (v − v_ref); fixed dofs
+    (``mode`` 1) keep zero velocity, prescribed ones (2) move at ``presc``. ``inv_mass`` may be
+    scaled (static relaxation); ``mass`` is the true lumped mass (weight, kinetic energy).
+    Returns (Σ|unbalanced force|, Σ applied force, kinetic energy, max speed). Work booked with
+    the mid-step velocity (eq. (11.2)): ``fint`` as E_ZONE_INTERNAL, ``fcon`` as
+    E_CONTACT_FREE, ``fext`` as E_EXTERNAL, the weight as E_GRAVITY, and the damping."""
     unb = 0.0
     app = 0.0
     ke = 0.0
@@ -1683,33 +1745,36 @@ def zone_nodes_step(xy, vel, f, fext, fabs, mass, inv_mass, mode, presc, weight,
                 vel[n, d] = presc[n, d]
                 xy[n, d] += presc[n, d] * dt
                 continue
-            fv = -alpha_mass * mass[n] * v_old
-            ff = f[n, d] + fext[n, d] + weight[n, d] + fv
+            weight = mass[n] * gravity[d]
+            v_ref = vref_x if d == 0 else vref_y
+            fv = -alpha_mass * mass[n] * (v_old - v_ref)
+            ff = fint[n, d] + fcon[n, d] + fext[n, d] + weight + fv
             fd = 0.0
             if alpha_local > 0.0 and v_old != 0.0:
                 fd = -alpha_local * abs(ff) * (1.0 if v_old > 0.0 else -1.0)
             v_new = v_old + (ff + fd) * inv_mass[n] * dt
             w = 0.5 * (v_old + v_new) * dt
-            E[E_ZONE_INTERNAL] += f[n, d] * w
+            E[E_ZONE_INTERNAL] += fint[n, d] * w
+            E[E_CONTACT_FREE] += fcon[n, d] * w
             E[E_EXTERNAL] += fext[n, d] * w
-            E[E_GRAVITY] += weight[n, d] * w
+            E[E_GRAVITY] += weight * w
             E[E_LOCAL_DAMP] += fd * w
             E[E_VISCOUS] += fv * w
             vel[n, d] = v_new
             xy[n, d] += v_new * dt
             fn2 += ff * ff
-            ke += 0.5 * mass[n] * v_new * v_new
+            ke += 0.5 * v_new * v_new / inv_mass[n]  # the mass it steps with
             if abs(v_new) > vmax:
                 vmax = abs(v_new)
         unb += math.sqrt(fn2)
         app += (fabs[n] + math.sqrt(fext[n, 0] ** 2 + fext[n, 1] ** 2)
-                + math.sqrt(weight[n, 0] ** 2 + weight[n, 1] ** 2))
+                + mass[n] * math.sqrt(gravity[0] ** 2 + gravity[1] ** 2))
     return unb, app, ke, vmax
 
 
 @njit(cache=True)
 def advance_zones(n_steps, xy, vel, tri, zmat, mtab, sig, strain, state, eps_p, mixed, fext,
-                  mass, inv_mass, mode, presc, weight, alpha_local, alpha_mass, dt, tol_ratio,
+                  mass, inv_mass, mode, presc, gravity, alpha_local, alpha_mass, dt, tol_ratio,
                   check_every, E, out):
     """Steps of a model of zones only (no contacts): :func:`zone_forces`, :func:`zone_nodes_step`,
     :func:`zone_stress_update` (the stress always belongs to the present positions), until the unbalanced-force ratio Σ|F_unb|/Σ|F_applied| is below
@@ -1718,17 +1783,20 @@ def advance_zones(n_steps, xy, vel, tri, zmat, mtab, sig, strain, state, eps_p, 
     ``RC_CONVERGED``, ``RC_DONE`` or ``RC_NONFINITE``. The plastic work goes to E_ZONE_PLASTIC."""
     nn = len(xy)
     f = np.zeros((nn, 2))
+    none = np.zeros((nn, 2))
     fabs = np.zeros(nn)
     node_ev = np.zeros(nn)
     node_a = np.zeros(nn)
+    live = np.ones(len(tri), np.bool_)
     ke_prev = np.inf
     for step in range(n_steps):
         f[:] = 0.0
         fabs[:] = 0.0
-        zone_forces(xy, tri, sig, f, fabs)
-        unb, app, ke, vmax = zone_nodes_step(xy, vel, f, fext, fabs, mass, inv_mass, mode, presc,
-                                             weight, alpha_local, alpha_mass, dt, E)
-        zone_stress_update(xy, vel, tri, zmat, mtab, sig, strain, state, eps_p, dt, mixed,
+        zone_forces(xy, tri, sig, live, f, fabs)
+        unb, app, ke, vmax = zone_nodes_step(xy, vel, f, none, fext, fabs, mass, inv_mass, mode,
+                                             presc, gravity, alpha_local, alpha_mass, 0.0, 0.0,
+                                             dt, E)
+        zone_stress_update(xy, vel, tri, zmat, mtab, sig, strain, state, eps_p, live, dt, mixed,
                            node_ev, node_a, E)
         ratio = unb / app if app > 0.0 else 0.0
         out[0] = step + 1
@@ -1743,3 +1811,184 @@ def advance_zones(n_steps, xy, vel, tri, zmat, mtab, sig, strain, state, eps_p, 
             if ratio < tol_ratio and falling:
                 return RC_CONVERGED
     return RC_DONE
+
+
+# ------------------------------------------------------------------------------------------------
+# Deformable blocks in the contact model (docs/dem.md §16.8): each zone is a block of the contact
+# search whose vertices, motion and strain rate come from its nodes, and whose contact forces go
+# to its nodes.
+# ------------------------------------------------------------------------------------------------
+
+
+@njit(cache=True)
+def zone_world_vertices(zoning, off, lgeo, wv):
+    """World vertex rows of the zones' blocks from their nodes (columns ``W_*``): the vertex, the
+    outward normal of the edge starting there, and the rounded corner of radius r (``lgeo[k, 5]``,
+    fixed at set-up) recomputed for the present shape, C = v − r(n₁ + n₂)/(1 + n₁·n₂), tangent
+    length r |n₁ × n₂|/(1 + n₁·n₂) (:func:`rockmass.solver.engine.rounded_corners`)."""
+    xy, tri, live, zb = zoning.xy, zoning.tri, zoning.live, zoning.zone_block
+    for z in range(len(tri)):
+        if not live[z]:
+            continue
+        k0 = off[zb[z]]
+        for q in range(3):
+            n0 = tri[z, q]
+            n1 = tri[z, (q + 1) % 3]
+            ex = xy[n1, 0] - xy[n0, 0]
+            ey = xy[n1, 1] - xy[n0, 1]
+            le = math.sqrt(ex * ex + ey * ey)
+            wv[k0 + q, W_X] = xy[n0, 0]
+            wv[k0 + q, W_Y] = xy[n0, 1]
+            wv[k0 + q, W_NX] = ey / le
+            wv[k0 + q, W_NY] = -ex / le
+        for q in range(3):
+            k = k0 + q
+            kp = k0 + (q + 2) % 3
+            n1x = wv[kp, W_NX]
+            n1y = wv[kp, W_NY]
+            n2x = wv[k, W_NX]
+            n2y = wv[k, W_NY]
+            c = 1.0 + n1x * n2x + n1y * n2y
+            r = lgeo[k, 5]
+            wv[k, W_TAN] = r * (n1x * n2y - n1y * n2x) / c
+            wv[k, W_CX] = wv[k, W_X] - r * (n1x + n2x) / c
+            wv[k, W_CY] = wv[k, W_Y] - r * (n1y + n2y) / c
+            wv[k, W_RAD] = r
+
+
+@njit(cache=True, inline="always")
+def _barycentric_add(xy, tri, z, px, py, fx, fy, f, fabs):
+    """Add the force (fx, fy) at (px, py) to the nodes of zone z with the barycentric weights of
+    the point (its resultant and moment are kept exactly, also for a point just outside)."""
+    i = tri[z, 0]
+    j = tri[z, 1]
+    k = tri[z, 2]
+    a2 = ((xy[j, 0] - xy[i, 0]) * (xy[k, 1] - xy[i, 1])
+          - (xy[k, 0] - xy[i, 0]) * (xy[j, 1] - xy[i, 1]))
+    wi = ((xy[j, 0] - px) * (xy[k, 1] - py) - (xy[k, 0] - px) * (xy[j, 1] - py)) / a2
+    wj = ((xy[k, 0] - px) * (xy[i, 1] - py) - (xy[i, 0] - px) * (xy[k, 1] - py)) / a2
+    wk = 1.0 - wi - wj
+    mag = math.sqrt(fx * fx + fy * fy)
+    for n, w in ((i, wi), (j, wj), (k, wk)):
+        f[n, 0] += w * fx
+        f[n, 1] += w * fy
+        fabs[n] += abs(w) * mag
+
+
+@njit(cache=True)
+def zone_contact_forces(zoning, zone_of, pa, pb, S):
+    """The contact forces on the zones' blocks, slot by slot (``FNA``, ``FSA``: dashpots
+    included; eq. (4.5)), given to the zones' nodes at the slot's point (docs/dem.md §16.8)."""
+    xy, tri, fcon, fabs = zoning.xy, zoning.tri, zoning.fcon, zoning.fabs
+    for p in range(len(pa)):
+        za = zone_of[pa[p]]
+        zb = zone_of[pb[p]]
+        if za < 0 and zb < 0:
+            continue
+        for k in range(2):
+            if S[p, k, ACT] == 0.0:
+                continue
+            fn = S[p, k, FNA]
+            fs = S[p, k, FSA]
+            nx = S[p, k, NX]
+            ny = S[p, k, NY]
+            fx = -fn * nx - fs * ny  # on a (eq. (4.5))
+            fy = -fn * ny + fs * nx
+            if za >= 0:
+                _barycentric_add(xy, tri, za, S[p, k, PX], S[p, k, PY], fx, fy, fcon, fabs)
+            if zb >= 0:
+                _barycentric_add(xy, tri, zb, S[p, k, PX], S[p, k, PY], -fx, -fy, fcon, fabs)
+
+
+@njit(cache=True)
+def zone_block_motion(zoning, pos, vel, omg, rot, srate, ref_pos, ref_rot, radius, dt, limit):
+    """Centroid, velocity, spin and strain rate of each live zone's block from its nodes, and
+    whether one moved more than ``limit`` since the pair list was made (docs/dem.md §16.8)."""
+    xy, v, tri, live, zb = zoning.xy, zoning.vel, zoning.tri, zoning.live, zoning.zone_block
+    moved = False
+    for z in range(len(tri)):
+        if not live[z]:
+            continue
+        b = zb[z]
+        a, gxi, gyi, gxj, gyj, gxk, gyk = _zone_gradients(xy, tri, z)
+        i = tri[z, 0]
+        j = tri[z, 1]
+        k = tri[z, 2]
+        pos[b, 0] = (xy[i, 0] + xy[j, 0] + xy[k, 0]) / 3.0
+        pos[b, 1] = (xy[i, 1] + xy[j, 1] + xy[k, 1]) / 3.0
+        vel[b, 0] = (v[i, 0] + v[j, 0] + v[k, 0]) / 3.0
+        vel[b, 1] = (v[i, 1] + v[j, 1] + v[k, 1]) / 3.0
+        lxx = v[i, 0] * gxi + v[j, 0] * gxj + v[k, 0] * gxk
+        lxy = v[i, 0] * gyi + v[j, 0] * gyj + v[k, 0] * gyk
+        lyx = v[i, 1] * gxi + v[j, 1] * gxj + v[k, 1] * gxk
+        lyy = v[i, 1] * gyi + v[j, 1] * gyj + v[k, 1] * gyk
+        omg[b] = 0.5 * (lyx - lxy)
+        rot[b] += omg[b] * dt
+        srate[b, 0] = lxx
+        srate[b, 1] = lyy
+        srate[b, 2] = 0.5 * (lxy + lyx)
+        dx = pos[b, 0] - ref_pos[b, 0]
+        dy = pos[b, 1] - ref_pos[b, 1]
+        if math.sqrt(dx * dx + dy * dy) + radius[b] * abs(rot[b] - ref_rot[b]) > limit:
+            moved = True
+    return moved
+
+
+@njit(cache=True)
+def _zone_block_loads(zoning, pos, bf):
+    """A force and moment (fx, fy, m) on each zone's block, ``bf`` rows, added to its nodes'
+    contact forces keeping the resultant and the moment about the centroid ``pos``."""
+    xy, tri, zb, fcon, fabs = zoning.xy, zoning.tri, zoning.zone_block, zoning.fcon, zoning.fabs
+    for z in range(len(tri)):
+        b = zb[z]
+        if bf[b, 0] == 0.0 and bf[b, 1] == 0.0 and bf[b, 2] == 0.0:
+            continue
+        r2 = 0.0
+        for q in range(3):
+            n = tri[z, q]
+            r2 += (xy[n, 0] - pos[b, 0]) ** 2 + (xy[n, 1] - pos[b, 1]) ** 2
+        for q in range(3):
+            n = tri[z, q]
+            rx = xy[n, 0] - pos[b, 0]
+            ry = xy[n, 1] - pos[b, 1]
+            fx = bf[b, 0] / 3.0 - bf[b, 2] * ry / r2
+            fy = bf[b, 1] / 3.0 + bf[b, 2] * rx / r2
+            fcon[n, 0] += fx
+            fcon[n, 1] += fy
+            fabs[n] += math.sqrt(fx * fx + fy * fy)
+
+
+@njit(cache=True)
+def zone_step(zoning, blocks, pairs, presc_val, step, gravity, alpha_local, alpha_mass, ref_col,
+              dt, limit, bf, E):
+    """One step of the deformable blocks inside :func:`advance`, after the contact forces: the
+    contacts' and the zones' forces on the nodes, the nodes' motion, the stress update and the
+    zones' blocks placed on their nodes (docs/dem.md §16.8). ``bf``: the bolts' forces and
+    moments on the blocks (:func:`bolt_step`), given to a zone's nodes as F/3 + M ẑ×r_i/Σ|r_j|²
+    (r_i from the zone's centroid: the resultant and moment are kept). Returns (Σ|unbalanced|,
+    Σ applied, kinetic energy, max speed, moved)."""
+    zoning.fint[:] = 0.0
+    zoning.fcon[:] = 0.0
+    zoning.fabs[:] = 0.0
+    zone_contact_forces(zoning, blocks.zone_of, pairs.pa, pairs.pb, pairs.S)
+    if len(bf):
+        _zone_block_loads(zoning, blocks.pos, bf)
+    zone_forces(zoning.xy, zoning.tri, zoning.sig, zoning.live, zoning.fint, zoning.fabs)
+    presc = zoning.presc
+    node_input = zoning.node_input
+    for n in range(len(presc)):
+        for d in range(2):
+            if zoning.mode[n, d] == 2:
+                presc[n, d] = presc_val[step, node_input[n, d]]
+    vref_x = presc_val[step, ref_col[0]] if ref_col[0] >= 0 else 0.0
+    vref_y = presc_val[step, ref_col[1]] if ref_col[1] >= 0 else 0.0
+    unb, app, ke, vmax = zone_nodes_step(
+        zoning.xy, zoning.vel, zoning.fint, zoning.fcon, zoning.fext, zoning.fabs, zoning.mass,
+        zoning.inv_mass, zoning.mode, presc, gravity, alpha_local, alpha_mass, vref_x, vref_y, dt,
+        E)
+    zone_stress_update(zoning.xy, zoning.vel, zoning.tri, zoning.zmat, zoning.mtab, zoning.sig,
+                       zoning.strain, zoning.state, zoning.eps_p, zoning.live, dt,
+                       zoning.mixed[0] != 0, zoning.node_ev, zoning.node_a, E)
+    moved = zone_block_motion(zoning, blocks.pos, blocks.vel, blocks.omg, blocks.rot,
+                              blocks.srate, pairs.ref_pos, pairs.ref_rot, blocks.radius, dt, limit)
+    return unb, app, ke, vmax, moved

@@ -15,6 +15,7 @@ from ..blockgen.tolerances import ROUNDING_FRACTION
 from . import _kernels as K
 from . import tolerances as T
 from .bolts import bolt_bound, bolt_kinetic_energy, empty_bolt_tables
+from .deformable import ZONE_STATE, DeformableBlocks
 from .selectors import domain_edges, select_blocks
 from .settings import ContinuouslyYielding, Coulomb, Settings
 
@@ -141,13 +142,16 @@ def rounded_corners(loc: np.ndarray, off: np.ndarray, normal: np.ndarray, roundi
     return np.ascontiguousarray(centre), r * unit_tan, radius
 
 
-class Engine:
+class Engine(DeformableBlocks):
     """Mutable DEM state of one model under one :class:`~rockmass.solver.Settings`."""
 
-    def __init__(self, model, settings: Settings):
+    def __init__(self, model, settings: Settings, zoned=None):
+        """``zoned``: the :class:`~rockmass.solver.deformable.ZonedModel` when blocks are
+        deformable (``model`` is then its model of pieces)."""
         from rockmass.blockgen.model import CONTACT_KINDS, KIND_JOINT
 
         self.model = model
+        self.zoned = zoned
         self.settings = settings
         nb = model.n_blocks
         self.nb = nb
@@ -212,15 +216,16 @@ class Engine:
         # boundaries
         self.edges = domain_edges(model, T.DOMAIN_EDGE_FRACTION * max(self.median_edge_m, 1e-12))
         self.base_mode = np.zeros((nb, 3), np.int8)
+        parent = None if zoned is None else zoned.parent
         for fix in settings.fixes:
-            ids = select_blocks(model, fix.where, self.edges)
+            ids = select_blocks(model, fix.where, self.edges, parent)
             if not len(ids):
                 raise ValueError(f"fix {fix.where!r} selects no block")
             for d in fix.dofs:
                 self.base_mode[ids, _DOF[d]] = FIXED
         self.dof_input = np.full((nb, 3), -1, np.int64)
         for i, inp in enumerate(settings.velocity_inputs):
-            ids = select_blocks(model, inp.where, self.edges)
+            ids = select_blocks(model, inp.where, self.edges, parent)
             if not len(ids):
                 raise ValueError(f"velocity input {inp.where!r} selects no block")
             self.dof_input[ids, _DOF[inp.component]] = i
@@ -241,6 +246,7 @@ class Engine:
         for name, value in empty_bolt_tables().items():
             setattr(self, name, value)
         self.gravity = np.array(settings.gravity_m_s2, float)
+        self._set_up_zones(zoned)
 
         # pairs
         self.pa = np.empty(0, np.int64)
@@ -267,6 +273,8 @@ class Engine:
             self.mode[self.ff_hold & (self.mode == FREE)] = FIXED
         self.inv_mass = np.where(self.mode == FREE, 1.0 / self.mass, 0.0)
         self.movable = (self.mode != FIXED).any(axis=1) & self.active
+        if self.zoned is not None:
+            self._set_node_modes()
         self.wake_all()
 
     def wake_all(self):
@@ -288,7 +296,9 @@ class Engine:
         """Broad phase and pair remap (state of surviving pairs kept)."""
         K.world_vertices(self.loc, self.lgeo, self.off, self.pos, self.rot, self.active, self.wv)
         margin = self.margin_m
-        pa, pb = K.broad_phase(self.wv, self.off, self.active, self.movable, margin)
+        if self.zoned is not None:
+            K.zone_world_vertices(self.zones_tuple(), self.off, self.lgeo, self.wv)
+        pa, pb = K.broad_phase(self.wv, self.off, self.active, self.movable, self.group, margin)
         n = len(pa)
         S = np.zeros((n, 2, K.N_SLOT_COLUMNS))
         pref = np.zeros(n, np.int8)
@@ -309,7 +319,17 @@ class Engine:
         """The per-block arrays as the kernels take them (:class:`rockmass.solver._kernels.Blocks`)."""
         return K.Blocks(self.loc, self.lgeo, self.off, self.radius, self.mass, self.inv_mass,
                         self.mode, self.dof_input, self.active, self.movable, self.pos, self.rot,
-                        self.vel, self.omg, self.asleep, self.calm, self.wv)
+                        self.vel, self.omg, self.asleep, self.calm, self.wv, self.zone_of,
+                        self.srate)
+
+    def zones_tuple(self) -> K.Zoning:
+        """The deformable blocks' zones and nodes as the kernels take them
+        (:class:`rockmass.solver._kernels.Zoning`; empty arrays without deformable blocks)."""
+        z = self.zone_state
+        return K.Zoning(z["xy"], z["vel"], z["mass"], z["inv_mass"], z["mode"], z["node_input"],
+                        z["fext"], z["tri"], z["zmat"], z["mtab"], z["sig"], z["strain"],
+                        z["state"], z["eps_p"], z["live"], z["zone_block"], z["mixed"],
+                        z["fint"], z["fcon"], z["fabs"], z["node_ev"], z["node_a"], z["presc"])
 
     def pairs_tuple(self) -> K.Pairs:
         """The pair list and contact state as the kernels take them (:class:`._kernels.Pairs`)."""
@@ -358,12 +378,14 @@ class Engine:
         """Run :func:`rockmass.solver._kernels.advance` for up to ``n_steps`` steps of ``dt``
         (``params``: the keywords of :meth:`kernel_params`); returns its ``RC_*`` code."""
         return K.advance(n_steps, self.blocks_tuple(), self.pairs_tuple(),
-                         self.loads_tuple(presc_val), self.kernel_params(dt, **params), self.E,
-                         out)
+                         self.loads_tuple(presc_val), self.zones_tuple(),
+                         self.kernel_params(dt, **params), self.E, out)
 
     def detect(self):
         """Run the narrow phase once without motion: establishes the contact slots."""
         K.world_vertices(self.loc, self.lgeo, self.off, self.pos, self.rot, self.active, self.wv)
+        if self.zoned is not None:
+            K.zone_world_vertices(self.zones_tuple(), self.off, self.lgeo, self.wv)
         K.contact_forces(self.blocks_tuple(), self.pairs_tuple(), np.zeros(self.nb, np.int8),
                          self.kernel_params(), np.zeros(K.N_ENERGY))
 
@@ -381,6 +403,8 @@ class Engine:
         self.vel[which] = 0.0
         self.omg[which] = 0.0
         self.movable &= self.active
+        if self.zoned is not None:
+            self._set_node_modes()
         self.wake_all()
 
     def _active_slots(self):
@@ -409,6 +433,7 @@ class Engine:
         ff_lam, ff_gamma = self._free_field_bound()
         lam, gamma = max(lam, ff_lam), max(gamma, ff_gamma)
         lam += bolt_bound(self, scale)  # docs/dem.md §15: rows of a sum add
+        lam += self._zone_bound()  # docs/dem.md §16.6
         if lam <= 0 and gamma <= 0:
             return math.inf
         gamma += beta * lam
@@ -490,10 +515,11 @@ class Engine:
 
     # ---------------------------------------------------------------------- state summaries --
     def strain_energy(self) -> float:
-        """Elastic energy in the contacts: Σ l(∫σ du_n + τ²/2k_s) over active slots (J per m)."""
+        """Elastic energy in the contacts, Σ l(∫σ du_n + τ²/2k_s) over active slots, and in the
+        zones of deformable blocks (:meth:`zone_strain_energy`) (J per m)."""
         p, k, slot = self._active_slots()
         if not len(p):
-            return 0.0
+            return self.zone_strain_energy()
         props = self.props[self.pprop[p]]
         length = slot[:, K.LEN]
         sig = slot[:, K.FN] / np.maximum(length, T.TINY)
@@ -504,7 +530,7 @@ class Engine:
         ks_t = ks * np.where(es > 0, np.maximum(sig, 0.0) ** es, 1.0)
         normal = np.where(cy, np.maximum(sig, 0.0) ** (2 - en) / (kn * (2 - en)), 0.5 * sig ** 2 / kn)
         shear = np.where(ks_t > 0, 0.5 * tau ** 2 / np.maximum(ks_t, T.TINY), 0.0)
-        return float(np.sum(length * (normal + shear)))
+        return float(np.sum(length * (normal + shear))) + self.zone_strain_energy()
 
     def contact_increment_work(self, dt: float) -> tuple[float, float]:
         """(Σ F_n Δδ, Σ F_s Δu_s) over active slots for one step of the present velocities:
@@ -529,8 +555,10 @@ class Engine:
         """½ Σ m v² over the free dofs of the active blocks, and the bolt nodes' (J per m)."""
         m = self.mass
         free = self.active[:, None] & (self.mode == FREE)  # prescribed dofs are the boundary's
+        free &= (self.zone_of < 0)[:, None]  # a zone's motion is its nodes'
         v2 = np.column_stack([self.vel ** 2, self.omg ** 2])
-        return float(0.5 * np.sum(np.where(free, m * v2, 0.0))) + bolt_kinetic_energy(self)
+        return (float(0.5 * np.sum(np.where(free, m * v2, 0.0))) + bolt_kinetic_energy(self)
+                + self._node_kinetic_energy())
 
     def vertex_displacement(self, ref_pos, ref_rot) -> np.ndarray:
         """Largest vertex displacement of each block from a reference placement (m)."""
@@ -564,12 +592,16 @@ class Engine:
                 "broken": slot[:, K.BRK] != 0}
 
     def snapshot(self) -> tuple:
+        zone = {k: self.zone_state[k].copy() for k in ZONE_STATE}
         return tuple(a.copy() for a in (self.pos, self.rot, self.vel, self.omg, self.S, self.E,
-                                        self.init_brk, self.ff_state, self.bolt_state)) + (self.time_s,)
+                                        self.init_brk, self.ff_state, self.bolt_state,
+                                        self.srate)) + (self.time_s, zone)
 
     def restore(self, snap):
         """Back to a :meth:`snapshot` taken since the last rebuild (same pair list)."""
         (self.pos, self.rot, self.vel, self.omg, self.S, self.E, self.init_brk, self.ff_state,
-         self.bolt_state, self.time_s) = \
-            tuple(a.copy() if isinstance(a, np.ndarray) else a for a in snap)
+         self.bolt_state, self.srate, self.time_s) = \
+            tuple(a.copy() if isinstance(a, np.ndarray) else a for a in snap[:-1])
+        for key, value in snap[-1].items():
+            self.zone_state[key] = value.copy()
         self.rebuild()

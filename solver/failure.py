@@ -99,6 +99,8 @@ class FailureWatch:
         going = (e.movable & e.active & (now > self.displacement_m)
                  & (recent >= FAIL_KEEP_GOING * (mid - old))
                  & (recent > FAIL_MIN_RECENT * self.displacement_m))
+        if e.zoned is not None:  # a deformable block fails whole, when all its zones keep going
+            going = _whole_blocks(going, e.zoned.parent, e.zone_of >= 0, e.active)
         return np.flatnonzero(going)
 
     def classify(self, ids: np.ndarray) -> list[FailedBlock]:
@@ -108,6 +110,8 @@ class FailureWatch:
         e = self.eng
         disp = self.track[-1]
         out = []
+        if e.zoned is not None:  # one report per deformable block: its zone nearest its middle
+            ids = _one_piece_per_block(ids, e)
         for b in ids:
             b = int(b)
             translation = float(np.hypot(*(e.pos[b] - self.start_pos[b])))
@@ -121,10 +125,38 @@ class FailureWatch:
             else:
                 mechanism = "slide"
             area = float(e.model.area_m2[b])
+            if e.zoned is not None and e.zone_of[b] >= 0:  # the whole deformable block's
+                area = float(e.model.area_m2[e.zoned.parent == e.zoned.parent[b]].sum())
             out.append(FailedBlock(block=b, area_m2=area, mechanism=mechanism,
                                    displacement_m=float(disp[b]), x_m=float(e.pos[b, 0]),
                                    y_m=float(e.pos[b, 1]), sliver=area < self.sliver_area_m2))
         return out
+
+
+def _whole_blocks(going: np.ndarray, parent: np.ndarray, zoned: np.ndarray,
+                  active: np.ndarray) -> np.ndarray:
+    """Zones fail only with their whole block: a zone keeps its flag when every active zone of
+    its block keeps going (a block falling or sliding as a whole), else it is cleared (zones of a
+    block that yields and creeps near a wall deform; they do not fall)."""
+    out = going.copy()
+    z = np.flatnonzero(zoned & active)
+    if not len(z):
+        return out
+    blocks = parent[z]
+    still = np.zeros(int(parent.max()) + 1, bool)
+    still[blocks[~going[z]]] = True
+    out[z] = going[z] & ~still[blocks]
+    return out
+
+
+def _one_piece_per_block(ids: np.ndarray, e) -> np.ndarray:
+    """Rigid ids as they are; of the zones of one deformable block, the one nearest its middle."""
+    from .deformable import piece_near_centre
+
+    rigid = ids[e.zone_of[ids] < 0]
+    blocks = np.unique(e.zoned.parent[ids[e.zone_of[ids] >= 0]])
+    return np.concatenate([rigid, [piece_near_centre(e.zoned, e.model, b) for b in blocks]]
+                          ).astype(np.int64)
 
 
 def mechanism_counts(failed: list[dict]) -> dict[str, int]:

@@ -12,6 +12,7 @@ import numpy as np
 
 from . import _kernels as K
 from . import tolerances as T
+from .deformable import add_node_forces, set_zone_stress, zone_centroids
 from .engine import FIXED
 from .settings import SIDES, BoundaryStress, InSituStress, QuietBoundary
 
@@ -50,6 +51,10 @@ def apply_insitu(engine, insitu: InSituStress):
     active); the normal offset U0 makes the joint law return exactly that σ_n at the present
     overlap. A face that rounded corners cover is one slot loaded with the face's whole traction
     (:func:`_covered_face_stress`). Corner-only touches start at zero force."""
+    if engine.zoned is not None:  # the zones of deformable blocks start at it too (§16.8)
+        sxx, syy, sxy = stress_at(insitu, zone_centroids(engine), _unit_weight(engine),
+                                  _y_ref(engine, insitu))
+        set_zone_stress(engine, sxx, syy, sxy)
     S = engine.S
     act = S[:, :, K.ACT] != 0
     if not act.any():
@@ -159,6 +164,7 @@ def apply_boundary_stress(engine, loads: tuple[BoundaryStress, ...], insitu: InS
     engine.ext_f[:] = 0.0
     engine.ext_a[:] = 0.0
     engine.ext_b[:] = 0.0
+    engine.zone_state["fext"][:] = 0.0
     edges = engine.edges
     for load in loads:
         on = np.flatnonzero(edges.on(load.sides))
@@ -202,6 +208,11 @@ def _add_tractions(engine, on: np.ndarray, stress):
         trac.append(-np.column_stack([sxx * nrm[:, 0] + sxy * nrm[:, 1],
                                       sxy * nrm[:, 0] + syy * nrm[:, 1]]))
     f0, f1 = _lumped(trac[0], trac[1], length[:, None])
+    zoned = engine.zone_of[blocks] >= 0
+    if zoned.any():  # a zone's edge: its two nodes take the forces (docs/dem.md §16.8)
+        for f, p in ((f0, p0), (f1, p1)):
+            add_node_forces(engine, blocks[zoned], p[zoned], f[zoned])
+        blocks, p0, p1, f0, f1 = (a[~zoned] for a in (blocks, p0, p1, f0, f1))
     for f, p in ((f0, p0), (f1, p1)):
         r = p - engine.pos0[blocks]
         np.add.at(engine.ext_f, blocks, f)

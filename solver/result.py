@@ -48,6 +48,9 @@ class EnergyLedger(Mapping):
     bolt_strain_end_j: float = 0.0
     bolt_slip_dissipation_j: float = 0.0
     bolt_yield_dissipation_j: float = 0.0
+    # deformable blocks (docs/dem.md §16.5; kernel entries E_ZONE_PLASTIC, E_ZONE_MIXED)
+    zone_plastic_dissipation_j: float = 0.0
+    zone_mixed_work_j: float = 0.0
 
     def __getitem__(self, key: str) -> float:
         if key not in _LEDGER_TERMS:
@@ -137,7 +140,10 @@ class StageResult:
 @dataclass(frozen=True)
 class Frame:
     """Block placement at one instant (for blocks_NNNN.vtu); ``failed``: blocks taken out so far
-    because they kept moving (inactive too)."""
+    because they kept moving (inactive too). ``zones``: with deformable blocks, their nodes'
+    positions ``nodes_m``, the zones' ``stress_pa`` (compression positive) and ``plastic_state``
+    at that instant, with the ``triangles`` and each zone's block ``zone_block``
+    (docs/dem.md §16); None without."""
 
     stage: str
     step: int
@@ -147,6 +153,7 @@ class Frame:
     velocity_m_s: np.ndarray
     active: np.ndarray
     failed: np.ndarray
+    zones: dict | None = None
 
 
 @dataclass(frozen=True)
@@ -159,7 +166,11 @@ class Result:
     ``<name>_contact_fx_n`` (sum of contact forces on the block), …). ``contacts``: the active
     contact slots at the end (:meth:`Engine.contact_table`). ``bolts``: the bolt nodes at the end
     (:func:`rockmass.solver.bolts.bolt_table`: axial force along each bolt, yielded segments,
-    bond slip; empty without bolts).
+    bond slip; empty without bolts). ``zones``: the zones of deformable blocks at the end
+    (:func:`rockmass.solver.deformable.zone_table`: nodes and their displacement, triangles,
+    stress, strain, plastic state, and the original block of each block of the result — with
+    deformable blocks the result's blocks are the model's pieces, each zone one; empty without);
+    ``pieces``: that model of pieces (a BlockModel; None without deformable blocks).
     ``block_energy``: per block volume (area × 1 m), mass, peak velocity and peak kinetic energy
     over the dynamic stages (as in Kiran & Juneja 2022, Fig. 7; docs/dem.md, References).
     ``status`` is ``ok``, ``failed_blocks`` (blocks kept moving in a static stage and were taken
@@ -180,6 +191,8 @@ class Result:
     info: dict = field(default_factory=dict)
     failed: np.ndarray | None = None
     bolts: dict = field(default_factory=dict)
+    zones: dict = field(default_factory=dict)
+    pieces: object = None
 
     @property
     def ok(self) -> bool:
@@ -220,7 +233,25 @@ class Result:
                 "max_displacement_m": float(np.max(np.hypot(*self.displacement_m[self.active].T),
                                                    initial=0.0)),
                 "block_energy_vs_volume": self.energy_table(),
-                "info": self.info} | ({"bolts": self.bolt_summary()} if self.bolts else {})
+                "info": self.info} | ({"bolts": self.bolt_summary()} if self.bolts else {}) | (
+                    {"zones": self.zone_summary()} if self.zones else {})
+
+    def zone_summary(self) -> dict:
+        """Deformable blocks at the end: zones, nodes, the area of the zones that yielded (ever,
+        and at the last step; m² per m), the largest plastic strain and the largest node
+        displacement (m)."""
+        z = self.zones
+        live = z["live"]
+        ever = live & (z["plastic_state"] & 12 != 0)  # shear or tension, in the past
+        now = live & (z["plastic_state"] & 3 != 0)
+        return {"zones": int(live.sum()), "nodes": int(len(z["nodes_m"])),
+                "plastic_area_m2": float(z["area_m2"][ever].sum()),
+                "plastic_area_now_m2": float(z["area_m2"][now].sum()),
+                "shear_yield_area_m2": float(z["area_m2"][live & (z["plastic_state"] & 4 != 0)].sum()),
+                "tension_yield_area_m2": float(z["area_m2"][live & (z["plastic_state"] & 8 != 0)].sum()),
+                "max_plastic_strain": float(np.max(z["plastic_strain"][live], initial=0.0)),
+                "max_node_displacement_m": float(np.max(np.hypot(*z["node_displacement_m"].T),
+                                                        initial=0.0))}
 
     def bolt_summary(self) -> list[dict]:
         """Per bolt: stage installed, largest and smallest axial force (N per m, tension +),

@@ -30,6 +30,7 @@ from . import tolerances as T
 from .engine import FIXED, Engine
 from .failure import FailureWatch
 from .bolts import bolt_energy, bolt_table, install_bolts
+from .deformable import piece_near_centre, zone_model, zone_table
 from .free_field import set_free_field
 from .loading import apply_boundary_stress, apply_insitu, quiet_edge_table
 from .monitoring import boundary_points, point_displacement_from
@@ -116,7 +117,11 @@ class _Recorder:
         for m in settings.monitors:
             if m.block is None:
                 _require_in_domain(eng.model, m.name, m.point_xy_m)
-            block = m.block if m.block is not None else block_at_point(eng.model, m.point_xy_m)
+            if m.block is not None and eng.zoned is not None:  # a zoned block: its middle piece
+                block = piece_near_centre(eng.zoned, eng.model, m.block)
+            else:
+                block = m.block if m.block is not None else block_at_point(eng.model,
+                                                                           m.point_xy_m)
             if not 0 <= block < eng.nb:
                 raise ValueError(f"monitor {m.name!r}: block {block} out of range")
             self.monitors.append((m.name, block))
@@ -141,8 +146,14 @@ class _Recorder:
 
     def frame(self, stage: str, step: int):
         e = self.eng
+        zones = None
+        if e.zoned is not None:
+            z = e.zone_state
+            zones = {"nodes_m": z["xy"].copy(), "stress_pa": -z["sig"],
+                     "plastic_state": z["state"].copy(), "triangles": z["tri"],
+                     "zone_block": z["zone_block"]}
         self.frames.append(Frame(stage, step, e.time_s, e.pos.copy(), e.rot.copy(), e.vel.copy(),
-                                 e.active.copy(), e.failed.copy()))
+                                 e.active.copy(), e.failed.copy(), zones))
 
     def track_peaks(self):
         e = self.eng
@@ -210,10 +221,11 @@ def _energy_ledger(eng: Engine, dt: float, ke0: float, se0: float, se0_shadow: f
     se1_shadow = se1 + 0.5 * (wn + ws)
     be1, be1_shadow = _bolt_strain(eng, dt)
     E = eng.E
-    work_in = E[K.E_GRAVITY] + E[K.E_EXTERNAL] - E[K.E_CONTACT_PRESC]
+    work_in = E[K.E_GRAVITY] + E[K.E_EXTERNAL] - E[K.E_CONTACT_PRESC] + E[K.E_ZONE_MIXED]
     damping = -(E[K.E_LOCAL_DAMP] + E[K.E_VISCOUS] + E[K.E_QUIET])
     stored = ((ke1 - ke0) + (se1_shadow - se0_shadow) + E[K.E_SLIP] + E[K.E_BROKEN] + damping
-              + removed_j + (be1_shadow - bolts0[1]) + E[K.E_BOLT_SLIP] + E[K.E_BOLT_YIELD])
+              + removed_j + (be1_shadow - bolts0[1]) + E[K.E_BOLT_SLIP] + E[K.E_BOLT_YIELD]
+              + E[K.E_ZONE_PLASTIC])
     terms = dict(work_gravity_j=E[K.E_GRAVITY], work_boundary_j=E[K.E_EXTERNAL] - E[K.E_CONTACT_PRESC],
                  kinetic_start_j=ke0, kinetic_end_j=ke1, strain_start_j=se0, strain_end_j=se1,
                  slip_dissipation_j=E[K.E_SLIP], breakage_dissipation_j=E[K.E_BROKEN],
@@ -221,7 +233,9 @@ def _energy_ledger(eng: Engine, dt: float, ke0: float, se0: float, se0_shadow: f
                  viscous_damping_j=-E[K.E_VISCOUS], quiet_boundary_j=-E[K.E_QUIET],
                  removed_blocks_j=removed_j, residual_j=work_in - stored,
                  bolt_strain_start_j=bolts0[0], bolt_strain_end_j=be1,
-                 bolt_slip_dissipation_j=E[K.E_BOLT_SLIP], bolt_yield_dissipation_j=E[K.E_BOLT_YIELD])
+                 bolt_slip_dissipation_j=E[K.E_BOLT_SLIP], bolt_yield_dissipation_j=E[K.E_BOLT_YIELD],
+                 zone_plastic_dissipation_j=E[K.E_ZONE_PLASTIC],
+                 zone_mixed_work_j=E[K.E_ZONE_MIXED])
     return EnergyLedger(**{k: float(v) for k, v in terms.items()})
 
 
@@ -284,6 +298,7 @@ class _StageRun:
                            else np.zeros((0, 8)))  # before the step limit: the dashpots lower it
         set_free_field(eng, settings.free_field if dynamic else None)  # docs/dem.md §14.2
         install_bolts(eng, settings, stage.name)  # docs/dem.md §15, before the step limit
+        eng.scale_node_masses(static=not dynamic)  # docs/dem.md §16.6, before the step limit
         self.dt, self.limit = self._first_time_step()
         self.n_steps = math.ceil(stage.duration_s / self.dt) if dynamic else stage.max_steps
         self.inputs = settings.velocity_inputs if dynamic else ()
@@ -547,7 +562,10 @@ def run(model, settings: Settings, *,
     time step above the stable limit, quiet boundaries without moduli); a run that fails while
     stepping returns a Result with ``status`` ``overlap`` or ``unstable`` and a diagnostic.
     """
-    eng = Engine(model, settings)
+    zoned = zone_model(model, settings)
+    if zoned is not None:  # docs/dem.md §16.8: the deformable blocks' zones are pieces
+        model = zoned.model
+    eng = Engine(model, settings, zoned)
     eng.detect()
     if settings.insitu is not None:
         apply_insitu(eng, settings.insitu)
@@ -579,9 +597,14 @@ def run(model, settings: Settings, *,
     info = {"blocks": eng.nb, "rounding_m": eng.rounding_m, "contact_tolerance_m": eng.ctol_m,
             "overlap_limit_m": eng.overlap_limit_m, "pairs": int(len(eng.pa)),
             "fixed_dofs": int((eng.base_mode == FIXED).sum())}
+    if zoned is not None:
+        info.update(monitor_blocks={name: int(b) for name, b in rec.monitors},
+                    zones=int(len(zoned.tri)), nodes=int(len(zoned.nodes)),
+                    deformable_blocks=int(len(np.unique(zoned.parent[zoned.zone_of >= 0]))))
     return Result(stages=stages, displacement_m=eng.pos - eng.pos0, rotation_rad=eng.rot.copy(),
                   velocity_m_s=eng.vel.copy(), active=eng.active.copy(), history=rec.history(),
                   contacts=eng.contact_table(),
                   frames=rec.frames, block_energy=block_energy, status=status,
                   diagnostic=diagnostic, info=info, failed=eng.failed.copy(),
-                  bolts=bolt_table(eng))
+                  bolts=bolt_table(eng), zones=zone_table(eng),
+                  pieces=model if zoned is not None else None)

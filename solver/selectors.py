@@ -68,8 +68,10 @@ def domain_edges(model, tol_m: float) -> DomainEdges:
     return DomainEdges(block.astype(np.int64), p0, p1, normal, side)
 
 
-def select_blocks(model, where: str, edges: DomainEdges) -> np.ndarray:
-    """Indices of the blocks chosen by a selector string (see :class:`~rockmass.solver.Fix`)."""
+def select_blocks(model, where: str, edges: DomainEdges, parent=None) -> np.ndarray:
+    """Indices of the blocks chosen by a selector string (see :class:`~rockmass.solver.Fix`).
+    ``parent``: for a model whose deformable blocks were zoned, the original block of each piece
+    (``blocks:i`` then names original blocks and selects all their pieces)."""
     where = where.strip()
     if where in SIDES:
         return np.unique(edges.block[edges.on([where])])
@@ -83,9 +85,10 @@ def select_blocks(model, where: str, edges: DomainEdges) -> np.ndarray:
             return np.flatnonzero((c[:, 0] >= x0) & (c[:, 0] <= x1) & (c[:, 1] >= y0) & (c[:, 1] <= y1))
         if kind == "blocks":
             ids = np.array([int(v) for v in arg.split(",") if v.strip()], np.int64)
-            if ((ids < 0) | (ids >= model.n_blocks)).any():
-                raise ValueError(f"block indices must be in [0, {model.n_blocks}), got {where!r}")
-            return np.unique(ids)
+            n = model.n_blocks if parent is None else int(parent.max()) + 1
+            if ((ids < 0) | (ids >= n)).any():
+                raise ValueError(f"block indices must be in [0, {n}), got {where!r}")
+            return np.unique(ids) if parent is None else np.flatnonzero(np.isin(parent, ids))
     except ValueError as exc:
         raise ValueError(f"selector {where!r}: {exc}") from exc
     raise ValueError(f"selector {where!r}: expected one of {SIDES}, 'region:K', 'box:x0,y0,x1,y1' "

@@ -35,11 +35,12 @@ from pydantic import BeforeValidator, Field, PlainSerializer, Strict, model_vali
 
 from ..dfn.specs import Bool, Float, Int, field_error, spec
 from . import tolerances as T
+from .zones import ZoneModel
 
 __all__ = ["Coulomb", "ContinuouslyYielding", "JointModel", "Material", "InSituStress",
            "Fix", "BoundaryStress", "Sine", "Ricker", "TableHistory", "History", "VelocityInput",
            "QuietBoundary", "FreeField", "Monitor", "BoltProperties", "Bolt", "BoltPattern",
-           "Stage", "Settings", "SIDES"]
+           "Deformable", "Stage", "Settings", "SIDES"]
 
 
 def _none_is_inf(value: Any) -> Any:
@@ -523,6 +524,29 @@ class BoltPattern:
         "prefix of the bolts' names in bolts.csv; none: pattern<k>"))] = None
 
 
+def _region_number(value: Any) -> Any:
+    """An ``excavate`` entry must be a region number; say so for a name (issue 19)."""
+    if isinstance(value, str):
+        raise ValueError(f"excavate takes region numbers (int >= 1) of the BlockModel, got the name "
+                         f"{value!r}: pass model.region_names.index({value!r}) (names are resolved "
+                         "only by a config's [[solve.stages]] excavate)")
+    return value
+
+
+@spec
+class Deformable:
+    """Blocks made deformable: meshed into triangular zones of about ``zone_size_m`` with the
+    constitutive ``model`` (elastic, Mohr–Coulomb or Hoek–Brown; docs/dem.md §16), the joints
+    acting on their boundary. The other blocks stay rigid. For a dynamic stage the zone size
+    should be at most a tenth of the shortest wavelength carried."""
+
+    where: Annotated[Where, Field(description=f"the blocks: {_WHERE}")]
+    model: Annotated[ZoneModel, Field(description="constitutive model of the zones")]
+    zone_size_m: Annotated[Float, Field(gt=0, le=1e6, description="zone size h (edge length)")]
+    mixed: Annotated[Optional[Bool], Field(description=(
+        "nodal mixed discretisation of the volumetric strain; none: on for plastic models"))] = None
+
+
 @spec
 class Stage:
     """One stage of a run.
@@ -543,7 +567,7 @@ class Stage:
                                          description="stage name, unique in the run")]
     kind: Annotated[Literal["static", "dynamic"], Field(
         description="static: step to equilibrium; dynamic: step for duration_s")] = "static"
-    excavate: Annotated[tuple[Annotated[Int, Field(ge=1)], ...], Field(
+    excavate: Annotated[tuple[Annotated[Int, BeforeValidator(_region_number), Field(ge=1)], ...], Field(
         max_length=64, description="regions of the block model removed at the start")] = ()
     max_steps: Annotated[Int, Field(ge=1, le=10 ** 10, description="step limit")] = 200_000
     tolerance: Annotated[Float, Field(gt=0, le=1, description=(
@@ -639,6 +663,9 @@ class Settings:
         exclude_if=lambda value: not value)] = ()
     bolt_patterns: Annotated[tuple[BoltPattern, ...], Field(
         max_length=100, description="bolts by rule around the opening (docs/dem.md §15)",
+        exclude_if=lambda value: not value)] = ()
+    deformable: Annotated[tuple[Deformable, ...], Field(
+        max_length=100, description="blocks meshed into zones (docs/dem.md §16)",
         exclude_if=lambda value: not value)] = ()
     rounding_m: Annotated[Optional[Float], Field(gt=0, le=1e6, description=(
         "corner rounding d; none: the block model's, else 1 % of the median edge"))] = None

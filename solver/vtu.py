@@ -20,6 +20,10 @@ name                dtype        meaning
 ``failed``          uint8        1 once taken out because it kept moving (inactive too)
 ==================  ===========  ===============================================================
 
+With deformable blocks every zone is a cell whose points are its nodes at the frame's instant, and
+the cells carry :data:`ZONE_CELL_DATA` too: ``stress_pa`` (float64 (4)), ``plastic_state``
+(int64) and ``yielded`` (uint8).
+
 meshio is imported when a mesh is made or written, not with this module.
 """
 
@@ -29,11 +33,17 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["frame_mesh", "pvd_text", "write_vtu", "FRAME_CELL_DATA", "PVD_NUDGE_S"]
+__all__ = ["frame_mesh", "pvd_text", "write_vtu", "FRAME_CELL_DATA", "ZONE_CELL_DATA",
+           "PVD_NUDGE_S"]
 
 #: Names of the cell data of :func:`frame_mesh`, in order.
 FRAME_CELL_DATA = ("displacement", "velocity", "rotation_rad", "block_id", "region", "active",
                    "failed")
+#: Cell data added when the model has deformable blocks (docs/dem.md §16): the zones' stress
+#: (σ_xx, σ_yy, σ_zz, σ_xy, compression positive, Pa; zeros on rigid blocks), plastic state bits
+#: (1 shear now, 2 tension now, 4 shear in the past, 8 tension in the past; -1 on rigid blocks)
+#: and ``yielded`` (1 for a zone that ever yielded).
+ZONE_CELL_DATA = ("stress_pa", "plastic_state", "yielded")
 
 #: Relative time added to a frame whose time is not after the previous one (the end of one stage and
 #: the start of the next, after its excavation, share an instant), so that ParaView shows both.
@@ -84,9 +94,30 @@ def frame_mesh(model, frame):
         "active": np.asarray(frame.active, np.uint8),
         "failed": np.asarray(frame.failed, np.uint8),
     }
+    names = FRAME_CELL_DATA
+    if frame.zones is not None:  # deformable blocks: zones drawn on their nodes, with stress
+        names = FRAME_CELL_DATA + ZONE_CELL_DATA
+        _zone_cells(model, frame, points, per_block)
     cells, groups = polygon_cells(model.offsets)
-    data = {name: [per_block[name][idx] for idx in groups] for name in FRAME_CELL_DATA}
+    data = {name: [per_block[name][idx] for idx in groups] for name in names}
     return meshio.Mesh(points, cells, cell_data=data)
+
+
+def _zone_cells(model, frame, points, per_block) -> None:
+    """Place the zones' vertices on their nodes (each zone is a block of ``model``, its vertices
+    its nodes in order) and add the zones' cell data (zeros and -1 on rigid blocks)."""
+    z = frame.zones
+    tri, block = z["triangles"], z["zone_block"]
+    starts = np.asarray(model.offsets)[block]
+    for q in range(3):
+        points[starts + q, :2] = z["nodes_m"][tri[:, q]]
+    stress = np.zeros((model.n_blocks, 4))
+    stress[block] = z["stress_pa"]
+    state = np.full(model.n_blocks, -1, np.int64)
+    state[block] = z["plastic_state"]
+    per_block["stress_pa"] = stress
+    per_block["plastic_state"] = state
+    per_block["yielded"] = np.where(state > 0, (state & 12) != 0, False).astype(np.uint8)
 
 
 def pvd_text(entries) -> str:

@@ -22,7 +22,7 @@ Public names
 from __future__ import annotations
 
 import math
-from typing import Annotated, Optional, Union
+from typing import Annotated, Literal, Optional, Union
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -43,6 +43,7 @@ class Elastic:
 
     bulk_modulus_pa: Annotated[Modulus, Field(description="bulk modulus K")]
     shear_modulus_pa: Annotated[Modulus, Field(description="shear modulus G")]
+    model: Annotated[Literal["elastic"], Field(description="zone model: \"elastic\"")] = "elastic"
 
     @classmethod
     def from_young(cls, young_pa: float, poisson: float, **kw) -> "Elastic":
@@ -63,6 +64,8 @@ class MohrCoulomb:
     dilation_deg: Annotated[Angle, Field(description="dilation angle ψ (≤ φ)")] = 0.0
     tension_pa: Annotated[Strength, Field(description=(
         "tensile strength σ_t (at most c/tan φ)"))] = 0.0
+    model: Annotated[Literal["mohr_coulomb"], Field(
+        description="zone model: \"mohr_coulomb\"")] = "mohr_coulomb"
 
     @model_validator(mode="after")
     def _consistent(self):
@@ -92,6 +95,8 @@ class HoekBrown:
     mi: Annotated[Float, Field(gt=0, le=50, description="intact-rock constant m_i")]
     disturbance: Annotated[Float, Field(ge=0, le=1, description="disturbance factor D")] = 0.0
     dilation_deg: Annotated[Angle, Field(description="dilation angle ψ")] = 0.0
+    model: Annotated[Literal["hoek_brown"], Field(
+        description="zone model: \"hoek_brown\"")] = "hoek_brown"
 
     @property
     def mb(self) -> float:
@@ -109,7 +114,7 @@ class HoekBrown:
         return 0.5 + (math.exp(-self.gsi / 15) - math.exp(-20 / 3)) / 6
 
 
-ZoneModel = Union[Elastic, MohrCoulomb, HoekBrown]
+ZoneModel = Annotated[Union[Elastic, MohrCoulomb, HoekBrown], Field(discriminator="model")]
 
 
 def _n(angle_deg: float) -> float:
@@ -189,6 +194,11 @@ def mesh_polygon(shell: np.ndarray, zone_size: float, holes: tuple = ()) -> tupl
         raise ValueError(f"mesh_polygon: zones cover {covered:.9g} of {poly.area:.9g} m² (the "
                          "zone size may be too large for the polygon's features)")
     return nodes, tri
+
+
+def triangle_areas(nodes: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Signed areas of the triangles (positive counter-clockwise)."""
+    return 0.5 * _twice_areas(nodes, tri)
 
 
 def _twice_areas(nodes: np.ndarray, tri: np.ndarray) -> np.ndarray:
@@ -318,11 +328,11 @@ class Zones:
         K = self._K
         scaled = self.rows / (2 * safety) ** 2
         inv_mass = 1.0 / np.maximum(scaled, 1e-300)
-        weight = self.mass[:, None] * np.asarray(gravity, float)[None, :]
         out = np.zeros(4)
         rc = K.advance_zones(int(max_steps), self.xy, self.vel, self.tri, self.zmat, self.mtab,
                              self.sig, self.strain, self.state, self.eps_p, self.mixed,
-                             self.fext, self.mass, inv_mass, self.mode, self.presc, weight,
+                             self.fext, self.mass, inv_mass, self.mode, self.presc,
+                             np.asarray(gravity, float),
                              float(damping), 0.0, 1.0, float(tolerance), int(check_every),
                              self.E, out)
         if rc == K.RC_NONFINITE:

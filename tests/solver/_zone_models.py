@@ -98,3 +98,54 @@ def hoek_brown_plastic_radius(a, p0, pi, sigma_ci, mb, s):
     if pis >= pcr:
         return a
     return a * math.exp(2 * (math.sqrt(pcr) - math.sqrt(pis)))
+
+
+def opening(model, n_theta: int, growth: float, sxx: float, syy: float, nu: float,
+            mixed=None, tolerance: float = 1e-7):
+    """The quarter annulus a = 1 m to 20 m of :func:`quarter_annulus` under the far field
+    (compression positive; σ_zz = p0 when hydrostatic, else the plane-strain ν(σ_xx + σ_yy)), the
+    opening excavated at the start, relaxed to ``tolerance``. Returns (zones, wall nodes, ring
+    radii, sectors, relax info, seconds)."""
+    import time
+
+    from rockmass.solver.zones import Zones
+
+    nodes, tri, radii, nt = quarter_annulus(1.0, 20.0, n_theta, math.pi / 2 / n_theta, growth)
+    zones = Zones(nodes, tri, model, mixed=mixed)
+    wall, _outer, xaxis, yaxis, edges = quarter_boundaries(nodes, radii, nt)
+    zones.fix(xaxis, x=False, y=True)
+    zones.fix(yaxis, x=True, y=False)
+    zones.set_stress(sxx, syy, sxx if sxx == syy else nu * (sxx + syy))
+    far_field_tractions(zones, edges, sxx, syy)
+    t0 = time.perf_counter()
+    info = zones.relax(tolerance=tolerance, max_steps=400_000)
+    return zones, wall, radii, nt, info, time.perf_counter() - t0
+
+
+def ring_hoop(zones, ring: int, nt: int):
+    """Radius, angle and hoop stress of each sector of a ring of :func:`quarter_annulus` (the
+    sector's two triangles averaged)."""
+    sl = slice(2 * nt * ring, 2 * nt * (ring + 1))
+    s = zones.stress[sl].reshape(nt, 2, 4).mean(axis=1)
+    c = zones.centroids[sl].reshape(nt, 2, 2).mean(axis=1)
+    t = np.arctan2(c[:, 1], c[:, 0])
+    hoop = s[:, 0] * np.sin(t) ** 2 + s[:, 1] * np.cos(t) ** 2 - 2 * s[:, 3] * np.sin(t) * np.cos(t)
+    return np.hypot(*c.T), t, hoop
+
+
+def kirsch_errors(zones, wall, nt, px: float, py: float, shear: float, nu: float):
+    """Relative errors against Kirsch, as fractions of their peaks: the wall's radial
+    displacement, the hoop stress extrapolated to the wall from the first two rings, and the
+    first ring's hoop stress against the field at its centroids."""
+    x = zones.x0[wall]
+    theta = np.arctan2(x[:, 1], x[:, 0])
+    ur = (zones.displacement[wall] * x).sum(axis=1)
+    exact_u = kirsch_radial_displacement(1.0, theta, 1.0, px, py, shear, nu)
+    r0, t0, h0 = ring_hoop(zones, 0, nt)
+    r1, _t1, h1 = ring_hoop(zones, 1, nt)
+    at_wall = h0 + (h0 - h1) * (r0 - 1.0) / (r1 - r0)
+    exact_h = kirsch_stresses(1.0, t0, 1.0, px, py)[1]
+    peak = np.max(np.abs(exact_h))
+    return (np.max(np.abs(ur - exact_u)) / np.max(np.abs(exact_u)),
+            np.max(np.abs(at_wall - exact_h)) / peak,
+            np.max(np.abs(h0 - kirsch_stresses(r0, t0, 1.0, px, py)[1])) / peak)

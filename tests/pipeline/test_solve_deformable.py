@@ -1,0 +1,96 @@
+"""``rockmass solve`` with deformable blocks: zones.csv, zone cells in the frames, the zones'
+summary in result.json (docs/dem.md §16.8), and the study's plastic-area column."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import meshio
+import numpy as np
+
+from rockmass.cli import main
+
+# 2 x 2 blocks of 0.5 m on a fixed base row, the top right block zoned (Mohr–Coulomb, weak), a
+# stress on the top that makes it yield
+CONFIG = """[blocks]
+[blocks.domain]
+width_m = 1.0
+height_m = 1.5
+[[blocks.sets]]
+name = "h"
+angle_deg = 0.0
+spacing_m = 0.5
+origin_xy_m = [0.0, 0.0]
+[[blocks.sets]]
+name = "v"
+angle_deg = 90.0
+spacing_m = 0.5
+origin_xy_m = [0.0, 0.0]
+
+[solve]
+gravity_m_s2 = [0.0, -9.81]
+[solve.material]
+density_kg_m3 = 2700.0
+[solve.joints.default]
+model = "coulomb"
+kn_pa_m = 1e10
+ks_pa_m = 5e9
+friction_deg = 35.0
+[[solve.fixes]]
+where = "bottom"
+[[solve.fixes]]
+where = "left"
+dofs = "x"
+[[solve.fixes]]
+where = "right"
+dofs = "x"
+[[solve.boundary_stress]]
+sides = ["top"]
+syy_pa = 3e6
+[[solve.deformable]]
+where = "box:0.5,1.0,1.0,1.5"
+zone_size_m = 0.1
+[solve.deformable.model]
+model = "mohr_coulomb"
+bulk_modulus_pa = 2e9
+shear_modulus_pa = 1.2e9
+cohesion_pa = 0.5e6
+friction_deg = 30.0
+tension_pa = 0.2e6
+[[solve.monitors]]
+name = "corner"
+point_xy_m = [0.9, 1.4]
+[[solve.stages]]
+name = "load"
+max_steps = 20000
+frames = 2
+"""
+
+
+def test_solve_writes_the_zones_and_their_stress(tmp_path):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(CONFIG)
+    out = tmp_path / "out"
+    assert main(["solve", str(cfg), "--out", str(out)]) == 0
+    doc = json.loads((out / "result.json").read_text())
+    zones = doc["zones"]
+    assert zones["zones"] > 20 and zones["nodes"] > 20
+    assert 0 < zones["plastic_area_m2"] <= 0.25 + 1e-9  # within the zoned block
+    assert doc["info"]["deformable_blocks"] == 1
+    rows = list(csv.DictReader((out / "zones.csv").open()))
+    assert len(rows) == zones["zones"]
+    area = sum(float(r["area_m2"]) for r in rows)
+    assert abs(area - 0.25) < 0.01 * 0.25  # the zones tile the block (compressed a little)
+    syy = np.array([float(r["syy_pa"]) for r in rows])
+    assert 1e6 < np.mean(syy) < 6e6  # compression from the top stress, as the user reads it
+    yielded = sum(float(r["area_m2"]) for r in rows if r["shear_past"] == "1"
+                  or r["tension_past"] == "1")
+    assert abs(yielded - zones["plastic_area_m2"]) < 1e-9
+    energy = list(csv.DictReader((out / "block_energy.csv").open()))
+    assert "parent_block" in energy[0]
+    frame = meshio.read(out / "blocks_0001.vtu")
+    names = set(frame.cell_data)
+    assert {"stress_pa", "plastic_state", "yielded"} <= names
+    state = np.concatenate(frame.cell_data["plastic_state"])
+    assert (state == -1).sum() == 5 and (state >= 0).sum() == zones["zones"]  # 5 rigid blocks
