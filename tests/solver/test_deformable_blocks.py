@@ -152,3 +152,20 @@ def test_energy_ledger_closes_with_the_zones_plastic_work():
     assert ledger.zone_plastic_dissipation_j > 0.1 * ledger.work_boundary_j
     assert abs(ledger.residual_j) < 0.01 * ledger.work_boundary_j
     assert (r.zones["plastic_state"] & 4).any()  # yielded in shear
+
+
+def test_a_zoned_keyblock_fails_whole_and_is_reported_once():
+    """A zoned block hanging under a fixed roof on a joint without tension falls: all its zones are
+    taken out together and the stage reports one failed block of its whole area, a fall."""
+    model = hand_model([rect(0, 0, 2, 1), rect(0.5, -1, 1.5, 0)], pairs=[(0, 1)])
+    settings = Settings(joints={"default": Coulomb(1e9, 1e9, 30.0)},
+                        stages=(Stage("hang", max_steps=30_000),),
+                        material=Material(RHO), fixes=(Fix("blocks:0"),),
+                        deformable=(Deformable("blocks:1", Elastic(KB, GB), 0.25),))
+    r = run(model, settings)
+    stage = r.stages[0]
+    assert len(stage.failed_blocks) == 1
+    failed = stage.failed_blocks[0]
+    assert failed["mechanism"] == "fall" and failed["area_m2"] == pytest.approx(1.0)
+    zoned = r.zones["parent_block"][r.zones["zone_block"]] == 1
+    assert not r.zones["live"][zoned].any()  # every zone of the block is out
