@@ -21,6 +21,7 @@ DFN                       ``dfn/fitted.json``, ``dfn/manifest.json`` (config), r
 block model               ``blocks/blocks.png``, ``blocks/blocks.json``
 solver stages, energy     ``solve/result.json``
 displacement map          ``solve/blocks_NNNN.vtu`` of the last frame (drawn here)
+plastic zones             the zones of deformable blocks in that frame, by how they yielded
 histories                 ``solve/history.csv`` (drawn here) and the monitors of ``result.json``
 ========================  ==========================================================================
 
@@ -490,7 +491,8 @@ def _frames(run: _Run) -> tuple[Path, Path | None, str | None]:
 
 
 def _read_frame(path: Path, out: Path) -> dict[int, tuple]:
-    """Block id -> (polygon (k, 2), displacement (2,), active) of one .vtu frame."""
+    """Block id -> (polygon (k, 2), displacement (2,), active, plastic state) of one .vtu frame
+    (plastic state: the zone's bits, docs/dem.md §16; -1 for a rigid block or without zones)."""
     import meshio.vtu  # its reader raises; meshio.read would print and exit on a bad file
     import numpy as np
 
@@ -506,8 +508,10 @@ def _read_frame(path: Path, out: Path) -> dict[int, tuple]:
         data = {key: np.asarray(v[k]) for key, v in mesh.cell_data.items()}
         ids = data.get("block_id", np.arange(n, n + len(cells.data)))
         active = data.get("active", np.ones(len(cells.data)))
+        state = data.get("plastic_state", np.full(len(cells.data), -1))
         for c, conn in enumerate(cells.data):
-            blocks[int(ids[c])] = (mesh.points[conn, :2], data["displacement"][c, :2], bool(active[c]))
+            blocks[int(ids[c])] = (mesh.points[conn, :2], data["displacement"][c, :2],
+                                   bool(active[c]), int(state[c]))
         n += len(cells.data)
     return blocks
 
@@ -516,11 +520,11 @@ def _displacement_panel(fig, ax, blocks: dict, values: dict, title: str) -> floa
     """Active blocks coloured by ``values`` (mm), removed blocks dotted; returns the largest value."""
     from matplotlib.collections import PolyCollection
 
-    on = [b for b, (_, _, active) in blocks.items() if active]
+    on = [b for b, (_, _, active, _) in blocks.items() if active]
     coll = PolyCollection([blocks[b][0] for b in on], array=[values[b] for b in on], cmap="viridis",
                           edgecolors="k", linewidths=0.2)
     ax.add_collection(coll)
-    off = [blocks[b][0] for b, (_, _, active) in blocks.items() if not active]
+    off = [blocks[b][0] for b, (_, _, active, _) in blocks.items() if not active]
     if off:
         ax.add_collection(PolyCollection(off, facecolors="none", edgecolors="0.6", linewidths=0.4,
                                          linestyles="dotted"))
@@ -540,7 +544,7 @@ def _section_displacement(run: _Run) -> str:
 
     last, first, stage = _frames(run)
     blocks = _read_frame(last, run.out)
-    total = {b: 1e3 * m.hypot(*d) for b, (_, d, _) in blocks.items()}
+    total = {b: 1e3 * m.hypot(*d) for b, (_, d, _, _) in blocks.items()}
     start = _read_frame(first, run.out) if first is not None else None
     plt = pyplot()
     fig, axes = plt.subplots(1, 2 if start else 1, figsize=(13 if start else 7.5, 5.5), squeeze=False)
@@ -549,12 +553,67 @@ def _section_displacement(run: _Run) -> str:
                f"position; largest {fmt(peak)} mm")
     if start:
         during = {b: 1e3 * m.hypot(*(d - start[b][1])) if b in start else 0.0
-                  for b, (_, d, _) in blocks.items()}
+                  for b, (_, d, _, _) in blocks.items()}
         peak_stage = _displacement_panel(fig, axes[0, 1], blocks, during, f"during stage {stage}")
         caption += (f". Right: during the last stage, {stage} ({first.name} to {last.name}); "
                     f"largest {fmt(peak_stage)} mm")
-    if any(not active for _, _, active in blocks.values()):
+    if any(not active for _, _, active, _ in blocks.values()):
         caption += ". Dotted outlines: removed (excavated) blocks"
+    src = png_base64(fig)
+    plt.close(fig)
+    return figure(caption, src)
+
+
+#: Colours of the plastic-zone map: never yielded, shear, tension, both (in the past; docs/dem.md
+#: §16.3), and rigid blocks.
+_PLASTIC_COLOURS = {"elastic": "#f2efe6", "shear": "#d62728", "tension": "#1f77b4",
+                    "shear and tension": "#9467bd", "rigid": "#d9d9d9"}
+
+
+def _plastic_kind(state: int) -> str:
+    if state < 0:
+        return "rigid"
+    shear, tension = bool(state & 4), bool(state & 8)
+    return ("shear and tension" if shear and tension else "shear" if shear
+            else "tension" if tension else "elastic")
+
+
+def _has_zones(run: _Run) -> bool:
+    """Whether the run's solver had deformable blocks (else the plastic-zone map is left out)."""
+    try:
+        return bool(run.json("solve", "result.json").get("zones"))
+    except (_Note, AttributeError):
+        return False
+
+
+def _section_plastic(run: _Run) -> str:
+    """The zones of deformable blocks at the final frame coloured by how they yielded (docs/dem.md
+    §16): the seed's plastic-zone map (Jiang et al., Fig. 6b)."""
+    from matplotlib.collections import PolyCollection
+    from matplotlib.patches import Patch
+
+    zones = run.json("solve", "result.json")["zones"]
+    last, _first, _stage = _frames(run)
+    blocks = _read_frame(last, run.out)
+    live = [b for b, (_, _, active, _) in blocks.items() if active]
+    kinds = [_plastic_kind(blocks[b][3]) for b in live]
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(7.5, 6))
+    ax.add_collection(PolyCollection([blocks[b][0] for b in live],
+                                     facecolors=[_PLASTIC_COLOURS[k] for k in kinds],
+                                     edgecolors="0.5", linewidths=0.1))
+    ax.autoscale_view()
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.legend(handles=[Patch(color=c, label=k) for k, c in _PLASTIC_COLOURS.items()],
+              fontsize=8, loc="upper right")
+    caption = (f"Zones that yielded by the final frame ({last.name}): "
+               f"{fmt(zones.get('plastic_area_m2'))} m² of {zones.get('zones')} zones (shear "
+               f"{fmt(zones.get('shear_yield_area_m2'))} m², tension "
+               f"{fmt(zones.get('tension_yield_area_m2'))} m²; yielding at the last step "
+               f"{fmt(zones.get('plastic_area_now_m2'))} m²); largest plastic strain "
+               f"{fmt(zones.get('max_plastic_strain'))}")
     src = png_base64(fig)
     plt.close(fig)
     return figure(caption, src)
@@ -636,6 +695,7 @@ SECTIONS = (
     ("blocks", "Block model", ("blocks",), _section_blocks),
     ("solver", "Solver stages", ("solve",), _section_solver),
     ("displacement", "Displacement map", ("solve",), _section_displacement),
+    ("plastic", "Plastic zones", ("solve",), _section_plastic),
     ("histories", "Monitored histories", ("solve",), _section_histories),
     ("energy", "Energy ledger", ("solve",), _section_energy),
 )
@@ -668,7 +728,8 @@ def write_run_report(out_dir: str | Path) -> Path:
 
     out = Path(out_dir)
     run = _Run(out)
-    shown = [(sid, title, fn) for sid, title, stages, fn in SECTIONS if stages is None or run.has(*stages)]
+    shown = [(sid, title, fn) for sid, title, stages, fn in SECTIONS
+             if (stages is None or run.has(*stages)) and (sid != "plastic" or _has_zones(run))]
     nav = " · ".join(f'<a href="#sec-{sid}">{html.escape(title)}</a>' for sid, title, _ in shown)
     body = "".join(_render(run, sid, title, fn) for sid, title, fn in shown)
     config = (run.doc or {}).get("config", "")

@@ -71,7 +71,7 @@ frames = 2
 def test_solve_writes_the_zones_and_their_stress(tmp_path):
     cfg = tmp_path / "c.toml"
     cfg.write_text(CONFIG)
-    out = tmp_path / "out"
+    out = tmp_path / "run" / "solve"  # a run folder's solve stage: the report reads it
     assert main(["solve", str(cfg), "--out", str(out)]) == 0
     doc = json.loads((out / "result.json").read_text())
     zones = doc["zones"]
@@ -94,3 +94,12 @@ def test_solve_writes_the_zones_and_their_stress(tmp_path):
     assert {"stress_pa", "plastic_state", "yielded"} <= names
     state = np.concatenate(frame.cell_data["plastic_state"])
     assert (state == -1).sum() == 5 and (state >= 0).sum() == zones["zones"]  # 5 rigid blocks
+
+    # the report's plastic-zone map (a run folder holding this solve stage)
+    from rockmass.run_report import write_run_report
+
+    report = write_run_report(tmp_path / "run").read_text()
+    section = report[report.index('id="sec-plastic"'):]
+    section = section[:section.index("</section>")]
+    assert "data:image/png;base64," in section
+    assert "Zones that yielded" in section and f"{zones['zones']} zones" in section
