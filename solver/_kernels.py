@@ -1427,8 +1427,9 @@ def advance(n_steps, blocks, pairs, loads, zoning, prm, E, out):
 
 (ZS_XX, ZS_YY, ZS_ZZ, ZS_XY) = range(4)
 N_ZS_COLUMNS = 4
-(ZM_MODEL, ZM_K, ZM_G, ZM_NPHI, ZM_COH, ZM_NPSI, ZM_TEN, ZM_SIGCI, ZM_MB, ZM_S, ZM_A) = range(11)
-N_ZM_COLUMNS = 11
+(ZM_MODEL, ZM_K, ZM_G, ZM_NPHI, ZM_COH, ZM_NPSI, ZM_TEN, ZM_SIGCI, ZM_MB, ZM_S, ZM_A,
+ ZM_MIXED) = range(12)
+N_ZM_COLUMNS = 12
 ZMODEL_ELASTIC, ZMODEL_MC, ZMODEL_HB = 0, 1, 2
 #: plastic state bits of a zone: yielding in shear / tension at the last step, and ever
 ZST_SHEAR_NOW, ZST_TENSION_NOW, ZST_SHEAR_PAST, ZST_TENSION_PAST = 1, 2, 4, 8
@@ -1592,14 +1593,15 @@ def _hb_return(s, m, npsi, trial):
 def zone_stress_update(xy, vel, tri, zmat, mtab, sig, strain, state, eps_p, live, dt, mixed,
                        node_ev, node_a, E):
     """The stress update of every zone after the nodes moved by ``vel`` Δt (docs/dem.md §16.2–
-    §16.4). Books the plastic work σ:Δε_p as E_ZONE_PLASTIC and, with ``mixed``, the work
+    §16.4). Books the plastic work σ:Δε_p as E_ZONE_PLASTIC and, for the zones whose material
+    has the mixed discretisation (``ZM_MIXED``; ``mixed``: whether any has), the work
     A ½(σ_xx + σ_yy)(ē − e) the mixed volumetric strain ē adds over the zone's own e as
     E_ZONE_MIXED (the nodes' forces come from the zones' stresses, so this work is done by no
     force: it is the discretisation's, and the ledger states it, docs/dem.md §16.5).
 
     Strain increment Δε = ½(∇v + ∇vᵀ)Δt and spin θ = ½(∂v_y/∂x − ∂v_x/∂y)Δt of the constant-strain
-    triangle on the new geometry; with ``mixed`` the volumetric part is replaced by the
-    area-weighted mean over the zones around each of its nodes, averaged over the zone's three
+    triangle on the new geometry; in a mixed zone the volumetric part is replaced by the
+    area-weighted mean over the mixed zones around each of its nodes, averaged over the zone's three
     nodes (nodal mixed discretisation, Detournay & Dzik 2006: no volumetric locking under plastic
     flow; ``node_ev``/``node_a`` are scratch of the node count). The stress is rotated by θ
     (Jaumann), takes the elastic increment Δσ = λ tr(Δε) I + 2G Δε (plane strain, σ_zz included),
@@ -1613,7 +1615,7 @@ def zone_stress_update(xy, vel, tri, zmat, mtab, sig, strain, state, eps_p, live
         node_ev[:] = 0.0
         node_a[:] = 0.0
         for z in range(nz):
-            if not live[z]:
+            if not live[z] or mtab[zmat[z], ZM_MIXED] == 0.0:
                 continue
             a, gxi, gyi, gxj, gyj, gxk, gyk = _zone_gradients(xy, tri, z)
             i = tri[z, 0]
@@ -1640,7 +1642,7 @@ def zone_stress_update(xy, vel, tri, zmat, mtab, sig, strain, state, eps_p, live
         lyx = (vel[i, 1] * gxi + vel[j, 1] * gxj + vel[k, 1] * gxk) * dt
         lyy = (vel[i, 1] * gyi + vel[j, 1] * gyj + vel[k, 1] * gyk) * dt
         shift = 0.0
-        if mixed:
+        if mixed and mtab[zmat[z], ZM_MIXED] != 0.0:
             ev = (node_ev[i] / node_a[i] + node_ev[j] / node_a[j] + node_ev[k] / node_a[k]) / 3.0
             shift = 0.5 * (ev - lxx - lyy)
             lxx += shift

@@ -40,7 +40,8 @@ class ZonedModel:
         Node positions (m); ``tri`` (Z, 3) the zones (counter-clockwise), ``zone_block`` (Z,)
         their pieces, ``zmat`` (Z,) their row of ``mtab`` (the zone-material table).
     mixed : bool
-        Nodal mixed discretisation (docs/dem.md §16.2).
+        Whether any zone has the nodal mixed discretisation (docs/dem.md §16.2; per material in
+        ``mtab``).
     rows : (N,) float64
         Gershgorin row sums of the zones' stiffness per node (the time step, §16.6).
     """
@@ -96,7 +97,7 @@ def zone_model(model, settings) -> ZonedModel | None:
     spec_of = _chosen_blocks(model, settings.deformable, domain_edges(model, edge_tol_m))
     models = [spec.model for spec in settings.deformable]
     polys, parent, zone_of, node_chunks, tri_chunks, zmat = [], [], [], [], [], []
-    n_nodes = 0
+    n_nodes = n_zones = 0
     for b in range(model.n_blocks):
         ring = model.polygon(b)
         if spec_of[b] < 0:
@@ -107,13 +108,13 @@ def zone_model(model, settings) -> ZonedModel | None:
         spec = settings.deformable[spec_of[b]]
         nodes, tri = mesh_polygon(ring, spec.zone_size_m)
         node_chunks.append(nodes)
-        base_zone = sum(len(t) for t in tri_chunks)
         tri_chunks.append(tri + n_nodes)
         n_nodes += len(nodes)
-        for z, t in enumerate(tri):
+        for t in tri:
             polys.append(nodes[t])
             parent.append(b)
-            zone_of.append(base_zone + z)
+            zone_of.append(n_zones)
+            n_zones += 1
         zmat.append(np.full(len(tri), spec_of[b], np.int64))
     parent = np.asarray(parent, np.int64)
     zone_of = np.asarray(zone_of, np.int64)
@@ -130,12 +131,10 @@ def zone_model(model, settings) -> ZonedModel | None:
                          contact_length_m=contacts[1], contact_kind=contacts[2],
                          contact_source=contacts[3], set_names=model.set_names,
                          domain_xy_m=model.domain_xy_m, quality=model.quality)
-    mtab = material_table(models)
-    mixed = [spec.mixed for spec in settings.deformable]
-    plastic = any(m.model != "elastic" for m in models)
-    use_mixed = plastic if all(m is None for m in mixed) else any(bool(m) for m in mixed)
     from . import _kernels as K
 
+    mtab = material_table(models, [spec.mixed for spec in settings.deformable])
+    use_mixed = bool(mtab[:, K.ZM_MIXED].any())
     rows = stiffness_rows(nodes, tri, mtab[zmat, K.ZM_K], mtab[zmat, K.ZM_G])
     return ZonedModel(model=derived, parent=parent, zone_of=zone_of, nodes=nodes, tri=tri,
                       zone_block=zone_block, zmat=zmat, mtab=mtab, mixed=use_mixed, rows=rows)

@@ -123,12 +123,16 @@ def _n(angle_deg: float) -> float:
     return (1 + s) / (1 - s)
 
 
-def material_table(models: list) -> np.ndarray:
-    """Rows of the kernels' zone-material table (columns ``ZM_*`` of :mod:`._kernels`)."""
+def material_table(models: list, mixed: Optional[list] = None) -> np.ndarray:
+    """Rows of the kernels' zone-material table (columns ``ZM_*`` of :mod:`._kernels`).
+    ``mixed``: per model, the nodal mixed discretisation (docs/dem.md §16.2) on or off; None
+    entries (or no list): on for the plastic models."""
     from . import _kernels as K
 
     table = np.zeros((len(models), K.N_ZM_COLUMNS))
-    for row, m in zip(table, models):
+    mixed = [None] * len(models) if mixed is None else list(mixed)
+    for row, m, mix in zip(table, models, mixed):
+        row[K.ZM_MIXED] = float(not isinstance(m, Elastic) if mix is None else bool(mix))
         row[K.ZM_K], row[K.ZM_G] = m.bulk_modulus_pa, m.shear_modulus_pa
         if isinstance(m, Elastic):
             row[K.ZM_MODEL] = K.ZMODEL_ELASTIC
@@ -246,8 +250,8 @@ class Zones:
     density : float
         ρ (kg/m³); node masses are lumped, ρA/3 from each zone.
     mixed : bool or None
-        Nodal mixed discretisation of the volumetric strain (docs/dem.md §16.2); None: on when any
-        model is plastic.
+        Nodal mixed discretisation of the volumetric strain (docs/dem.md §16.2) for every zone;
+        None: for the zones of plastic models.
     """
 
     def __init__(self, nodes, triangles, models, density: float = 2700.0,
@@ -267,9 +271,8 @@ class Zones:
         nz, nn = len(self.tri), len(self.x0)
         self.zmat = (np.zeros(nz, np.int64) if zone_model is None
                      else np.ascontiguousarray(zone_model, np.int64))
-        self.mtab = material_table(models)
-        self.mixed = (any(not isinstance(m, Elastic) for m in models) if mixed is None
-                      else bool(mixed))
+        self.mtab = material_table(models, [mixed] * len(models))
+        self.mixed = bool(self.mtab[:, K.ZM_MIXED].any())
         self.density = float(density)
         self.mass = np.zeros(nn)
         np.add.at(self.mass, self.tri.ravel(), np.repeat(density * self.area0 / 3, 3))
