@@ -18,7 +18,9 @@ STUDIES = sorted(SAMPLES.glob("study_*.toml"))
 # cases per sample (a new sample adds its line here)
 EXPECTED = {
     "study_bolting_seed000.toml": 3,  # no bolts, pattern 1, pattern 2 (seed 000 Fig. 5)
+    "study_bolting_seed000_deformable.toml": 3,  # the same with deformable blocks
     "study_cavern.toml": 18,         # theta 40/60/90 x 3 spacings x 2 realizations
+    "study_cavern_deformable.toml": 18,  # the same with deformable blocks
     "study_dfn_seed001.toml": 6,     # P32 = 1, 2 x 3 realizations
     "study_seed000.toml": 81,        # theta x alpha x spacings (3 each) x 3 realizations
     "study_shaketable.toml": 13,     # one parameter at a time (seed 002 §4) x 1 realization
