@@ -75,6 +75,7 @@ if TYPE_CHECKING:
     from .sampling import LineSample, plane_frame, sample_line, sample_plane
     from .section import generate_section, size_biased_sample
     from .network_io import CSV_COLUMNS, read_fractures_csv, write_fractures_csv, write_fractures_vtu, disk_polygons
+    from .network_io import FRACTURE_CELL_DATA, SECTION_CELL_DATA, clip_disk_polygons, write_section_traces_vtu
     from .scanline import Scanline, read_scanline
     from .sets3d import JointSets3D, fit_sets_3d
     from .scanline_stats import SpacingFit, fit_spacings, rqd_direct, rqd_priest_hudson, scanline_statistics
@@ -198,6 +199,10 @@ _SOURCES = {
     "write_fractures_csv": "network_io",
     "write_fractures_vtu": "network_io",
     "disk_polygons": "network_io",
+    "FRACTURE_CELL_DATA": "network_io",
+    "SECTION_CELL_DATA": "network_io",
+    "clip_disk_polygons": "network_io",
+    "write_section_traces_vtu": "network_io",
     "Scanline": "scanline",
     "read_scanline": "scanline",
     "JointSets3D": "sets3d",

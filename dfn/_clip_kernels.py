@@ -1,7 +1,9 @@
-"""Numba kernel: area of regular polygons (disk approximations) clipped by an axis-aligned box.
+"""Numba kernels: regular polygons (disk approximations) clipped by an axis-aligned box.
 
-Private to :mod:`rockmass.dfn.network`, which validates, selects the disks that the box cuts and
-applies the polygon-to-disk area correction. Imported lazily (numba is heavy).
+:func:`clipped_polygon_areas` gives their areas, for :mod:`rockmass.dfn.network`, which validates,
+selects the disks that the box cuts and applies the polygon-to-disk area correction;
+:func:`clip_polygons` gives the clipped polygons themselves, for ``fractures.vtu``
+(:mod:`rockmass.dfn.network_io`). Private; imported lazily (numba is heavy).
 """
 
 from __future__ import annotations
@@ -50,6 +52,59 @@ def _clip_axis(src, n_src, dst, axis, value, keep_below):
 
 
 @njit(cache=True)
+def _clip_box(buf_a, buf_b, n, box_lo, box_hi):
+    """Clip the convex polygon buf_a[:n] by the six planes of the box; return its vertex count.
+
+    The result is in buf_a again (six passes swap the buffers an even number of times); buf_b is
+    scratch. Both need room for n + 6 vertices (each plane adds at most one to a convex polygon).
+    """
+    src = buf_a
+    dst = buf_b
+    for axis in range(3):
+        n = _clip_axis(src, n, dst, axis, box_lo[axis], False)
+        src, dst = dst, src
+        n = _clip_axis(src, n, dst, axis, box_hi[axis], True)
+        src, dst = dst, src
+    return n
+
+
+@njit(cache=True)
+def clip_polygons(polygons, box_lo, box_hi, tol, out, counts):
+    """Clip convex planar polygons by the box [box_lo, box_hi]; write the parts that remain.
+
+    polygons : (n, m, 3) float64 -- the polygons' vertices in order. box_lo, box_hi : (3,) float64.
+    tol : (n,) float64 -- a vertex closer than tol[i] (on every axis) to the one written before it
+    is the same vertex (a polygon vertex on or just off a face of the box, met again as the
+    crossing point): it is written once, so no edge written is shorter than about tol[i].
+    out : (n, m + 6, 3) float64 -- receives the clipped polygon i in out[i, :counts[i]].
+    counts : (n,) int64 -- receives the vertex counts: 0 when less than a triangle is left (the
+    polygon is outside the box or only touches it).
+
+    No checks: the caller guarantees finite input, m >= 3, tol >= 0 and box_lo < box_hi.
+    """
+    m = polygons.shape[1]
+    buf_a = np.empty((m + 6, 3))
+    buf_b = np.empty((m + 6, 3))
+    for i in range(polygons.shape[0]):
+        buf_a[:m] = polygons[i]
+        n = _clip_box(buf_a, buf_b, m, box_lo, box_hi)
+        k = 0
+        for j in range(n):
+            if k == 0 or not _same_vertex(buf_a, j, out[i], k - 1, tol[i]):
+                out[i, k] = buf_a[j]
+                k += 1
+        while k > 1 and _same_vertex(out[i], k - 1, out[i], 0, tol[i]):  # the ring closes on itself
+            k -= 1
+        counts[i] = k if k >= 3 else 0
+
+
+@njit(cache=True)
+def _same_vertex(a, j, b, k, tol):
+    """Whether a[j] and b[k] differ by at most tol on every axis."""
+    return abs(a[j, 0] - b[k, 0]) <= tol and abs(a[j, 1] - b[k, 1]) <= tol and abs(a[j, 2] - b[k, 2]) <= tol
+
+
+@njit(cache=True)
 def clipped_polygon_areas(centre, e1, e2, radius, box_lo, box_hi, n_vertices, out):
     """Area of each regular n-gon inscribed in a disk, clipped by the box [box_lo, box_hi].
 
@@ -69,14 +124,8 @@ def clipped_polygon_areas(centre, e1, e2, radius, box_lo, box_hi, n_vertices, ou
         for k in range(n_vertices):
             for c in range(3):
                 buf_a[k, c] = centre[i, c] + r * (cos_t[k] * e1[i, c] + sin_t[k] * e2[i, c])
-        n = n_vertices
+        n = _clip_box(buf_a, buf_b, n_vertices, box_lo, box_hi)
         src = buf_a
-        dst = buf_b
-        for axis in range(3):
-            n = _clip_axis(src, n, dst, axis, box_lo[axis], False)
-            src, dst = dst, src
-            n = _clip_axis(src, n, dst, axis, box_hi[axis], True)
-            src, dst = dst, src
         # area = |sum of cross products| / 2 (vector area of a planar polygon)
         sx = 0.0
         sy = 0.0

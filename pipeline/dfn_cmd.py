@@ -2,7 +2,9 @@
 
 For each realization i (``--first I`` .. ``I + K - 1``, K from ``--realizations`` or the config)
 writes ``realization_NNNN/fractures.csv`` (``set,cx,cy,cz,nx,ny,nz,radius``),
-``realization_NNNN/fractures.vtu`` (polygons with ``set`` and ``id`` cell data) and
+``realization_NNNN/fractures.vtu`` (the disks' polygons clipped to the domain, cell data ``set``, ``id``,
+``dip_deg``, ``dip_direction_deg``, ``radius_m``, ``clipped``; :mod:`rockmass.dfn.network_io`), with
+``[[dfn.sections]]`` ``realization_NNNN/sections.vtu`` (the section traces as lines) and
 ``realization_NNNN/summary.json`` (target and achieved P32, P30 and counts per set), and one top-level
 ``manifest.json``. Everything is computed first and written all-or-nothing. Realization i depends only
 on the root seed and i (docs/design.md §3.5), so ``--first 7 --realizations 1`` reproduces realization 7 of

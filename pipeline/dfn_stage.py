@@ -220,20 +220,28 @@ def produce(args, out_dir, document=None):
     from contextlib import ExitStack
 
     from .atomic import atomic_path, atomic_write_json
-    from .dfn.network_io import write_fractures_csv, write_fractures_vtu
+    from .dfn.network_io import write_fractures_csv, write_fractures_vtu, write_section_traces_vtu
+    from .dfn.orientation import normal_from_dip
     from .manifest import build_manifest
 
     document, specs, seed, results, timings, fit = computed = compute(args, document)
     t0 = time.perf_counter()
+    sections = [(sec.point_m, normal_from_dip(sec.dip_deg, sec.dip_direction_deg), sec.window_uv_m)
+                for sec in document.dfn.sections]
     with output_set(out_dir, owns=_OWNED) as out, ExitStack() as stack:
         if fit is not None:
             atomic_write_json(stack.enter_context(atomic_path(out / "fitted.json")), fit.as_dict())
         for index, network, summary, rows in results:
             folder = out / f"realization_{index:04d}"
-            names = ["fractures.csv", "fractures.vtu", "summary.json"] + (["validation.json"] if rows else [])
+            names = ["fractures.csv", "fractures.vtu", "summary.json"] + (["validation.json"] if rows else []) \
+                + (["sections.vtu"] if sections else [])
             paths = {name: stack.enter_context(atomic_path(folder / name)) for name in names}
             write_fractures_csv(network, paths["fractures.csv"])
-            write_fractures_vtu(network, paths["fractures.vtu"], n_vertices=[s.n_vertices for s in specs])
+            # the disks clipped to the domain: how many were cut and how many left out (outside)
+            summary["fractures_vtu"] = write_fractures_vtu(network, paths["fractures.vtu"],
+                                                           n_vertices=[s.n_vertices for s in specs])
+            if sections:  # the traces that summary["sections"] counts, for ParaView
+                write_section_traces_vtu(network, sections, paths["sections.vtu"])
             atomic_write_json(paths["summary.json"], summary)
             if rows:
                 atomic_write_json(paths["validation.json"], validation_document(rows, index))

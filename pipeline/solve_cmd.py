@@ -13,12 +13,15 @@ the same file (built as ``rockmass blocks`` builds it). Writes under ``--out``:
   :mod:`rockmass.solver.vtu`: the polygons placed at each frame's positions and rotations, cell
   data ``displacement`` and ``velocity`` (3-vectors, z = 0, displacement from the model's original
   position), ``rotation_rad``, ``block_id``, ``region``, ``active``, ``failed`` (taken out because
-  it kept moving). Frames at the same instant (the end of one stage and the start of the next,
-  after its excavation) get times 1 ns apart in the ``.pvd`` so ParaView shows both; result.json
-  has the exact times;
+  it kept moving), ``excavated`` (removed by its excavation stage). Frames at the same instant
+  (the end of one stage and the start of the next, after its excavation) get times 1 ns apart in
+  the ``.pvd`` so ParaView shows both; result.json has the exact times;
 - ``block_energy.csv``: per block volume, mass, peak velocity and peak kinetic energy (dynamic
   stages);
 - ``contacts.csv``: the active contacts at the end (stresses, plastic slip, slipping / broken);
+- ``contacts.vtu``: the same contacts as ParaView points with stresses (compression positive), the
+  force on ``block_b``, plastic slip, opening (the overlap sign-flipped) and flags
+  (:func:`rockmass.solver.vtu.contact_mesh`);
 - ``blocks.json``: the block model used; ``manifest.json``.
 
 Everything is computed before the first file is written, and every file is written atomically. A
@@ -46,7 +49,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                     "ParaView frames.")
     p.add_argument("config", help="TOML file with a [solve] section (and blocks_file or [blocks])")
     p.add_argument("--out", required=True, help="write result.json, history.csv, blocks_NNNN.vtu, "
-                                                "blocks.pvd, block_energy.csv, contacts.csv, "
+                                                "blocks.pvd, block_energy.csv, contacts.csv, contacts.vtu, "
                                                 "blocks.json and manifest.json here")
     p.add_argument("--json", action="store_true", help="print the result summary as JSON")
     p.set_defaults(handler=run)

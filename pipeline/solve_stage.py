@@ -24,7 +24,7 @@ __all__ = ["prepare", "solve", "build_outputs", "produce"]
 #: rather than kept as the user's: the frames of an earlier solve (``blocks_0000.vtu`` …; a
 #: ParaView series must not mix two runs, issue 18) and outputs written only for some models
 #: (``bolts.csv``). A new optional output belongs here.
-_OWNED = (r"blocks_\d{4,}\.vtu", r"bolts\.csv", r"zones\.csv")
+_OWNED = (r"blocks_\d{4,}\.vtu", r"bolts\.csv", r"zones\.csv", r"contacts\.vtu")
 
 
 def prepare(config_path, document=None, model=None):
@@ -150,7 +150,7 @@ def build_outputs(model, settings, result, timings) -> dict:
     import numpy as np
 
     from .solver.deformable import zone_rows
-    from .solver.vtu import frame_mesh, pvd_text
+    from .solver.vtu import contact_mesh, frame_mesh, pvd_text
 
     files: dict = {}
     frames, pvd = [], []
@@ -175,6 +175,7 @@ def build_outputs(model, settings, result, timings) -> dict:
         files["zones.csv"] = csv_text(zone_rows(result.zones))
     contacts = result.contacts or {}
     files["contacts.csv"] = csv_text(contacts) if contacts else "block_a,block_b\n"
+    files["contacts.vtu"] = contact_mesh(contacts)  # the same slots for ParaView (solver/vtu.py)
     if result.bolts:  # docs/dem.md §15: per bolt node, axial force, yield, bond slip
         files["bolts.csv"] = csv_text(result.bolts)
     doc = result.to_json_dict()

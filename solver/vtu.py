@@ -18,11 +18,35 @@ name                dtype        meaning
 ``region``          int64        0 rock, k >= 1 excavation stage k
 ``active``          uint8        1 while the block takes part in the run
 ``failed``          uint8        1 once taken out because it kept moving (inactive too)
+``excavated``       uint8        1 once removed by its excavation stage: a block of a region
+                                 k >= 1, inactive and not ``failed`` (a block that failed before
+                                 its region was excavated stays ``failed`` only)
 ==================  ===========  ===============================================================
 
 With deformable blocks every zone is a cell whose points are its nodes at the frame's instant, and
 the cells carry :data:`ZONE_CELL_DATA` too: ``stress_pa`` (float64 (4)), ``plastic_state``
 (int64) and ``yielded`` (uint8).
+
+:func:`contact_mesh` turns the active contact slots at the end of a run
+(:meth:`rockmass.solver.Engine.contact_table`, ``Result.contacts``) into ``contacts.vtu``: one
+vertex cell per slot at its contact point (z = 0), with the point data :data:`CONTACT_POINT_DATA`:
+
+========================  ===========  ============================================================
+name                      dtype        meaning
+========================  ===========  ============================================================
+``block_a``, ``block_b``  int64        the two blocks; the normal points from a to b
+``normal``                float64 (3)  unit normal n from ``block_a`` to ``block_b`` (z = 0)
+``length_m``              float64      contact length the slot stands for, m
+``normal_stress_pa``      float64      σ_n, compression positive, Pa
+``shear_stress_pa``       float64      τ, positive when b moves along t = (−n_y, n_x) relative to a
+``force_b_n_per_m``       float64 (3)  force on ``block_b``, l (σ_n n − τ t), N per m of thickness
+                                       (``block_a`` receives its opposite)
+``plastic_slip_m``        float64      accumulated plastic shear displacement Σ|Δu_s^p|, m
+``opening_m``             float64      gap between the (rounded) blocks, m: the slot's overlap with
+                                       its sign flipped (negative: the blocks overlap)
+``slipping``              uint8        1 when slipping at the last update
+``broken``                uint8        1 for a bond that failed or a contact never bonded
+========================  ===========  ============================================================
 
 meshio is imported when a mesh is made or written, not with this module.
 """
@@ -33,17 +57,20 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["frame_mesh", "pvd_text", "write_vtu", "FRAME_CELL_DATA", "ZONE_CELL_DATA",
-           "PVD_NUDGE_S"]
+__all__ = ["frame_mesh", "contact_mesh", "pvd_text", "write_vtu", "FRAME_CELL_DATA", "ZONE_CELL_DATA",
+           "CONTACT_POINT_DATA", "PVD_NUDGE_S"]
 
 #: Names of the cell data of :func:`frame_mesh`, in order.
 FRAME_CELL_DATA = ("displacement", "velocity", "rotation_rad", "block_id", "region", "active",
-                   "failed")
+                   "failed", "excavated")
 #: Cell data added when the model has deformable blocks (docs/dem.md §16): the zones' stress
 #: (σ_xx, σ_yy, σ_zz, σ_xy, compression positive, Pa; zeros on rigid blocks), plastic state bits
 #: (1 shear now, 2 tension now, 4 shear in the past, 8 tension in the past; -1 on rigid blocks)
 #: and ``yielded`` (1 for a zone that ever yielded).
 ZONE_CELL_DATA = ("stress_pa", "plastic_state", "yielded")
+#: Names of the point data of :func:`contact_mesh`, in order (module docstring).
+CONTACT_POINT_DATA = ("block_a", "block_b", "normal", "length_m", "normal_stress_pa", "shear_stress_pa",
+                      "force_b_n_per_m", "plastic_slip_m", "opening_m", "slipping", "broken")
 
 #: Relative time added to a frame whose time is not after the previous one (the end of one stage and
 #: the start of the next, after its excavation, share an instant), so that ParaView shows both.
@@ -93,6 +120,8 @@ def frame_mesh(model, frame):
         "region": np.asarray(model.region, np.int64),
         "active": np.asarray(frame.active, np.uint8),
         "failed": np.asarray(frame.failed, np.uint8),
+        "excavated": ((np.asarray(model.region) >= 1) & ~np.asarray(frame.active, bool)
+                      & ~np.asarray(frame.failed, bool)).astype(np.uint8),
     }
     names = FRAME_CELL_DATA
     if frame.zones is not None:  # deformable blocks: zones drawn on their nodes, with stress
@@ -118,6 +147,51 @@ def _zone_cells(model, frame, points, per_block) -> None:
     per_block["stress_pa"] = stress
     per_block["plastic_state"] = state
     per_block["yielded"] = np.where(state > 0, (state & 12) != 0, False).astype(np.uint8)
+
+
+def contact_mesh(contacts):
+    """The active contact slots as a meshio mesh of vertices (``contacts.vtu``).
+
+    Parameters
+    ----------
+    contacts : dict of (n,) arrays
+        :meth:`rockmass.solver.Engine.contact_table` (``Result.contacts``): ``block_a``,
+        ``block_b``, ``x_m``, ``y_m``, ``nx``, ``ny``, ``length_m``, ``normal_stress_pa``,
+        ``shear_stress_pa``, ``plastic_slip_m``, ``overlap_m``, ``slipping``, ``broken``. An empty
+        dict (no contact) gives a mesh without points.
+
+    Returns
+    -------
+    meshio.Mesh
+        Points (n, 3) at the contact points, z = 0; one ``vertex`` cell per point; point data
+        :data:`CONTACT_POINT_DATA` (see the module docstring).
+
+    Examples
+    --------
+    >>> mesh = contact_mesh({"block_a": [0], "block_b": [1], "x_m": [2.0], "y_m": [1.0], "nx": [0.0],
+    ...                      "ny": [1.0], "length_m": [0.5], "normal_stress_pa": [2e6],
+    ...                      "shear_stress_pa": [1e6], "plastic_slip_m": [0.0], "overlap_m": [1e-4],
+    ...                      "slipping": [False], "broken": [False]})
+    >>> mesh.point_data["force_b_n_per_m"].tolist(), mesh.point_data["opening_m"].tolist()
+    ([[500000.0, 1000000.0, 0.0]], [-0.0001])
+    """
+    import meshio
+
+    def column(name, dtype=float):
+        return np.asarray(contacts.get(name, ()), dtype=dtype).reshape(-1)
+
+    x, y = column("x_m"), column("y_m")
+    n = np.column_stack([column("nx"), column("ny"), np.zeros(x.size)])
+    t = np.column_stack([-n[:, 1], n[:, 0], np.zeros(x.size)])
+    length, sigma, tau = column("length_m"), column("normal_stress_pa"), column("shear_stress_pa")
+    data = {"block_a": column("block_a", np.int64), "block_b": column("block_b", np.int64), "normal": n,
+            "length_m": length, "normal_stress_pa": sigma, "shear_stress_pa": tau,
+            "force_b_n_per_m": length[:, None] * (sigma[:, None] * n - tau[:, None] * t),
+            "plastic_slip_m": column("plastic_slip_m"), "opening_m": -column("overlap_m"),
+            "slipping": column("slipping", bool).astype(np.uint8), "broken": column("broken", bool).astype(np.uint8)}
+    points = np.column_stack([x, y, np.zeros(x.size)])
+    cells = [("vertex", np.arange(x.size, dtype=np.int64)[:, None])]
+    return meshio.Mesh(points, cells, point_data={name: data[name] for name in CONTACT_POINT_DATA})
 
 
 def pvd_text(entries) -> str:
@@ -159,7 +233,7 @@ def pvd_text(entries) -> str:
 
 
 def write_vtu(mesh, path) -> Path:
-    """Write a mesh (:func:`frame_mesh`) to ``path`` as VTU, atomically.
+    """Write a mesh (:func:`frame_mesh`, :func:`contact_mesh`) to ``path`` as VTU, atomically.
 
     Parameters
     ----------

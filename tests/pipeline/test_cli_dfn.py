@@ -61,8 +61,15 @@ def test_writes_every_file_with_achieved_p32_at_target(config, tmp_path):
     assert net.n_fractures == summary["total"]["count"] == sum(s["count"] for s in summary["sets"])
     assert net.p32() == pytest.approx(summary["total"]["achieved_p32"], rel=1e-12)
     mesh = meshio.read(folder / "fractures.vtu")
-    sizes = {block.data.shape[1]: block.data.shape[0] for block in mesh.cells}   # J2: 8-gons, J1: 16-gons
-    assert sizes == {8: summary["sets"][1]["count"], 16: summary["sets"][0]["count"]}
+    sizes = np.concatenate([np.full(len(block.data), block.data.shape[1]) for block in mesh.cells])
+    data = {name: np.concatenate(values) for name, values in mesh.cell_data.items()}
+    whole = data["clipped"] == 0     # J2: 8-gons, J1: 16-gons; cut by the domain: up to 6 vertices more
+    assert sizes[whole].tolist() == np.where(data["set"][whole] == 1, 8, 16).tolist()
+    assert (sizes[~whole] <= np.where(data["set"][~whole] == 1, 14, 22)).all()
+    report = summary["fractures_vtu"]
+    assert report == {"polygons": len(sizes), "clipped": int((~whole).sum()), "outside": net.n_fractures - len(sizes)}
+    assert report["clipped"] > 0 and sorted(data["id"].tolist()) == sorted(set(data["id"].tolist()))
+    assert np.array_equal(data["radius_m"], net.radius_m[data["id"]])
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["seeds"]["root"] == 5 and manifest["seeds"]["realizations"] == [0, 1, 2]
     assert manifest["config"]["dfn"]["sets"][0]["name"] == "J1"
@@ -120,3 +127,46 @@ def test_sample_config_of_seed_001_is_valid_and_generates(tmp_path):
     assert main(["dfn", str(SAMPLE), "--out", str(tmp_path / "o"), "--realizations", "1"]) == 0
     summary = json.loads((tmp_path / "o" / "realization_0000" / "summary.json").read_text())
     assert summary["total"]["achieved_p32"] >= 1.0
+
+
+def test_sections_are_written_as_traces_in_world_coordinates(config, tmp_path):
+    """With [[dfn.sections]], each realization also writes sections.vtu: the traces that
+    summary.json counts, one line per trace on the section plane, with set, disk id and length."""
+    from rockmass.dfn.orientation import normal_from_dip
+
+    config.write_text(CONFIG + """
+[[dfn.sections]]
+name = "wall"
+point_m = [6, 5, 4]
+dip_deg = 90
+dip_direction_deg = 180
+window_uv_m = [[-5, -3], [5, -3], [5, 3], [-5, 3]]
+
+[[dfn.sections]]
+point_m = [6, 5, 4]
+dip_deg = 0
+dip_direction_deg = 0
+window_uv_m = [[-6, -5], [6, -5], [6, 5], [-6, 5]]
+""")
+    out = tmp_path / "out"
+    assert main(["dfn", str(config), "--out", str(out), "--realizations", "1"]) == 0
+    folder = out / "realization_0000"
+    assert sorted(p.name for p in folder.iterdir()) == ["fractures.csv", "fractures.vtu", "sections.vtu",
+                                                        "summary.json"]
+    summary = json.loads((folder / "summary.json").read_text())
+    net = read_fractures_csv(folder / "fractures.csv", summary["domain_m"])
+    mesh = meshio.read(folder / "sections.vtu")
+    data = {name: values[0] for name, values in mesh.cell_data.items()}
+    for k, (dip, dip_direction) in enumerate([(90, 180), (0, 0)]):
+        mine = data["section"] == k
+        assert mine.sum() == summary["sections"][k]["traces"] > 0
+        assert data["length_m"][mine].sum() / summary["sections"][k]["area_m2"] == \
+            pytest.approx(summary["sections"][k]["p21"], rel=1e-12)
+        ends = mesh.points[mesh.cells[0].data[mine]]                            # (traces, 2, 3)
+        plane = normal_from_dip(dip, dip_direction)
+        assert np.allclose((ends - [6, 5, 4]) @ plane, 0.0, atol=1e-9)          # on the section plane
+        ids = data["id"][mine]
+        for e in (ends[:, 0], ends[:, 1]):                                      # on its own disk
+            assert np.allclose(np.einsum("ij,ij->i", e - net.centre_m[ids], net.normal[ids]), 0.0, atol=1e-9)
+            assert (np.linalg.norm(e - net.centre_m[ids], axis=1) <= net.radius_m[ids] + 1e-9).all()
+        assert np.array_equal(data["set"][mine], net.set_id[ids])

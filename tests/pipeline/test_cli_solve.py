@@ -393,6 +393,39 @@ def test_a_new_run_leaves_no_frame_of_an_earlier_run(tiny_run, tmp_path, capsys)
     assert (again / "notes.txt").read_text() == "the user's own file"
 
 
+def test_contacts_vtu_holds_the_rows_of_contacts_csv(tiny_run):
+    """contacts.vtu (issue 19): one vertex per row of contacts.csv at its point, with the stresses,
+    plastic slip and flags of the row, the opening as the overlap sign-flipped and the force on
+    block b as l (σ_n n − τ t); a stale one of an earlier run is the command's to remove; the frames
+    carry ``excavated`` (nothing is excavated in this run)."""
+    meshio = pytest.importorskip("meshio")
+    from rockmass.solve_stage import _OWNED
+
+    _, out, _ = tiny_run
+    with open(out / "contacts.csv", newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    mesh = meshio.read(out / "contacts.vtu")
+    d = mesh.point_data
+    assert len(rows) > 10 and [c.type for c in mesh.cells] == ["vertex"] and len(mesh.points) == len(rows)
+
+    def col(name):
+        return np.array([float(r[name]) for r in rows])
+
+    assert mesh.points[:, :2] == pytest.approx(np.column_stack([col("x_m"), col("y_m")]), rel=1e-12)
+    for name in ("normal_stress_pa", "shear_stress_pa", "plastic_slip_m", "length_m", "block_a", "block_b"):
+        assert d[name] == pytest.approx(col(name), rel=1e-12, abs=1e-300), name
+    assert d["opening_m"] == pytest.approx(-col("overlap_m"), rel=1e-12, abs=1e-300)
+    for name in ("slipping", "broken"):
+        assert d[name].tolist() == [int(r[name] in ("1", "True", "true")) for r in rows], name
+    n = np.column_stack([col("nx"), col("ny")])
+    t = np.column_stack([-n[:, 1], n[:, 0]])
+    force = col("length_m")[:, None] * (col("normal_stress_pa")[:, None] * n - col("shear_stress_pa")[:, None] * t)
+    assert d["force_b_n_per_m"][:, :2] == pytest.approx(force, rel=1e-9, abs=1e-9 * np.abs(force).max())
+    assert any(re.fullmatch(pattern, "contacts.vtu") for pattern in _OWNED)
+    frame = meshio.read(out / "blocks_0000.vtu")
+    assert not np.concatenate(frame.cell_data["excavated"]).any()
+
+
 def test_monitor_point_outside_the_domain_exits_2_naming_it(tmp_path, capsys):
     """A point 480 m away used to follow the nearest block silently (issue 18)."""
     path = _tiny(tmp_path)
