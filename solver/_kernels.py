@@ -1743,7 +1743,9 @@ def zone_nodes_step(xy, vel, fint, fcon, fext, fabs, mass, inv_mass, mode, presc
             if mode[n, d] == 1:
                 vel[n, d] = 0.0
                 continue
-            if mode[n, d] == 2:
+            if mode[n, d] == 2:  # the boundary's motion: it works on the model through the
+                # node's zones and contacts (E_CONTACT_PRESC, as a prescribed block's contacts)
+                E[E_CONTACT_PRESC] += (fint[n, d] + fcon[n, d]) * 0.5 * (v_old + presc[n, d]) * dt
                 vel[n, d] = presc[n, d]
                 xy[n, d] += presc[n, d] * dt
                 continue
