@@ -64,13 +64,15 @@ class ZonedModel:
 
 
 def _chosen_blocks(model, deformable, edges) -> np.ndarray:
-    """Index of the ``deformable`` entry that zones each block (-1: rigid); a block chosen twice is
-    an error naming both entries."""
+    """Index of the ``deformable`` entry that zones each block (-1: rigid; also a chosen block
+    smaller than the entry's ``min_block_area_m2``); a block chosen twice is an error naming both
+    entries."""
     spec_of = np.full(model.n_blocks, -1, np.int64)
     for i, spec in enumerate(deformable):
         ids = select_blocks(model, spec.where, edges)
         if not len(ids):
             raise ValueError(f"deformable[{i}].where {spec.where!r} selects no block")
+        ids = ids[model.area_m2[ids] >= spec.min_block_area_m2]  # slivers stay rigid
         twice = ids[spec_of[ids] >= 0]
         if len(twice):
             raise ValueError(f"deformable[{i}].where {spec.where!r}: block {int(twice[0])} is "

@@ -537,14 +537,18 @@ def _region_number(value: Any) -> Any:
 class Deformable:
     """Blocks made deformable: meshed into triangular zones of about ``zone_size_m`` with the
     constitutive ``model`` (elastic, Mohr–Coulomb or Hoek–Brown; docs/dem.md §16), the joints
-    acting on their boundary. The other blocks stay rigid. For a dynamic stage the zone size
-    should be at most a tenth of the shortest wavelength carried."""
+    acting on their boundary. The other blocks stay rigid, and so do chosen blocks smaller than
+    ``min_block_area_m2``. For a dynamic stage the zone size should be at most a tenth of the
+    shortest wavelength carried."""
 
     where: Annotated[Where, Field(description=f"the blocks: {_WHERE}")]
     model: Annotated[ZoneModel, Field(description="constitutive model of the zones")]
     zone_size_m: Annotated[Float, Field(gt=0, le=1e6, description="zone size h (edge length)")]
     mixed: Annotated[Optional[Bool], Field(description=(
         "nodal mixed discretisation of the volumetric strain; none: on for plastic models"))] = None
+    min_block_area_m2: Annotated[Float, Field(ge=0, le=1e12, description=(
+        "chosen blocks smaller than this stay rigid (slivers: their zones would set the time "
+        "step of a dynamic stage)"))] = 0.0
 
 
 @spec

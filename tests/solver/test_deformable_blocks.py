@@ -192,3 +192,16 @@ def test_a_zoned_block_shaken_through_its_own_nodes_keeps_the_ledger():
     # measured 0.5 % (the zones' strain energy is the plain ½σ:C:σ, not the leapfrog's shadow form
     # that makes the contacts' exact); without booking the prescribed nodes' work it is ~100 %
     assert abs(ledger.residual_j) < 1e-2 * ledger.work_boundary_j
+
+
+def test_chosen_blocks_smaller_than_the_minimum_area_stay_rigid():
+    """``min_block_area_m2``: of two chosen blocks, the sliver (0.02 m²) stays rigid."""
+    model = hand_model([rect(0, -1, 2, 0), rect(0, 0, 2, 1), rect(0, 1, 2, 1.01)],
+                       pairs=[(0, 1), (1, 2)])
+    settings = _column_settings(5e9, (Deformable("blocks:1,2", Elastic(KB, GB), 0.25,
+                                                 min_block_area_m2=0.05),),
+                                stages=(Stage("gravity", max_steps=50),))
+    r = run(model, settings)
+    assert r.info["deformable_blocks"] == 1
+    parents = r.zones["parent_block"][r.zones["zone_block"]]
+    assert set(np.unique(parents)) == {1}
