@@ -553,6 +553,9 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     if h < MIN_SIDE_PX or w < MIN_SIDE_PX:
         raise ValueError(f"{name} is {h} x {w} pixels; at least {MIN_SIDE_PX} x {MIN_SIDE_PX} are "
                          "needed to find joints")
+    if joint_width_px >= min(h, w):  # else OpenCV's kernels get sizes it cannot parse (TypeError)
+        raise ValueError(f"joint_width_px = {joint_width_px:g} px is not narrower than the {h} x "
+                         f"{w} pixel image; give the width of one joint in pixels (default 3)")
     lo, hi = float(grey.min()), float(grey.max())
     if hi - lo < 0.5 / 255:
         raise ValueError(f"{name} is blank: every pixel has grey level {lo:.3f} (all black or all "

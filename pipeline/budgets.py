@@ -5,8 +5,10 @@ code 2, an estimate above the limit, naming the field, the estimate and the limi
 
 The memory limit is 80 % of the machine's physical memory, or the environment variable
 :data:`MAX_MEMORY_ENV` (``ROCKMASS_MAX_MEMORY=16G``; suffixes K, M, G, T in powers of 1024, or
-bytes). Estimates are upper bounds made from measured costs (each constant says how it was
-measured), so a refused config would have needed at least a good part of what the message says.
+bytes). The trace maps of ``rockmass traces`` have a count limit instead (their cost is time,
+not memory: :func:`check_traces`, ``--max-traces`` or :data:`MAX_TRACES_ENV`). Estimates are upper
+bounds made from measured costs (each constant says how it was measured), so a refused config
+would have needed at least a good part of what the message says.
 """
 
 from __future__ import annotations
@@ -18,7 +20,8 @@ from .errors import InputError
 
 __all__ = ["MAX_MEMORY_ENV", "DFN_BYTES_HELD", "DFN_BYTES_WRITTEN", "DFN_BYTES_PER_VERTEX",
            "BLOCK_BYTES", "parse_size", "memory_limit", "check_memory", "dfn_memory_bytes",
-           "block_count_terms"]
+           "block_count_terms", "MAX_TRACES_ENV", "DEFAULT_MAX_TRACES", "TRACE_SECONDS",
+           "positive_count", "positive_count_arg", "trace_limit_arg", "max_traces", "check_traces"]
 
 MAX_MEMORY_ENV = "ROCKMASS_MAX_MEMORY"
 _SHARE_OF_RAM = 0.8
@@ -166,3 +169,82 @@ def block_count_terms(domain_xy_m, joints: list[tuple[float, float]],
                     for k, (a1, s1) in enumerate(joints) for a2, s2 in joints[k + 1:])
     cracks = area / crack_size_m ** 2 if crack_size_m else 0.0
     return {"lines": lines, "crossings": crossings, "cracks": cracks}
+
+
+# ------------------------------------------------------------------------------------- traces
+
+MAX_TRACES_ENV = "ROCKMASS_MAX_TRACES"
+#: Traces ``rockmass traces`` analyses by default: about 40 s of work at :data:`TRACE_SECONDS`.
+DEFAULT_MAX_TRACES = 200_000
+#: Seconds per trace of the statistics of ``rockmass traces`` (read, sets, topology, intensity,
+#: Mauldon, box count). Measured on Boolean two-set maps (benchmarks/bench_trace_stats.py's
+#: generator, λ = 1 / L²), on an idle machine: 10⁴ traces 1.6 s, 10⁵ traces 17 s (the set fit's
+#: EM two thirds of it), so 1.7e-4 s a trace, rounded up; the plots of ``--out`` add about a third.
+#: 10⁶ traces took 336 s on a loaded machine (the EM 261 s, reading 29 s), before any plot.
+TRACE_SECONDS = 1.8e-4
+
+
+def positive_count(text: str) -> int | None:
+    """``text`` as a positive whole number (``2e5`` accepted), or None.
+
+    >>> positive_count("2e5"), positive_count("0"), positive_count("1.5"), positive_count("x")
+    (200000, None, None, None)
+    """
+    try:
+        value = float(text)
+    except ValueError:
+        return None
+    return int(value) if value >= 1 and value == int(value) else None
+
+
+def positive_count_arg(text: str, noun: str) -> int:
+    """``text`` as an ``argparse`` option value: a positive number of ``noun`` (e.g. ``traces``)."""
+    import argparse
+
+    value = positive_count(text)
+    if value is None:
+        raise argparse.ArgumentTypeError(f"must be a positive number of {noun}, got {text!r}")
+    return value
+
+
+def trace_limit_arg(text: str) -> int:
+    """``argparse`` type of ``--max-traces``: a positive number of traces."""
+    return positive_count_arg(text, "traces")
+
+
+def max_traces(option: int | None = None) -> tuple[int, str]:
+    """The trace limit in force and where it comes from: ``option`` (``--max-traces``), else the
+    environment variable :data:`MAX_TRACES_ENV`, else :data:`DEFAULT_MAX_TRACES`.
+
+    >>> max_traces(5)
+    (5, '--max-traces')
+    """
+    if option is not None:
+        return int(option), "--max-traces"
+    text = os.environ.get(MAX_TRACES_ENV)
+    if text is None or not text.strip():
+        return DEFAULT_MAX_TRACES, "the default"
+    value = positive_count(text)
+    if value is None:
+        raise InputError(f"{MAX_TRACES_ENV} must be a positive number of traces, got {text!r}")
+    return value, MAX_TRACES_ENV
+
+
+def check_traces(n_traces: int, where: str, option: int | None = None) -> None:
+    """Refuse (:class:`InputError`, exit 2) a trace map of more than the trace limit before its
+    statistics start, naming ``where`` (the file), the count, the limit and the time it would take.
+
+    >>> check_traces(10, "map.geojson", option=100)
+    >>> check_traces(10**6, "map.geojson", option=100)
+    Traceback (most recent call last):
+    ...
+    rockmass.errors.InputError: map.geojson: 1000000 traces, more than the limit of 100 (--max-traces); their statistics would take about 3 min (1.8e-04 s a trace); raise the limit with --max-traces N or the environment variable ROCKMASS_MAX_TRACES=N, or split the map
+    """
+    limit, source = max_traces(option)
+    if n_traces > limit:
+        seconds = n_traces * TRACE_SECONDS
+        took = f"{seconds / 60:.0f} min" if seconds >= 120 else f"{seconds:.0f} s"
+        raise InputError(f"{where}: {n_traces} traces, more than the limit of {limit} ({source}); "
+                         f"their statistics would take about {took} ({TRACE_SECONDS:.1e} s a "
+                         f"trace); raise the limit with --max-traces N or the environment variable "
+                         f"{MAX_TRACES_ENV}=N, or split the map")

@@ -17,6 +17,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from .budgets import positive_count, positive_count_arg
 from .errors import InputError
 
 __all__ = ["DEFAULT_MAX_PIXELS", "MAX_PIXELS_ENV", "image_size", "max_pixels", "check_image_pixels",
@@ -58,23 +59,9 @@ def image_size(path: str | os.PathLike) -> tuple[int, int] | None:
         Image.MAX_IMAGE_PIXELS = before
 
 
-def _positive_pixels(text: str) -> int | None:
-    """``text`` as a positive whole number of pixels (``1e8`` accepted), or None."""
-    try:
-        value = float(text)
-    except ValueError:
-        return None
-    return int(value) if value >= 1 and value == int(value) else None
-
-
 def pixel_limit_arg(text: str) -> int:
     """``argparse`` type of ``--max-pixels``: a positive number of pixels."""
-    import argparse
-
-    value = _positive_pixels(text)
-    if value is None:
-        raise argparse.ArgumentTypeError(f"must be a positive number of pixels, got {text!r}")
-    return value
+    return positive_count_arg(text, "pixels")
 
 
 def max_pixels(option: int | None = None) -> int:
@@ -91,7 +78,7 @@ def max_pixels(option: int | None = None) -> int:
     text = os.environ.get(MAX_PIXELS_ENV)
     if text is None or not text.strip():
         return DEFAULT_MAX_PIXELS
-    value = _positive_pixels(text)
+    value = positive_count(text)
     if value is None:
         raise InputError(f"{MAX_PIXELS_ENV} must be a positive number of pixels, got {text!r}")
     return value

@@ -142,7 +142,16 @@ def _read_traces(path: Path) -> None:
     """The trace map, read whole (GeoJSON or CSV)."""
     from .inputs import read_trace_file
 
-    read_trace_file(path)
+    read_trace_file(path, quiet=True)  # its warnings come when the stage reads it
+
+
+def _read_stage_traces(path: Path) -> None:
+    """The ``run.traces`` map, read whole, within the trace limit of the traces stage."""
+    from .budgets import check_traces
+    from .inputs import read_trace_file
+
+    trace_map = read_trace_file(path, quiet=True)  # its warnings come when the stage reads it
+    check_traces(trace_map.n_traces, path)  # run has no --max-traces: the environment variable
 
 
 def _read_scanline(path: Path) -> None:
@@ -153,7 +162,8 @@ def _read_scanline(path: Path) -> None:
 
 
 #: What planning reads of each kind of input file (the stages read them again, whole).
-_CONTENT_CHECKS = {"photo": _check_photo, "traces": _read_traces, "scanline": _read_scanline}
+_CONTENT_CHECKS = {"photo": _check_photo, "traces": _read_traces,
+                   "stage traces": _read_stage_traces, "scanline": _read_scanline}
 
 
 def _check_contents(config_path, files: list[tuple[str, Path, str]]) -> None:
@@ -219,7 +229,7 @@ def plan_run(config_path, out_dir, document=None) -> RunPlan:
     for key, path in (("run.photo", photo), ("run.traces", traces_file), ("run.scanline", scanline)):
         _check_file(config_path, key, path)
     contents = [(key, path, kind) for key, path, kind in (
-        ("run.photo", photo, "photo"), ("run.traces", traces_file, "traces"),
+        ("run.photo", photo, "photo"), ("run.traces", traces_file, "stage traces"),
         ("run.scanline", scanline, "scanline")) if path is not None]
     trace_map = (out_dir.resolve() / "extract" / "traces.geojson" if photo is not None
                  else traces_file)
@@ -383,7 +393,7 @@ def _check_area(config_path, traces_file: Path | None, area: str | None) -> None
         from .inputs import read_trace_file
 
         with reading(traces_file, "run.traces", config=config_path):
-            trace_map = read_trace_file(traces_file)
+            trace_map = read_trace_file(traces_file, quiet=True)
     if trace_map is None or trace_map.n_traces == 0:
         if area is not None and area not in AREA_CHOICES:  # a photo's traces: check the polygon alone
             from .inputs import read_polygon_file

@@ -297,7 +297,7 @@ def _traces(document, config_path, section=None):
     if document.blocks.dfn_section is not None:
         return (section or _dfn_section(document, config_path))[0]
     path = document.blocks.traces_path(config_path)
-    return None if path is None else read_trace_file(path, "blocks.traces")
+    return None if path is None else read_trace_file(path, "blocks.traces", quiet=True)
 
 
 def _build_model(document, config_path, section=None):

@@ -115,6 +115,45 @@ def _preflight(pending, config_path) -> None:
     solve.to_settings(model, config_path)
 
 
+def _read_case_traces(path) -> None:
+    """The trace map that cuts a case's blocks, read whole (its warnings come when the case runs)."""
+    from .inputs import read_trace_file
+
+    read_trace_file(path, "blocks.traces", quiet=True)
+
+
+#: File keys whose content a study reads before any case runs, and how; the others are read when
+#: their case runs.
+_CASE_FILE_CHECKS = {("blocks", "traces"): _read_case_traces}
+
+
+def _check_case_files(cases, config_path, digests: dict) -> None:
+    """Read the content of every case's trace file before the first case runs (issue 18): a
+    broken file is bad input (exit 2) naming the config, the field, the file and the case, not an
+    error found case by case after others ran. Each distinct file is read once; a missing file is
+    left to fail its own case (a re-run retries it once the file is there)."""
+    from .errors import reading
+    from .study_config import _case_files, params_text
+    from .strict import config_file
+
+    checked: set[str] = set()
+    for case in cases:
+        for keys, name in _case_files(case.document):
+            check = _CASE_FILE_CHECKS.get(tuple(keys))
+            path = config_file(config_path, name)
+            key = os.fspath(path)
+            if check is None or key in checked or digests.get(key) is None:
+                continue
+            checked.add(key)
+            try:
+                with reading(path, ".".join(keys), config=config_path):
+                    check(path)
+            except InputError as exc:
+                raise InputError(f"{exc} (study case {case.index}: "
+                                 f"{params_text(case.params) or 'the base config'}; no case has "
+                                 "run)") from None
+
+
 def _case_header(case, config_path) -> str:
     """The comment lines that head a case's config.toml: where it comes from, how to rerun it."""
     from .study_config import params_text
@@ -199,6 +238,7 @@ def run(args) -> int:
     scheduler = args.scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS") or None
     client = None
     if pending:
+        _check_case_files(pending, args.config, digests)
         _preflight(pending, args.config)
         if scheduler is not None:
             client = _connect(scheduler, args.connect_timeout)

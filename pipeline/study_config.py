@@ -346,6 +346,7 @@ def expand_cases(document: StudyDocument, raw: dict, config_path,
         if any(path in entry for entry in listed):
             problems.append((f"study.grid.{path}", "also set in study.cases; give each field in "
                              "one place"))
+    problems += _colour_by_problems(study.colour_by, grid, listed, seed_fields, base)
     if problems:
         raise ConfigError(shown, problems)
     n = len(listed) * study.realizations
@@ -392,6 +393,22 @@ def expand_cases(document: StudyDocument, raw: dict, config_path,
                 seen[digest] = index
                 cases.append(StudyCase(index, params, r, seed, data, doc, digest, inputs))
     return cases
+
+
+def _colour_by_problems(colour_by, grid: dict, listed: list[dict], seed_fields: list[str],
+                        base: dict) -> list[tuple[str, str]]:
+    """``study.colour_by`` must name a field whose value the report can read from each case: one
+    the study varies (grid, cases, seed fields) or a value of the base config (not a table);
+    otherwise the plots would silently go uncoloured. The problem lists the varying fields."""
+    if not colour_by:
+        return []
+    varying = list(dict.fromkeys([*grid, *(p for entry in listed for p in entry), *seed_fields]))
+    value = get_path(base, colour_by)
+    if colour_by in varying or (value is not None and not isinstance(value, dict)):
+        return []
+    what = "is a table, not a field" if isinstance(value, dict) else "names no field of the cases"
+    return [("study.colour_by", f"{colour_by!r} {what}; give one of the fields the study varies "
+             f"({', '.join(varying)}) or a field set in the base config")]
 
 
 def params_text(params: dict) -> str:

@@ -7,12 +7,17 @@ I-Y-X-E topology) and the box-counting dimension of
 :func:`rockmass.fractal.box_count` over the same window, and writes under ``--out DIR``:
 ``summary.json``, ``rose.png`` (length-weighted, equal-area, axial), ``traces.png`` (the map by set)
 and ``manifest.json`` — all of them or none. ``--json`` prints the summary to stdout.
+
+Zero-length traces are dropped with a warning and counted (``input.dropped_zero_length``); a map of
+more than ``--max-traces`` traces (default 200 000, or ``ROCKMASS_MAX_TRACES``) is refused before
+its statistics start (exit 2; :func:`rockmass.budgets.check_traces`).
 """
 
 from __future__ import annotations
 
 import argparse
 
+from .budgets import DEFAULT_MAX_TRACES, MAX_TRACES_ENV, TRACE_SECONDS, trace_limit_arg
 from .outputs import print_summary
 from .traces_stage import produce
 
@@ -35,6 +40,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="number of joint sets (default: chosen by BIC over 1-5)")
     p.add_argument("--snap-tolerance", type=float, dest="snap_tolerance_m",
                    help="topology snap tolerance in metres (default 1e-4 x window diameter)")
+    p.add_argument("--max-traces", type=trace_limit_arg, dest="max_traces", metavar="N",
+                   help=f"refuse a map of more than N traces before the statistics start (default "
+                        f"{DEFAULT_MAX_TRACES}, or the environment variable {MAX_TRACES_ENV}; "
+                        f"about {TRACE_SECONDS:.1e} s a trace)")
     p.add_argument("--out", help="write summary.json, rose.png, traces.png and manifest.json here")
     p.add_argument("--json", action="store_true", help="print the summary as JSON on stdout")
     p.set_defaults(handler=run)
@@ -54,6 +63,9 @@ def summary_text(summary: dict) -> str:
              f"D_box = {value('Box-counting Dimension', '.4f')}"]
     if area:
         lines.append(f"  area {value('Area')}: {area['text']}")
+    dropped = summary.get("input", {}).get("dropped_zero_length") or {}
+    if dropped.get("count"):
+        lines.append(f"  {dropped['count']} zero-length traces dropped (not counted)")
     azimuth = summary.get("angle_convention") == "azimuth"
     crs = summary.get("crs")
     lines.append(f"  angles: {summary.get('angle_convention_text', '')}"

@@ -14,7 +14,8 @@ import time
 from pathlib import Path
 
 from .errors import InputError, reading, reads
-from .inputs import read_trace_file
+from .budgets import check_traces
+from .inputs import read_trace_file, read_trace_map, warn
 from .outputs import output_set, plot_text
 
 __all__ = ["AREA_CHOICES", "area_window", "dimension_entry", "compute", "produce"]
@@ -74,14 +75,24 @@ def area_window(trace_map, area, file, option: str = "--area"):
 
 @reads("file")
 def compute(args):
-    """Read and analyse; return (summary dict, trace map with the window used, timings)."""
+    """Read and analyse; return (summary dict, trace map with the window used, timings).
+
+    Zero-length traces are dropped with a warning and counted in ``input.dropped_zero_length``
+    (:func:`rockmass.inputs.drop_zero_length` says why), and a map of more traces than the limit
+    is refused before its statistics start (:func:`rockmass.budgets.check_traces`).
+    """
     from .dfn import trace_map_statistics
     from .fractal import box_count
 
     t0 = time.perf_counter()
-    trace_map = read_trace_file(Path(args.file))
+    trace_map, dropped = read_trace_map(Path(args.file))
+    if dropped["count"]:
+        warn(dropped["text"])
     if trace_map.n_traces == 0:
-        raise InputError(f"{args.file}: the map holds no traces")
+        raise InputError(f"{args.file}: the map holds no traces" + (
+            f" of any length ({dropped['count']} zero-length traces dropped)"
+            if dropped["count"] else ""))
+    check_traces(trace_map.n_traces, args.file, getattr(args, "max_traces", None))
     window, area = area_window(trace_map, args.area, args.file, getattr(args, "area_option", "--area"))
     t1 = time.perf_counter()
     summary = trace_map_statistics(trace_map, window=window, n_sets=args.n_sets,
@@ -93,9 +104,24 @@ def compute(args):
     t3 = time.perf_counter()
     summary["Box-counting Dimension"] = dimension_entry(dimension)
     summary["input"] = {"path": str(args.file), "n_traces": int(trace_map.n_traces),
-                        "frame": trace_map.frame, "crs": trace_map.crs, "area": area}
+                        "frame": trace_map.frame, "crs": trace_map.crs, "area": area,
+                        "dropped_zero_length": {k: v for k, v in dropped.items() if k != "text"}}
     timings = {"read_s": t1 - t0, "statistics_s": t2 - t1, "box_count_s": t3 - t2}
     return summary, trace_map, timings
+
+
+def _set_per_trace(trace_map, set_ids):
+    """The set of every trace of the map from the sets of the traces that reach its window (the
+    statistics leave the others out): -1 (grey in the plot) for a trace outside the window."""
+    import numpy as np
+    import shapely
+
+    if len(set_ids) == trace_map.n_traces or trace_map.window_xy_m is None:
+        return set_ids
+    reaches = shapely.intersects(trace_map.to_shapely(), trace_map.window_polygon())
+    every = np.full(trace_map.n_traces, -1, dtype=np.int64)
+    every[reaches] = set_ids
+    return every
 
 
 def produce(args, out_dir=None):
@@ -114,6 +140,7 @@ def produce(args, out_dir=None):
         from .manifest import build_manifest
 
         traces = summary["traces"]
+        set_ids = _set_per_trace(trace_map, np.array(traces["set"], dtype=np.int64))
         set_means = [s["Mean Angle"]["value"] for s in summary["sets"]]
         # all files renamed into place only when every one is written
         with output_set(out_dir) as out, ExitStack() as stack:
@@ -123,7 +150,7 @@ def produce(args, out_dir=None):
                          np.array(traces["length"], dtype=float), paths["rose.png"],
                          set_means_deg=set_means, convention=summary["angle_convention"],
                          title=f"{plot_text(Path(args.file).name)}: trace orientations")
-            plot_trace_map(trace_map, paths["traces.png"], set_ids=np.array(traces["set"]),
+            plot_trace_map(trace_map, paths["traces.png"], set_ids=set_ids,
                            title=f"{plot_text(Path(args.file).name)}: traces by set")
             atomic_write_json(paths["summary.json"], summary)
             manifest = build_manifest(
