@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .selectors import domain_edges, select_blocks
-from .zones import material_table, mesh_polygon, stiffness_rows, triangle_areas
+from .zones import lumped_masses, material_table, mesh_polygon, stiffness_rows, triangle_areas
 
 __all__ = ["ZonedModel", "zone_model"]
 
@@ -39,9 +39,6 @@ class ZonedModel:
     nodes : (N, 2) float64
         Node positions (m); ``tri`` (Z, 3) the zones (counter-clockwise), ``zone_block`` (Z,)
         their pieces, ``zmat`` (Z,) their row of ``mtab`` (the zone-material table).
-    mixed : bool
-        Whether any zone has the nodal mixed discretisation (docs/dem.md §16.2; per material in
-        ``mtab``).
     rows : (N,) float64
         Gershgorin row sums of the zones' stiffness per node (the time step, §16.6).
     """
@@ -54,8 +51,15 @@ class ZonedModel:
     zone_block: np.ndarray
     zmat: np.ndarray
     mtab: np.ndarray
-    mixed: bool
     rows: np.ndarray
+
+    @property
+    def mixed(self) -> bool:
+        """Whether any zone has the nodal mixed discretisation (per material in ``mtab``,
+        docs/dem.md §16.2)."""
+        from . import _kernels as K
+
+        return bool(self.mtab[:, K.ZM_MIXED].any())
 
     def group(self) -> np.ndarray:
         """Contact-search group of each piece: its original block for zones, -1 for rigid
@@ -136,10 +140,9 @@ def zone_model(model, settings) -> ZonedModel | None:
     from . import _kernels as K
 
     mtab = material_table(models, [spec.mixed for spec in settings.deformable])
-    use_mixed = bool(mtab[:, K.ZM_MIXED].any())
     rows = stiffness_rows(nodes, tri, mtab[zmat, K.ZM_K], mtab[zmat, K.ZM_G])
     return ZonedModel(model=derived, parent=parent, zone_of=zone_of, nodes=nodes, tri=tri,
-                      zone_block=zone_block, zmat=zmat, mtab=mtab, mixed=use_mixed, rows=rows)
+                      zone_block=zone_block, zmat=zmat, mtab=mtab, rows=rows)
 
 
 def _piece_contacts(model, polys, parent, zone_of, tol):
@@ -226,9 +229,7 @@ class DeformableBlocks:
             nodes, tri, zmat, mtab = zoned.nodes, zoned.tri, zoned.zmat, zoned.mtab
             zone_block, mixed, rows = zoned.zone_block, zoned.mixed, zoned.rows
             nn, nz = len(nodes), len(tri)
-            area = triangle_areas(nodes, tri)
-            mass = np.zeros(nn)
-            np.add.at(mass, tri.ravel(), np.repeat(self.settings.material.density_kg_m3 * area / 3, 3))
+            mass = lumped_masses(nodes, tri, self.settings.material.density_kg_m3)
         self.node_x0 = np.ascontiguousarray(nodes, float).copy()
         self.node_rows = rows
         self.zone_state = {

@@ -200,6 +200,13 @@ def mesh_polygon(shell: np.ndarray, zone_size: float, holes: tuple = ()) -> tupl
     return nodes, tri
 
 
+def lumped_masses(nodes: np.ndarray, tri: np.ndarray, density: float) -> np.ndarray:
+    """Node masses (per metre of thickness): each zone gives ρA/3 to each of its nodes."""
+    mass = np.zeros(len(nodes))
+    np.add.at(mass, np.asarray(tri).ravel(), np.repeat(density * triangle_areas(nodes, tri) / 3, 3))
+    return mass
+
+
 def triangle_areas(nodes: np.ndarray, tri: np.ndarray) -> np.ndarray:
     """Signed areas of the triangles (positive counter-clockwise)."""
     return 0.5 * _twice_areas(nodes, tri)
@@ -274,8 +281,7 @@ class Zones:
         self.mtab = material_table(models, [mixed] * len(models))
         self.mixed = bool(self.mtab[:, K.ZM_MIXED].any())
         self.density = float(density)
-        self.mass = np.zeros(nn)
-        np.add.at(self.mass, self.tri.ravel(), np.repeat(density * self.area0 / 3, 3))
+        self.mass = lumped_masses(self.x0, self.tri, density)
         self.vel = np.zeros((nn, 2))
         self.sig = np.zeros((nz, K.N_ZS_COLUMNS))
         self.strain = np.zeros((nz, 3))
@@ -308,17 +314,6 @@ class Zones:
         K = self._K
         self.sig[:, K.ZS_XX], self.sig[:, K.ZS_YY] = -sxx, -syy
         self.sig[:, K.ZS_ZZ], self.sig[:, K.ZS_XY] = -szz, -sxy
-
-    def add_pressure(self, edges: np.ndarray, pressure: float) -> None:
-        """Constant normal pressure (compression positive, Pa) on boundary ``edges`` (E, 2) of node
-        indices, lumped half to each end; the edge's outward side is to the right of (a → b) for
-        a counter-clockwise outer boundary, so the force −p n l pushes into the body."""
-        edges = np.asarray(edges, np.int64)
-        d = self.x0[edges[:, 1]] - self.x0[edges[:, 0]]
-        outward = np.column_stack([d[:, 1], -d[:, 0]])  # (dy, −dx): length-weighted normal
-        f = -pressure * outward / 2
-        np.add.at(self.fext, edges[:, 0], f)
-        np.add.at(self.fext, edges[:, 1], f)
 
     # --- stepping ---------------------------------------------------------------------------
 
