@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import warnings
 
 from .errors import EXIT_BAD_INPUT, EXIT_FAILURE, RunError
 
@@ -47,6 +48,14 @@ def _error(command: str, kind: str, exc: BaseException) -> None:
     print(f"rockmass {command}: {kind}: {exc}", file=sys.stderr)
 
 
+def _plain_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A library warning (e.g. the solver's zones too coarse for a stage's waves) as one
+    ``rockmass: warning: ...`` line, without Python's file and source line."""
+    from .inputs import warn
+
+    warn(str(message))
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; return the exit code (the console script passes it to ``sys.exit``)."""
     parser = build_parser()
@@ -58,7 +67,10 @@ def main(argv: list[str] | None = None) -> int:
                                       "folder (created if missing) or move the file away")
         return EXIT_BAD_INPUT
     try:
-        return int(args.handler(args) or 0)
+        with warnings.catch_warnings():  # restores Python's own form when the command ends
+            if not args.debug:
+                warnings.showwarning = _plain_warning
+            return int(args.handler(args) or 0)
     except RunError as exc:  # a failure while running, e.g. outputs that could not be written
         if args.debug:
             raise

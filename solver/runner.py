@@ -38,6 +38,7 @@ from .result import (FAILED_STATUSES, STATUS_FAILED_BLOCKS, STATUS_OK, EnergyLed
                      StageResult)
 from .selectors import block_at_point
 from .settings import Settings, Stage
+from .wavelength import warn_coarse_zones, wave_checks
 
 __all__ = ["run"]
 
@@ -565,6 +566,8 @@ def run(model, settings: Settings, *,
     zoned = zone_model(model, settings)
     if zoned is not None:  # docs/dem.md §16.8: the deformable blocks' zones are pieces
         model = zoned.model
+    waves = wave_checks(zoned, settings)  # docs/dem.md §16.9: zones per wavelength
+    warn_coarse_zones(waves)
     eng = Engine(model, settings, zoned)
     eng.detect()
     if settings.insitu is not None:
@@ -601,6 +604,8 @@ def run(model, settings: Settings, *,
         info.update(monitor_blocks={name: int(b) for name, b in rec.monitors},
                     zones=int(len(zoned.tri)), nodes=int(len(zoned.nodes)),
                     deformable_blocks=int(len(np.unique(zoned.parent[zoned.zone_of >= 0]))))
+    if waves:
+        info["wave_checks"] = waves
     return Result(stages=stages, displacement_m=eng.pos - eng.pos0, rotation_rad=eng.rot.copy(),
                   velocity_m_s=eng.vel.copy(), active=eng.active.copy(), history=rec.history(),
                   contacts=eng.contact_table(),

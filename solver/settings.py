@@ -539,7 +539,8 @@ class Deformable:
     constitutive ``model`` (elastic, Mohr–Coulomb or Hoek–Brown; docs/dem.md §16), the joints
     acting on their boundary. The other blocks stay rigid, and so do chosen blocks smaller than
     ``min_block_area_m2``. For a dynamic stage the zone size should be at most a tenth of the
-    shortest wavelength carried."""
+    shortest wavelength carried: a run warns when it is not and keeps the check in
+    ``Result.info["wave_checks"]`` (:mod:`rockmass.solver.wavelength`, docs/dem.md §16.9)."""
 
     where: Annotated[Where, Field(description=f"the blocks: {_WHERE}")]
     model: Annotated[ZoneModel, Field(description="constitutive model of the zones")]

@@ -103,3 +103,30 @@ def test_solve_writes_the_zones_and_their_stress(tmp_path):
     section = section[:section.index("</section>")]
     assert "data:image/png;base64," in section
     assert "Zones that yielded" in section and f"{zones['zones']} zones" in section
+
+
+def test_solve_warns_when_the_zones_are_too_coarse_for_the_waves(tmp_path, capsys):
+    """A 2 kHz shake of the zoned block (S wave λ = √(G/ρ)/f = 0.33 m, zones of 0.1 m: about three
+    per wavelength): one plain warning line naming the zone size that would do, and the check in
+    result.json (docs/dem.md §16.9)."""
+    shake = CONFIG + """[[solve.velocity_inputs]]
+where = "bottom"
+component = "x"
+history = { type = "sine", amplitude = 0.001, frequency_hz = 2000.0, cycles = 2 }
+[[solve.stages]]
+name = "shake"
+kind = "dynamic"
+duration_s = 0.001
+frames = 0
+"""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(shake)
+    assert main(["solve", str(cfg), "--out", str(tmp_path / "out")]) == 0
+    err = capsys.readouterr().err
+    wavelength = (1.2e9 / 2700.0) ** 0.5 / 2000.0
+    assert (f"rockmass: warning: stage 'shake': the zones of deformable[0]" in err
+            and f"use zone_size_m <= {wavelength / 10:.3g} m" in err)
+    check, = json.loads((tmp_path / "out" / "result.json").read_text())["info"]["wave_checks"]
+    assert check["stage"] == "shake" and check["f_max_hz"] == 2000.0
+    assert abs(check["wavelength_m"] - wavelength) < 1e-9 * wavelength
+    assert 0.1 <= check["zone_size_m"] < 0.2 and check["zones_per_wavelength"] < 4
