@@ -1,5 +1,6 @@
 """``blocks.png``: blocks coloured by region, contacts coloured by joint set, potential cracks in
-grey, excavation outlines."""
+grey, excavation outlines; and the contact maps of a solved model (:func:`contact_segments`,
+:func:`draw_contact_values`): contacts coloured by a value such as plastic slip or opening."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import numpy as np
 
 from .model import CONTACT_KINDS, KIND_GLUED, SOURCE_CRACK, BlockModel
 
-__all__ = ["plot_blocks"]
+__all__ = ["contact_segments", "draw_contact_values", "plot_blocks"]
 
 
 def plot_blocks(model: BlockModel, path, title: str | None = None, dpi: int = 150) -> Path:
@@ -83,3 +84,97 @@ def _draw_cracks(ax, model: BlockModel) -> None:
     segs = np.stack([coords[:-1][same], coords[1:][same]], axis=1)
     ax.add_collection(LineCollection(segs, colors=(0.35, 0.35, 0.35, 1.0),
                                      linewidths=0.25 if len(segs) > 2000 else 0.4))
+
+
+def contact_segments(points_xy, normals, lengths_m, block_a, block_b) -> np.ndarray:
+    """The stretch of joint each contact slot stands for, as segments ``(n, 2, 2)``.
+
+    A slot sits at its contact point and stands for ``length_m`` of contact along the tangent
+    t = (−n_y, n_x) (solver/vtu.py). Two slots of one pair of blocks with the same normal are the
+    two ends of one edge-to-edge contact: each gets the half of the edge between its point and the
+    edge's midpoint. Any other slot gets a segment of its length centred on its point.
+
+    Parameters
+    ----------
+    points_xy : (n, 2) array_like
+        Contact points, m.
+    normals : (n, 2) array_like
+        Unit normals (only the x and y columns are read).
+    lengths_m : (n,) array_like
+        Contact length of each slot, m.
+    block_a, block_b : (n,) array_like of int
+        The two blocks of each slot.
+
+    Examples
+    --------
+    >>> contact_segments([[0, 0], [2, 0], [5, 5]], [[0, 1], [0, 1], [1, 0]], [1, 1, 2],
+    ...                  [0, 0, 1], [1, 1, 2]).tolist()
+    [[[0.0, 0.0], [1.0, 0.0]], [[2.0, 0.0], [1.0, 0.0]], [[5.0, 4.0], [5.0, 6.0]]]
+    """
+    p = np.asarray(points_xy, dtype=np.float64).reshape(-1, 2)
+    nrm = np.asarray(normals, dtype=np.float64).reshape(p.shape[0], -1)[:, :2]
+    half = 0.5 * np.asarray(lengths_m, dtype=np.float64).reshape(-1)
+    tangent = np.column_stack([-nrm[:, 1], nrm[:, 0]])
+    seg = np.stack([p - half[:, None] * tangent, p + half[:, None] * tangent], axis=1)
+    groups: dict = {}
+    keys = zip(np.asarray(block_a).tolist(), np.asarray(block_b).tolist(), map(tuple, np.round(nrm, 9).tolist()))
+    for k, key in enumerate(keys):  # slots of one contact: same blocks, same normal
+        groups.setdefault(key, []).append(k)
+    for slots in groups.values():
+        if len(slots) == 2:
+            i, j = slots
+            mid = 0.5 * (p[i] + p[j])
+            seg[i] = (p[i], mid)
+            seg[j] = (p[j], mid)
+    return seg
+
+
+def draw_contact_values(ax, segments, values, *, polygons=None, label: str = "", cmap: str = "viridis",
+                        symmetric: bool = False):
+    """Draw contact segments coloured by ``values`` on ``ax`` (block outlines in light grey below).
+
+    Parameters
+    ----------
+    ax : matplotlib Axes
+    segments : (n, 2, 2) array_like
+        From :func:`contact_segments`.
+    values : (n,) array_like
+        One value per segment (NaN drawn grey).
+    polygons : sequence of (k, 2) arrays, optional
+        Block outlines.
+    label : str
+        Colour-bar label.
+    symmetric : bool, default False
+        For a signed value such as the opening: a colour scale centred on zero from minus to plus the
+        largest |value|, logarithmic in |value| beyond 1e-3 of it and linear inside (matplotlib's
+        SymLogNorm), so that overlaps of micrometres and gaps of millimetres both show.
+
+    Returns
+    -------
+    matplotlib.collections.LineCollection
+        The coloured contacts (its array holds ``values``).
+    """
+    from matplotlib.collections import LineCollection, PolyCollection
+
+    if polygons is not None:
+        ax.add_collection(PolyCollection(list(polygons), facecolors="none", edgecolors="0.85", linewidths=0.3))
+    v = np.asarray(values, dtype=np.float64).reshape(-1)
+    finite = v[np.isfinite(v)]
+    from matplotlib import colormaps
+    from matplotlib.colors import Normalize, SymLogNorm
+
+    if symmetric:
+        top = float(np.abs(finite).max()) if finite.size and np.abs(finite).max() > 0 else 1.0
+        norm = SymLogNorm(linthresh=1e-3 * top, vmin=-top, vmax=top)
+    else:
+        low, high = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
+        norm = Normalize(low, high) if high > low else Normalize(low - 0.5, high + 0.5)
+    coll = LineCollection(np.asarray(segments, dtype=np.float64).reshape(-1, 2, 2), array=v, norm=norm,
+                          cmap=colormaps[cmap].with_extremes(bad="0.6"), linewidths=1.6)
+    ax.add_collection(coll)
+    ax.autoscale_view()
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.figure.colorbar(coll, ax=ax, shrink=0.8, label=label)
+    return coll

@@ -7,8 +7,12 @@ Public names (each module's docstring gives the formulas and sources)
     window polygon (:mod:`rockmass.dfn.tracemap`).
 :func:`read_traces`, :func:`write_traces`
     GeoJSON or CSV by suffix (:mod:`rockmass.dfn.traceio`).
-:func:`read_geojson`, :func:`write_geojson`, :func:`read_csv`, :func:`write_csv`
-    The explicit readers and writers (:mod:`rockmass.dfn.geojson_io`, :mod:`rockmass.dfn.csv_io`).
+:func:`read_geojson`, :func:`write_geojson`, :func:`read_csv`, :func:`write_csv`, :func:`read_gis`, :func:`write_gis`
+    The explicit readers and writers (:mod:`rockmass.dfn.geojson_io`, :mod:`rockmass.dfn.csv_io`;
+    GeoPackage / Shapefile layers through the optional pyogrio, :mod:`rockmass.dfn.gis_io`).
+:func:`branches_and_nodes`, :func:`validate_traces`
+    fractopo's branch and node layers (:mod:`rockmass.dfn.branches`) and its trace validation
+    labels (:mod:`rockmass.dfn.trace_validation`).
 Frames (:mod:`rockmass.dfn.frames`)
     The CRS of a map (:func:`crs_kind`; geographic ones refused by :func:`check_crs`), the local CRS
     that names a face frame in files (:func:`local_crs_wkt`), and the convention of trace angles in
@@ -21,7 +25,8 @@ Trace-map statistics
     2D joint sets (:mod:`~rockmass.dfn.sets2d`), P20 / P21 / scanline spacing
     (:mod:`~rockmass.dfn.intensity`), Mauldon circular windows (:mod:`~rockmass.dfn.mauldon`),
     I-Y-X-E topology (:mod:`~rockmass.dfn.topology`) and the fractopo-named summary
-    (:func:`trace_map_statistics`, :mod:`~rockmass.dfn.trace_stats`).
+    (:func:`trace_map_statistics`, :mod:`~rockmass.dfn.trace_stats`), with P21 per grid cell
+    (:func:`p21_map`).
 3D orientation and DFN primitives
     dip / dip direction, strike, trend / plunge conversions (:mod:`~rockmass.dfn.orientation`),
     Fisher sampling and fitting (:mod:`~rockmass.dfn.fisher`), stereology C13 / C23 and the P32
@@ -33,7 +38,9 @@ DFN generation and virtual sampling
     (:mod:`~rockmass.dfn.network_io`).
 Scanline surveys
     reading (:mod:`~rockmass.dfn.scanline`), 3D joint sets from poles (:mod:`~rockmass.dfn.sets3d`),
-    P10, Terzaghi, spacing fits and RQD (:mod:`~rockmass.dfn.scanline_stats`). Figures:
+    P10, Terzaghi, spacing fits and RQD (:mod:`~rockmass.dfn.scanline_stats`), the contoured pole
+    density of a stereonet (:func:`pole_density`, Kamb's kernel concentration :func:`kamb_kappa`;
+    :mod:`~rockmass.dfn.stereonet`). Figures:
     :mod:`rockmass.dfn.plots` (rose, trace map) and :mod:`rockmass.dfn.stereonet`.
 Fitting from field data and the closed loop
     disk radius laws from censored trace lengths (:mod:`~rockmass.dfn.size_fit`), orientation, size
@@ -56,6 +63,9 @@ if TYPE_CHECKING:
     from .csv_io import read_csv, write_csv
     from .geojson_io import read_geojson, write_geojson
     from .traceio import read_traces, write_traces
+    from .gis_io import read_gis, write_gis
+    from .branches import BranchesAndNodes, branches_and_nodes
+    from .trace_validation import TraceValidation, validate_traces
     from .tracemap import TraceMap
     from .frames import ANGLE_CONVENTIONS, DEGREE_EXTENT, MAP_FRAME, angle_convention, check_crs, crs_kind
     from .frames import default_frame, is_rockmass_local_crs, local_crs_wkt, to_convention
@@ -65,7 +75,8 @@ if TYPE_CHECKING:
     from .mauldon import mauldon_from_counts, mauldon_circle, MauldonEstimate, circle_window, CircleWindow
     from .mauldon import InscribedCircles, MauldonCircles, inscribed_circles, mauldon_circles
     from .topology import trace_topology, TraceTopology
-    from .trace_stats import trace_map_statistics
+    from .trace_stats import P21_MAP_CELLS, p21_map, trace_map_statistics
+    from .stereonet import equal_area_vectors, equal_area_xy, kamb_kappa, plot_pole_density, plot_stereonet, pole_density, small_circle
     from .orientation import angle_between, dip_text, dip_from_normal, dip_from_pole_trend_plunge, dip_from_strike, normal_from_dip, pole_from_dip, pole_trend_plunge, strike_from_dip, to_lower_hemisphere, trend_plunge_from_vector, vector_from_trend_plunge
     from .fisher import FisherFit, confidence_cone, fisher_angle_cdf, fisher_angle_pdf, fisher_density, fit_fisher, orientation_tensor, sample_fisher, variability_cone
     from .stereology import C13_ISOTROPIC, C23_ISOTROPIC, P32Solution, c13, c13_from_angle, c23, c23_from_angle, p10_from_p32, p21_from_p32, p32_from_p10, p32_from_p21, solve_p32, terzaghi_weights
@@ -92,6 +103,12 @@ _SOURCES = {
     "write_geojson": "geojson_io",
     "read_csv": "csv_io",
     "write_csv": "csv_io",
+    "read_gis": "gis_io",
+    "write_gis": "gis_io",
+    "BranchesAndNodes": "branches",
+    "branches_and_nodes": "branches",
+    "TraceValidation": "trace_validation",
+    "validate_traces": "trace_validation",
     "trace_angles_deg": "sets2d",
     "fit_sets_2d": "sets2d",
     "fit_axial_mixture": "sets2d",
@@ -115,6 +132,15 @@ _SOURCES = {
     "trace_topology": "topology",
     "TraceTopology": "topology",
     "trace_map_statistics": "trace_stats",
+    "P21_MAP_CELLS": "trace_stats",
+    "p21_map": "trace_stats",
+    "equal_area_vectors": "stereonet",
+    "equal_area_xy": "stereonet",
+    "kamb_kappa": "stereonet",
+    "plot_pole_density": "stereonet",
+    "plot_stereonet": "stereonet",
+    "pole_density": "stereonet",
+    "small_circle": "stereonet",
     "angle_between": "orientation",
     "dip_text": "orientation",
     "ANGLE_CONVENTIONS": "frames",

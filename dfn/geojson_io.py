@@ -19,7 +19,9 @@ Reading
   undigitised feature usually means the wrong file or an unfinished one, and dropping features
   silently would change the intensities computed downstream.
 - Positions keep x and y; a z (or m) value is dropped. ``NaN`` and ``Infinity`` (which Python's json
-  module accepts) are reported with the feature, as is a trace with fewer than 2 vertices.
+  module accepts), a coordinate beyond ±10¹² m (:data:`rockmass.dfn.tracemap.MAX_COORDINATE_M`:
+  a typo or a unit slip) and a ``true`` / ``false`` where a number belongs are reported with the
+  feature, as is a trace with fewer than 2 vertices.
 - Properties become attribute columns (union of keys, in order of first appearance). A column whose
   values are all booleans is bool; all integers, int64; numbers, float64. A missing or null value is
   NaN in a numeric column (so an integer or bool column with gaps becomes float64) and '' in a string
@@ -64,7 +66,8 @@ import shapely
 
 from .atomic import atomic_open
 from .frames import angle_convention, check_crs, default_frame, is_rockmass_local_crs, local_crs_wkt
-from .tracemap import _MAX_LISTED, TraceMap, _as_window, _describe_traces, _require_trace_map, _resolve_frame
+from .tracemap import (_MAX_LISTED, MAX_COORDINATE_M, TraceMap, _as_window, _beyond_range, _describe_traces,
+                       _require_trace_map, _resolve_frame)
 
 __all__ = ["read_geojson", "write_geojson"]
 
@@ -136,27 +139,13 @@ def read_geojson(path: str | os.PathLike[str], *, frame: str | None = None) -> T
             records.append(props)
         elif kind == "MultiLineString":
             parts = _multi_parts(geometry.get("coordinates"), where)
-            merged = shapely.line_merge(shapely.MultiLineString(parts))
-            if merged.geom_type == "LineString":
-                polylines.append(shapely.get_coordinates(merged))
-                records.append(props)
-                continue
-            if "part" in props:
-                raise ValueError(
-                    f"{where}: properties already have a 'part' field, which the reader needs to number "
-                    "the parts of a MultiLineString whose parts do not join; rename that property"
-                )
-            split_any = True
-            polylines.extend(parts)
-            records.extend({**props, "part": k} for k in range(len(parts)))
+            split_any |= _add_multi_line(parts, props, polylines, records, where)
         else:
             raise ValueError(
                 f"{where}: geometry type {kind!r} is not a trace; expected LineString or MultiLineString "
                 "(or a Polygon for the sampling window)"
             )
-    if split_any:
-        for record in records:
-            record.setdefault("part", -1)
+    _number_parts(records, split_any)
     every_xy = polylines + ([] if window is None else [window])
     check_crs(crs, np.concatenate(every_xy) if every_xy else np.zeros((0, 2)), name,
               rfc7946_default="crs" not in doc and file_frame is None)
@@ -263,7 +252,8 @@ def _positions(coords: Any, where: str, field: str) -> np.ndarray:
         array = np.array(coords)
     except (ValueError, TypeError):  # ragged: mixed 2D / 3D positions, or a malformed one
         array = None
-    if array is not None and array.ndim == 2 and array.shape[1] >= 2 and array.dtype.kind in "iuf":
+    if (array is not None and array.ndim == 2 and array.shape[1] >= 2 and array.dtype.kind in "iuf"
+            and not any(type(c) is bool for position in coords for c in position)):  # numpy: True -> 1
         xy = array[:, :2].astype(np.float64)
     else:
         for k, position in enumerate(coords):
@@ -276,11 +266,24 @@ def _positions(coords: Any, where: str, field: str) -> np.ndarray:
                     f"{where}: {field}[{k}]: expected a position [x, y] or [x, y, z] of numbers, "
                     f"got {json.dumps(position)[:60]}"
                 )
-        xy = np.array([position[:2] for position in coords], dtype=np.float64)
+        xy = np.array([[_as_float(c) for c in position[:2]] for position in coords], dtype=np.float64)
     bad = np.flatnonzero(~np.isfinite(xy).all(axis=1))
     if bad.size:
         raise ValueError(f"{where}: {field} contain NaN/Infinity at positions {bad[:_MAX_LISTED].tolist()}")
+    far = np.flatnonzero(_beyond_range(xy))
+    if far.size:
+        raise ValueError(f"{where}: {field} beyond ±{MAX_COORDINATE_M:.0e} m at positions "
+                         f"{far[:_MAX_LISTED].tolist()}; coordinates are metres in the face or map frame")
     return xy
+
+
+def _as_float(number: int | float) -> float:
+    """A JSON number as a float; an integer too large for one (JSON has no limit) as the largest
+    float of its sign, which the range check then reports."""
+    try:
+        return float(number)
+    except OverflowError:
+        return float(np.finfo(np.float64).max) * (1 if number > 0 else -1)
 
 
 def _trace_line(coords: Any, where: str, field: str) -> np.ndarray:
@@ -294,6 +297,38 @@ def _multi_parts(coords: Any, where: str) -> list[np.ndarray]:
     if not isinstance(coords, list) or not coords:
         raise ValueError(f"{where}: coordinates: a MultiLineString needs a non-empty list of parts")
     return [_trace_line(part, where, f"coordinates[{k}]") for k, part in enumerate(coords)]
+
+
+def _add_multi_line(
+    parts: list[np.ndarray], props: dict[str, Any], polylines: list[np.ndarray], records: list[dict[str, Any]],
+    where: str,
+) -> bool:
+    """Append a MultiLineString's trace(s) by the rule of the module docstring; True if it was split.
+
+    Its parts become one trace when :func:`shapely.line_merge` joins them into one line, else one
+    trace each, numbered by a ``part`` property (GeoPackage and Shapefile features follow the same
+    rule, :mod:`rockmass.dfn.gis_io`).
+    """
+    merged = shapely.line_merge(shapely.MultiLineString(parts))
+    if merged.geom_type == "LineString":
+        polylines.append(shapely.get_coordinates(merged))
+        records.append(props)
+        return False
+    if "part" in props:
+        raise ValueError(
+            f"{where}: properties already have a 'part' field, which the reader needs to number "
+            "the parts of a MultiLineString whose parts do not join; rename that property"
+        )
+    polylines.extend(parts)
+    records.extend({**props, "part": k} for k in range(len(parts)))
+    return True
+
+
+def _number_parts(records: list[dict[str, Any]], split_any: bool) -> None:
+    """When any feature was split, traces that came whole get ``part = -1``."""
+    if split_any:
+        for record in records:
+            record.setdefault("part", -1)
 
 
 def _window_ring(geometry: dict[str, Any], where: str) -> np.ndarray:

@@ -236,7 +236,8 @@ def _group_statistics(scanline: Scanline, mask: np.ndarray, poles: np.ndarray, c
     weights = terzaghi_weights(poles[mask], scanline.direction, min_angle_deg=cap_deg) if n else np.zeros(0)
     p10 = n / length
     capped = int(np.count_nonzero(np.isclose(weights, 1.0 / math.sin(math.radians(cap_deg)), rtol=1e-12))) if n else 0
-    spacing = fit_spacings(np.diff(distance))
+    spacings = np.diff(distance)
+    spacing = fit_spacings(spacings)
     trace = None
     if scanline.trace_length_m is not None:
         measured = scanline.trace_length_m[mask]
@@ -249,6 +250,7 @@ def _group_statistics(scanline: Scanline, mask: np.ndarray, poles: np.ndarray, c
         "p10_terzaghi_per_m": float(weights.sum() / length),
         "n_terzaghi_capped": capped,
         "spacing_m": spacing.as_dict(),
+        "spacings_m": spacings.tolist(),
         "rqd_priest_hudson_percent": float(rqd_priest_hudson(p10, threshold_m)),
         "rqd_direct_percent": rqd_direct(distance, length, threshold_m),
         "trace_length_m": trace,
@@ -279,11 +281,15 @@ def scanline_statistics(scanline: Scanline, membership: ArrayLike | None = None,
     Returns
     -------
     dict
-        ``{"scanline": {...}, "all": {...}, "sets": [{...}, ...], "warnings": [...]}``, JSON-ready
+        ``{"scanline": {...}, "all": {...}, "sets": [{...}, ...], "intersections": {...},
+        "warnings": [...]}``, JSON-ready
         (undefined values are None). Each group has ``n_intersections``, ``p10_per_m``,
-        ``p10_terzaghi_per_m``, ``n_terzaghi_capped``, ``spacing_m`` (see :class:`SpacingFit`),
-        ``rqd_priest_hudson_percent``, ``rqd_direct_percent`` and ``trace_length_m``. Spacings of a
-        set are measured between that set's hits only.
+        ``p10_terzaghi_per_m``, ``n_terzaghi_capped``, ``spacing_m`` (the fit, see
+        :class:`SpacingFit`), ``spacings_m`` (the spacings it was fitted to, in order along the
+        line), ``rqd_priest_hudson_percent``, ``rqd_direct_percent`` and ``trace_length_m``.
+        Spacings of a set are measured between that set's hits only. ``"intersections"`` holds the
+        survey's hits (``distance_m``, ``dip_deg``, ``dip_direction_deg``, one entry per hit), so a
+        report draws the poles and their density from the summary alone.
 
     Notes
     -----
@@ -329,6 +335,8 @@ def scanline_statistics(scanline: Scanline, membership: ArrayLike | None = None,
                      "terzaghi_cap_deg": cap, "rqd_threshold_m": threshold},
         "all": _group_statistics(scanline, np.ones(n, dtype=bool), poles, cap, threshold),
         "sets": [],
+        "intersections": {"distance_m": scanline.distance_m.tolist(), "dip_deg": scanline.dip_deg.tolist(),
+                          "dip_direction_deg": scanline.dip_direction_deg.tolist()},
         "warnings": [],
     }
     for j in range(max(k, len(fits))):

@@ -244,24 +244,34 @@ def _abutments(
     return abutted, contact
 
 
-def _crossings(
-    tree: shapely.STRtree, lines: np.ndarray, ends: np.ndarray, tau: float
-) -> tuple[np.ndarray, np.ndarray, int]:
-    """Crossing points away from both traces' ends, their trace pairs, and the count of overlapping pairs."""
+def _pair_intersections(tree: shapely.STRtree, lines: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Where traces meet: every point where two traces ``a < b`` intersect, and the pairs that share a
+    linear stretch.
+
+    Returns ``(xy, a, b, overlapping)``: (k, 2) float64 points with the (k,) int64 traces of each,
+    and (m, 2) int64 pairs (lower index first) that overlap along a stretch (not points: no node).
+    """
     a, b = tree.query(lines, predicate="intersects")
     keep = a < b
     a, b = a[keep], b[keep]
     meet = shapely.intersection(lines[a], lines[b])
     parts, pair = shapely.get_parts(meet, return_index=True)
-    kind = shapely.get_type_id(parts)
-    linear = kind != shapely.GeometryType.POINT
-    n_overlaps = int(np.unique(pair[linear]).size)
-    pair = pair[~linear]
+    linear = shapely.get_type_id(parts) != shapely.GeometryType.POINT
+    overlapping = np.unique(pair[linear])
     xy = shapely.get_coordinates(parts[~linear]).reshape(-1, 2)
-    a, b = a[pair], b[pair]
+    pair = pair[~linear]
+    return (xy, a[pair].astype(np.int64), b[pair].astype(np.int64),
+            np.stack([a[overlapping], b[overlapping]], axis=1).astype(np.int64).reshape(-1, 2))
+
+
+def _crossings(
+    tree: shapely.STRtree, lines: np.ndarray, ends: np.ndarray, tau: float
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """Crossing points away from both traces' ends, their trace pairs, and the count of overlapping pairs."""
+    xy, a, b, overlapping = _pair_intersections(tree, lines)
     near_end = np.zeros(xy.shape[0], dtype=bool)
     for trace in (a, b):
         for k in (0, 1):
             near_end |= np.hypot(*(ends[trace, k] - xy).T) <= tau
     traces = np.stack([a, b], axis=1).astype(np.int64).reshape(-1, 2)
-    return xy[~near_end], traces[~near_end], n_overlaps
+    return xy[~near_end], traces[~near_end], int(overlapping.shape[0])

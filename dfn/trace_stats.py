@@ -40,28 +40,36 @@ from .mauldon import (
 )
 from .sets2d import RESOLUTION_DEG, JointSets2D, fit_sets_2d, trace_angles_deg
 from .topology import trace_topology
+from .trace_validation import SHARP_TURN_DEG, validate_traces
 from .trace_summary import (
     Diagnostics,
     IntensityParameters,
     MauldonCircleSet,
     MauldonParameters,
     NodeCounts,
+    P21Map,
     Parameter,
     SetSelection,
     SetSummary,
     StatisticsSettings,
     TraceMapStatistics,
     TraceTable,
+    ValidationSummary,
     WindowSummary,
     _number,
 )
 from .tracemap import TraceMap, _require_trace_map
 
-__all__ = ["trace_map_statistics"]
+__all__ = ["P21_MAP_CELLS", "p21_map", "trace_map_statistics"]
 
 #: Default snap tolerance as a fraction of the window diameter: 1e-4 is 1 mm on a 10 m face and about
 #: 0.7 px on a 24 MP photograph, close to fractopo's 1 mm default on outcrop maps of metres.
 SNAP_FRACTION = 1e-4
+#: Cells of the P21 map along the longer side of the window's bounding box (square cells): 10 gives
+#: 100 cells or fewer, enough to see a trend across a face and still a few traces per cell.
+P21_MAP_CELLS = 10
+#: Segments cut at the grid lines per pass of the P21 map (bounds its memory, about 25 MB).
+_P21_MAP_CHUNK = 100_000
 
 
 def trace_map_statistics(
@@ -78,6 +86,7 @@ def trace_map_statistics(
     mauldon_in_window: bool = True,
     seed: int = 0,
     length_unit: str = "m",
+    sharp_turn_deg: float = SHARP_TURN_DEG,
 ) -> TraceMapStatistics:
     """Summarise a trace map: intensity, sets, Mauldon estimators, topology and trace lengths.
 
@@ -114,6 +123,8 @@ def trace_map_statistics(
         lists them. False: leave them undefined with a reason, as fractopo does.
     length_unit : str, default "m"
         Unit label of the map's coordinates (``"px"`` for a photo without scale); only the labels change.
+    sharp_turn_deg : float, default 90.0
+        Turn limit of fractopo's ``SHARP TURNS`` check (:func:`~rockmass.dfn.validate_traces`).
 
     Returns
     -------
@@ -132,12 +143,13 @@ def trace_map_statistics(
           length raw and Mauldon, mean spacing and P10 along scanlines normal to the set; ``sets``);
         - ``"set_selection"``: ``{"method": "bic" | "given", "bic": {k: value or None}}``;
         - ``"traces"``: per trace ``id``, clipped ``length``, ``censored``, ``set``, ``angle_deg``,
-          ``connections`` and ``end_class`` (the trace-length distribution with censoring marked;
-          ``traces`` holds them as arrays);
+          ``connections``, ``end_class`` and ``validation_errors`` (fractopo's labels; the
+          trace-length distribution with censoring marked; ``traces`` holds them as arrays);
         - ``"window"``: source, area, whether it is a circle (centre, radius), and the circles the
           Mauldon values were counted in when it is not (``"mauldon_circles"``: count, radius,
           centres; None when the window is a circle or ``mauldon_in_window`` is False);
-        - ``"settings"`` and ``"diagnostics"``.
+        - ``"settings"``, ``"diagnostics"`` and ``"validation"``: how many traces fractopo's
+          validation would flag, by label (:mod:`~rockmass.dfn.trace_validation`).
 
     Raises
     ------
@@ -206,6 +218,7 @@ def trace_map_statistics(
     circles = inscribed_circles(resolved) if (mauldon_in_window and not circle.is_circle) else None
 
     topology = trace_topology(traces, snap_tolerance_m=tolerance, window=resolved)
+    validation = validate_traces(traces, snap_tolerance_m=tolerance, sharp_turn_deg=sharp_turn_deg)
     overall = trace_intensity(traces, window=resolved, p20_rule=p20_rule, edge_tolerance_m=tolerance)
     lengths = clipped_lengths_m(traces, resolved)
     angles = trace_angles_deg(traces, method=angle_method)
@@ -249,6 +262,7 @@ def trace_map_statistics(
             angle_deg=to_convention(angles, convention),
             connections=topology.connections,
             end_class=topology.end_class,
+            validation_errors=tuple(validation.errors()),
         ),
         window=WindowSummary(
             source=resolved.source,
@@ -281,7 +295,100 @@ def trace_map_statistics(
             end_contacts=int(topology.end_contact.sum()),
             overlapping_pairs=topology.n_overlapping_pairs,
         ),
+        p21_map=p21_map(traces, resolved, unit=u.length),
+        validation=ValidationSummary(
+            n_flagged=validation.n_flagged,
+            counts=validation.counts(),
+            sharp_turn_deg=validation.sharp_turn_deg,
+            snap_tolerance=Parameter.of(validation.snap_tolerance_m, u.length),
+        ),
     )
+
+
+def p21_map(trace_map: TraceMap, window: Any, *, cells: int = P21_MAP_CELLS, unit: str = "m") -> P21Map:
+    """P21 on a grid of square cells over the window: trace length per cell area.
+
+    Parameters
+    ----------
+    trace_map : TraceMap
+        The traces (their parts outside the window are left out).
+    window : array_like, shapely.Polygon or SamplingWindow
+        The sampling window (:func:`~rockmass.dfn.intensity.sampling_window`).
+    cells : int, default :data:`P21_MAP_CELLS`
+        Cells along the longer side of the window's bounding box, >= 1; the cells are square, so the
+        shorter side gets ``ceil(short / s)`` of them.
+    unit : str, default "m"
+        The map's length unit (labels only).
+
+    Returns
+    -------
+    P21Map
+        ``length`` and ``area`` per cell (row 0 at the bottom) and ``p21 = length / area`` (NaN for
+        a cell whose area inside the window is below 1e-9 of a whole cell).
+
+    Notes
+    -----
+    Each straight segment of a clipped trace is cut at every grid line it crosses, and each piece
+    goes to the cell holding its midpoint (half-open cells), so ``length.sum()`` is the total length
+    inside the window up to rounding, even for a trace lying along a grid line, and
+    ``length.sum() / area.sum()`` is the map's P21 (docs/fractures.md §5, eq. (5.1); Dershowitz &
+    Herda 1992). A cell cut by the
+    window edge has a small area and a noisy P21.
+
+    Examples
+    --------
+    >>> tm = TraceMap.from_segments([[0, 5, 10, 5]], window=[(0, 0), (10, 0), (10, 10), (0, 10)])
+    >>> grid = p21_map(tm, tm.window_xy_m, cells=2)
+    >>> grid.length.tolist(), grid.p21.tolist()
+    ([[0.0, 0.0], [5.0, 5.0]], [[0.0, 0.0], [0.2, 0.2]])
+    """
+    if isinstance(cells, (bool, np.bool_)) or not isinstance(cells, (int, np.integer)) or cells < 1:
+        raise ValueError(f"cells must be an integer >= 1 (cells along the window's longer side), got {cells!r}")
+    polygon = sampling_window(trace_map, window).polygon
+    x0, y0, x1, y1 = polygon.bounds
+    side = max(x1 - x0, y1 - y0) / int(cells)
+    nx = max(1, int(np.ceil((x1 - x0) / side - 1e-9)))
+    ny = max(1, int(np.ceil((y1 - y0) / side - 1e-9)))
+    xs, ys = x0 + side * np.arange(nx + 1), y0 + side * np.arange(ny + 1)
+    col, row = np.meshgrid(np.arange(nx), np.arange(ny))
+    boxes = shapely.box(xs[col], ys[row], xs[col + 1], ys[row + 1])
+    area = shapely.area(shapely.intersection(boxes, polygon))
+    lines = trace_map.to_shapely()
+    cut = ~shapely.covered_by(lines, polygon)  # only traces that leave the window need clipping
+    lines[cut] = shapely.intersection(lines[cut], polygon)
+    parts = shapely.get_parts(lines)
+    lines = parts[np.isin(shapely.get_type_id(parts), (1, 2))]  # LineString / LinearRing; no points
+    coords, owner = shapely.get_coordinates(lines, return_index=True)
+    same = owner[1:] == owner[:-1]
+    starts, ends = coords[:-1][same], coords[1:][same]
+    length = np.zeros(nx * ny)
+    for k in range(0, starts.shape[0], _P21_MAP_CHUNK):
+        cell, piece = _cut_at_grid(starts[k:k + _P21_MAP_CHUNK], ends[k:k + _P21_MAP_CHUNK], xs, ys)
+        col_i = np.clip(np.floor((cell[:, 0] - x0) / side), 0, nx - 1).astype(np.int64)
+        row_j = np.clip(np.floor((cell[:, 1] - y0) / side), 0, ny - 1).astype(np.int64)
+        length += np.bincount(row_j * nx + col_i, weights=piece, minlength=nx * ny)
+    length = length.reshape(ny, nx)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        p21 = np.where(area > 1e-9 * side * side, length / area, np.nan)
+    return P21Map((float(x0), float(y0)), float(side), length, area, p21, unit)
+
+
+def _cut_at_grid(a: np.ndarray, b: np.ndarray, xs: np.ndarray, ys: np.ndarray):
+    """Segments a→b cut at the grid lines x = xs and y = ys: (midpoints (m, 2), lengths (m,)).
+
+    The cut parameters t of each segment (0, 1 and every crossing strictly inside) are sorted, and
+    consecutive ones bound a piece; the pieces of a segment add up to its length.
+    """
+    d = b - a
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.concatenate([(xs[None, :] - a[:, :1]) / d[:, :1], (ys[None, :] - a[:, 1:]) / d[:, 1:]], axis=1)
+    t = np.where((t > 0.0) & (t < 1.0), t, np.nan)
+    t = np.sort(np.concatenate([np.zeros((a.shape[0], 1)), t, np.ones((a.shape[0], 1))], axis=1), axis=1)
+    t = np.where(np.isnan(t), 1.0, t)                      # unused slots (NaN, sorted last) -> empty pieces
+    dt = np.diff(t, axis=1)
+    seg, piece = np.nonzero(dt > 0.0)
+    mid = t[seg, piece] + 0.5 * dt[seg, piece]
+    return a[seg] + mid[:, None] * d[seg], dt[seg, piece] * np.hypot(d[seg, 0], d[seg, 1])
 
 
 class _Units:

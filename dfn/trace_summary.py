@@ -23,12 +23,14 @@ __all__ = [
     "MauldonCircleSet",
     "MauldonParameters",
     "NodeCounts",
+    "P21Map",
     "Parameter",
     "SetSelection",
     "SetSummary",
     "StatisticsSettings",
     "TraceMapStatistics",
     "TraceTable",
+    "ValidationSummary",
     "WindowSummary",
 ]
 
@@ -155,6 +157,53 @@ class NodeCounts:
 
 
 @dataclass(frozen=True)
+class P21Map:
+    """P21 on a grid of square cells laid over the window (the "P21 Map" of ``summary.json``).
+
+    Cell (row j, column i) covers ``[x0 + i s, x0 + (i+1) s) × [y0 + j s, y0 + (j+1) s)``, with
+    (x0, y0) = ``origin_xy`` the lower-left corner of the window's bounding box and s =
+    ``cell_size``; row 0 is the bottom row. Each trace, clipped to the window, is cut where it
+    crosses a grid line and every piece is given to the one cell that holds its midpoint, so the
+    cells' lengths add up to the total trace length inside the window (no piece is counted twice,
+    even along a grid line).
+
+    Attributes
+    ----------
+    origin_xy : tuple of float
+        Lower-left corner of the grid, in the map's length unit.
+    cell_size : float
+        Side s of a cell, in the map's length unit.
+    length : (ny, nx) float ndarray
+        Trace length inside each cell and the window.
+    area : (ny, nx) float ndarray
+        Area of each cell inside the window (0 for a cell outside it).
+    p21 : (ny, nx) float ndarray
+        ``length / area``; NaN where ``area`` is 0 (None in the JSON document).
+    unit : str
+        The map's length unit.
+    """
+
+    origin_xy: tuple[float, float]
+    cell_size: float
+    length: np.ndarray
+    area: np.ndarray
+    p21: np.ndarray
+    unit: str
+
+    def to_dict(self) -> dict:
+        return {
+            "origin_xy": [float(v) for v in self.origin_xy],
+            "cell_size": float(self.cell_size),
+            "shape": list(self.length.shape),
+            "length": self.length.tolist(),
+            "area": self.area.tolist(),
+            "p21": [[_number(v) for v in row] for row in self.p21],
+            "unit": self.unit,
+            "p21_unit": f"{self.unit}/{self.unit}²",
+        }
+
+
+@dataclass(frozen=True)
 class SetSummary:
     """One joint set of the trace map.
 
@@ -265,6 +314,9 @@ class TraceTable:
         Y and X nodes on the trace.
     end_class : (N,) ndarray
         Topological class of the trace's ends.
+    validation_errors : tuple of tuple of str
+        Per trace, its fractopo validation labels (:mod:`~rockmass.dfn.trace_validation`); empty
+        for a clean trace.
     """
 
     id: np.ndarray
@@ -275,6 +327,7 @@ class TraceTable:
     angle_deg: np.ndarray
     connections: np.ndarray
     end_class: np.ndarray
+    validation_errors: tuple[tuple[str, ...], ...]
 
     def to_dict(self) -> dict:
         return {
@@ -286,7 +339,35 @@ class TraceTable:
             "angle_deg": [_number(v) for v in self.angle_deg],
             "connections": self.connections.tolist(),
             "end_class": self.end_class.tolist(),
+            "validation_errors": [list(labels) for labels in self.validation_errors],
         }
+
+
+@dataclass(frozen=True)
+class ValidationSummary:
+    """How many traces fractopo's validation would flag, by label (:func:`~rockmass.dfn.validate_traces`).
+
+    Attributes
+    ----------
+    n_flagged : int
+        Traces with at least one defect.
+    counts : dict of str to int
+        Traces flagged with each label (every label checked, zeros included).
+    sharp_turn_deg : float
+        The turn limit of ``SHARP TURNS``, deg.
+    snap_tolerance : Parameter
+        The snap tolerance of the node checks, in the map's length unit.
+    """
+
+    n_flagged: int
+    counts: dict[str, int]
+    sharp_turn_deg: float
+    snap_tolerance: Parameter
+
+    def to_dict(self) -> dict:
+        return {"traces_flagged": self.n_flagged, "errors": dict(self.counts),
+                "sharp_turn_deg": self.sharp_turn_deg, "snap_tolerance": self.snap_tolerance.to_dict(),
+                "labels": "fractopo's VALIDATION_ERRORS labels (fractopo.tval); per trace under traces"}
 
 
 @dataclass(frozen=True)
@@ -456,6 +537,10 @@ class TraceMapStatistics:
         every angle of the result (per trace, set means, scanline directions).
     diagnostics : Diagnostics
         Counts that flag suspicious input.
+    p21_map : P21Map
+        "P21 Map": P21 on square cells over the window.
+    validation : ValidationSummary
+        Traces fractopo's validation would flag, by label.
     """
 
     n_traces: Parameter
@@ -478,12 +563,14 @@ class TraceMapStatistics:
     crs: str | None
     angle_convention: str
     diagnostics: Diagnostics
+    p21_map: P21Map
+    validation: ValidationSummary
 
     def to_dict(self) -> dict:
         """The JSON document: parameters under their fractopo names, then ``"Node Counts"``,
         ``"sets"``, ``"set_selection"``, ``"traces"``, ``"window"``, ``"settings"``, ``"frame"``,
-        ``"crs"``, ``"angle_convention"`` with its meaning in ``"angle_convention_text"``, and
-        ``"diagnostics"`` (a new dict on each call)."""
+        ``"crs"``, ``"angle_convention"`` with its meaning in ``"angle_convention_text"``,
+        ``"diagnostics"``, ``"P21 Map"`` and ``"validation"`` (a new dict on each call)."""
         from .frames import ANGLE_CONVENTIONS
 
         return {
@@ -508,4 +595,6 @@ class TraceMapStatistics:
             "angle_convention": self.angle_convention,
             "angle_convention_text": ANGLE_CONVENTIONS[self.angle_convention],
             "diagnostics": self.diagnostics.to_dict(),
+            "P21 Map": self.p21_map.to_dict(),
+            "validation": self.validation.to_dict(),
         }

@@ -1,8 +1,8 @@
 """Trace files by suffix: :func:`read_traces` and :func:`write_traces`.
 
 This module owns the choice of format from a file's suffix; the formats themselves live in
-:mod:`rockmass.dfn.geojson_io` and :mod:`rockmass.dfn.csv_io`, whose module docstrings state the
-rules each reader follows. In short:
+:mod:`rockmass.dfn.geojson_io`, :mod:`rockmass.dfn.csv_io` and :mod:`rockmass.dfn.gis_io`, whose module
+docstrings state the rules each reader follows. In short:
 
 =====================  ==========  ====================================================================
 suffix                 format      holds
@@ -11,6 +11,10 @@ suffix                 format      holds
                                    Polygon (``"role": "window"``), ``frame`` and ``crs`` members
 ``.csv``               CSV         segments ``x0,y0,x1,y1[,id,...]`` or polylines ``trace_id,x,y[,...]``;
                                    ``# frame:`` / ``# crs:`` comments; no window
+``.gpkg``              GeoPackage  a line layer of traces and a polygon layer of the area (``layer=``
+                                   picks the traces layer of several); needs pyogrio
+                                   (``pip install 'rockmass[gis]'``)
+``.shp``               Shapefile   lines (traces) or one polygon (an area file); needs pyogrio
 =====================  ==========  ====================================================================
 
 Suffixes are matched case-insensitively. Every writer is atomic (temporary file in the same folder,
@@ -26,12 +30,13 @@ from pathlib import Path
 
 from .csv_io import read_csv, write_csv
 from .geojson_io import read_geojson, write_geojson
+from .gis_io import GIS_SUFFIXES, read_gis, write_gis
 from .tracemap import TraceMap, _require_trace_map
 
 __all__ = ["read_traces", "write_traces"]
 
-_FORMATS = {".geojson": "geojson", ".json": "geojson", ".csv": "csv"}
-_ACCEPTED = ".geojson or .json (GeoJSON), .csv (CSV)"
+_FORMATS = {".geojson": "geojson", ".json": "geojson", ".csv": "csv", **dict.fromkeys(GIS_SUFFIXES, "gis")}
+_ACCEPTED = ".geojson or .json (GeoJSON), .csv (CSV), .gpkg (GeoPackage), .shp (Shapefile)"
 
 
 def _format_of(path: str | os.PathLike[str], action: str) -> str:
@@ -46,16 +51,20 @@ def _format_of(path: str | os.PathLike[str], action: str) -> str:
     return _FORMATS[suffix]
 
 
-def read_traces(path: str | os.PathLike[str], *, frame: str | None = None) -> TraceMap:
-    """Read a trace map from a GeoJSON or CSV file, chosen by the file's suffix.
+def read_traces(path: str | os.PathLike[str], *, frame: str | None = None, layer: str | None = None) -> TraceMap:
+    """Read a trace map from a GeoJSON, CSV, GeoPackage or Shapefile, chosen by the file's suffix.
 
     Parameters
     ----------
     path : str or path-like
-        ``.geojson`` / ``.json`` (read with :func:`read_geojson`) or ``.csv`` (:func:`read_csv`).
+        ``.geojson`` / ``.json`` (read with :func:`read_geojson`), ``.csv`` (:func:`read_csv`),
+        ``.gpkg`` or ``.shp`` (:func:`~rockmass.dfn.gis_io.read_gis`).
     frame : str, optional
         Frame name for files that do not name one; a file naming a different frame is an error.
         Default None (the file's frame, else ``"face"``).
+    layer : str, optional
+        The traces layer of a GeoPackage with several line layers; an error for other formats.
+        Default None.
 
     Returns
     -------
@@ -65,6 +74,8 @@ def read_traces(path: str | os.PathLike[str], *, frame: str | None = None) -> Tr
     ------
     ValueError
         Unknown suffix (the message lists the accepted ones) or bad file content.
+    ImportError
+        A GeoPackage or Shapefile without pyogrio installed.
     OSError
         If the file cannot be read.
 
@@ -77,21 +88,29 @@ def read_traces(path: str | os.PathLike[str], *, frame: str | None = None) -> Tr
     >>> tm.lengths_m(), tm.attributes["set"]
     (array([5., 2.]), array([1, 2]))
     """
-    if _format_of(path, "read") == "geojson":
+    kind = _format_of(path, "read")
+    if kind == "gis":
+        return read_gis(path, frame=frame, layer=layer)
+    if layer is not None:
+        raise ValueError(f"{os.fspath(path)}: a layer ({layer!r}; --layer on the command line) picks the "
+                         f"traces of a GeoPackage (.gpkg); a {Path(path).suffix} file has no layers")
+    if kind == "geojson":
         return read_geojson(path, frame=frame)
     return read_csv(path, frame=frame)
 
 
 def write_traces(trace_map: TraceMap, path: str | os.PathLike[str]) -> None:
-    """Write a trace map to a GeoJSON or CSV file (chosen by suffix), atomically.
+    """Write a trace map to a GeoJSON, CSV, GeoPackage or Shapefile (chosen by suffix), atomically.
 
     Parameters
     ----------
     trace_map : TraceMap
         The map to write; it is not modified.
     path : str or path-like
-        ``.geojson`` / ``.json`` (:func:`write_geojson`) or ``.csv`` (:func:`write_csv`, polylines
-        layout; call :func:`write_csv` directly for ``layout="segments"``).
+        ``.geojson`` / ``.json`` (:func:`write_geojson`), ``.csv`` (:func:`write_csv`, polylines
+        layout; call :func:`write_csv` directly for ``layout="segments"``), ``.gpkg`` / ``.shp``
+        (:func:`~rockmass.dfn.gis_io.write_gis`: the ``traces`` and ``area`` layers; call it with a
+        ``network`` for the ``nodes`` and ``branches`` layers too).
 
     Raises
     ------
@@ -108,7 +127,10 @@ def write_traces(trace_map: TraceMap, path: str | os.PathLike[str]) -> None:
         Writing CSV for a map that has a sampling window (CSV does not store it).
     """
     _require_trace_map(trace_map)
-    if _format_of(path, "write") == "geojson":
+    kind = _format_of(path, "write")
+    if kind == "geojson":
         write_geojson(trace_map, path)
+    elif kind == "gis":
+        write_gis(trace_map, path)
     else:
         write_csv(trace_map, path)

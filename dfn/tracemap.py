@@ -37,6 +37,16 @@ __all__ = ["TraceMap"]
 #: Longest list of offending items quoted in an error message.
 _MAX_LISTED = 10
 
+#: Largest magnitude of a coordinate, metres (10⁹ km: no face or projected map comes near it). A
+#: value beyond it is a typo or a unit slip, never a position, and the products of coordinate
+#: differences the statistics and the block cutter form (squared lengths, areas) would overflow.
+MAX_COORDINATE_M = 1e12
+
+
+def _beyond_range(xy: np.ndarray) -> np.ndarray:
+    """(n,) bool: vertices of ``xy`` (n, 2) with a coordinate beyond ±:data:`MAX_COORDINATE_M`."""
+    return (np.abs(xy) > MAX_COORDINATE_M).any(axis=1)
+
 
 def _plural(count: int, noun: str, verb: str | None = None) -> str:
     """``"1 trace has"`` / ``"3 traces have"``."""
@@ -172,6 +182,10 @@ def _as_window(window: Any) -> np.ndarray | None:
     bad = np.flatnonzero(~np.isfinite(ring).all(axis=1))
     if bad.size:
         raise ValueError(f"window_xy_m has non-finite coordinates at vertices {bad[:_MAX_LISTED].tolist()}")
+    far = np.flatnonzero(_beyond_range(ring))
+    if far.size:
+        raise ValueError(f"window_xy_m has coordinates beyond ±{MAX_COORDINATE_M:.0e} m at vertices "
+                         f"{far[:_MAX_LISTED].tolist()}")
     if signed_area(ring) == 0.0:
         raise ValueError("window_xy_m encloses zero area; give the exterior ring of the sampling window")
     return ring
@@ -210,7 +224,8 @@ class TraceMap:
     ------
     ValueError
         Inconsistent offsets, a column of the wrong length, a trace with fewer than 2 vertices or a
-        non-finite coordinate (the message names the traces by id), or a bad window.
+        coordinate that is not finite or beyond ±:data:`MAX_COORDINATE_M` (the message names the
+        traces by id), or a bad window.
     TypeError
         Non-numeric coordinates or offsets, or an attribute column of an unsupported dtype.
 
@@ -251,12 +266,11 @@ class TraceMap:
             raise ValueError(
                 f"{_plural(short.size, 'trace', 'has')} fewer than 2 vertices: {_describe_traces(short, ids)}"
             )
-        bad_vertex = np.flatnonzero(~np.isfinite(xy).all(axis=1))
-        if bad_vertex.size:
-            bad = np.unique(np.searchsorted(offsets, bad_vertex, side="right") - 1)
-            raise ValueError(
-                f"{_plural(bad.size, 'trace', 'has')} non-finite coordinates: {_describe_traces(bad, ids)}"
-            )
+        for bad_vertex, what in ((~np.isfinite(xy).all(axis=1), "non-finite coordinates"),
+                                 (_beyond_range(xy), f"coordinates beyond ±{MAX_COORDINATE_M:.0e} m")):
+            if bad_vertex.any():
+                bad = np.unique(np.searchsorted(offsets, np.flatnonzero(bad_vertex), side="right") - 1)
+                raise ValueError(f"{_plural(bad.size, 'trace', 'has')} {what}: {_describe_traces(bad, ids)}")
         window = _as_window(self.window_xy_m)
         if not isinstance(self.frame, str) or not self.frame.strip():
             raise TypeError(f"frame must be a non-empty string naming the coordinate frame, got {self.frame!r}")

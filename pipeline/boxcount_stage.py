@@ -19,7 +19,7 @@ from .outputs import output_set, plot_text
 
 __all__ = ["TRACE_SUFFIXES", "IMAGE_SUFFIXES", "FLAGS", "compute", "produce"]
 
-TRACE_SUFFIXES = (".geojson", ".json", ".csv")
+TRACE_SUFFIXES = (".geojson", ".json", ".csv", ".gpkg", ".shp")  # dfn.read_traces; GIS files need pyogrio
 IMAGE_SUFFIXES = (".png", ".tif", ".tiff", ".jpg", ".jpeg", ".bmp")
 
 # config field -> the flag that sets it, so errors name what the user typed

@@ -56,13 +56,16 @@ def drop_zero_length(trace_map, path):
                                      "ids": ids, "text": text}
 
 
-def read_trace_map(path, what: str = "trace"):
-    """``(TraceMap, dropped)`` from GeoJSON or CSV without its zero-length traces
-    (:func:`drop_zero_length`); a file that cannot be read is bad input."""
+def read_trace_map(path, what: str = "trace", layer: str | None = None):
+    """``(TraceMap, dropped)`` from GeoJSON, CSV, GeoPackage or Shapefile (its traces ``layer``)
+    without its zero-length traces (:func:`drop_zero_length`); a file that cannot be read, or a
+    GeoPackage / Shapefile without the optional pyogrio, is bad input."""
     from .dfn import read_traces
 
     try:
-        trace_map = read_traces(path)
+        trace_map = read_traces(path, layer=layer)
+    except ImportError as exc:  # the message says: pip install 'rockmass[gis]'
+        raise InputError(f"{path}: cannot read the {what} file: {exc}") from exc
     except OSError as exc:
         raise InputError(f"{exc.filename or path}: cannot read the {what} file: "
                          f"{exc.strerror or exc}") from exc

@@ -1,12 +1,16 @@
 """``rockmass traces FILE``: statistics of a digitised trace map.
 
-Reads traces (GeoJSON or CSV), computes the trace-map statistics of
+Reads traces (GeoJSON, CSV, GeoPackage or Shapefile), computes the trace-map statistics of
 :func:`rockmass.dfn.trace_map_statistics` (joint sets, P20, P21, trace lengths with censoring,
 Mauldon estimators on the window when it is a circle, else on disjoint circles placed inside it,
 I-Y-X-E topology) and the box-counting dimension of
 :func:`rockmass.fractal.box_count` over the same window, and writes under ``--out DIR``:
 ``summary.json``, ``rose.png`` (length-weighted, equal-area, axial), ``traces.png`` (the map by set)
-and ``manifest.json`` — all of them or none. ``--json`` prints the summary to stdout.
+and ``manifest.json`` — all of them or none. ``--json`` prints the summary to stdout. ``--gis gpkg``
+(or ``shp``) also writes the map as GIS layers with fractopo's field names: ``traces.gpkg`` with
+the layers ``traces``, ``area``, ``nodes`` and ``branches`` (or ``traces.shp``, ``traces_area.shp``,
+``traces_nodes.shp``, ``traces_branches.shp``; :func:`rockmass.traces_stage.gis_layers`). GeoPackage
+and Shapefile need the optional pyogrio (``pip install 'rockmass[gis]'``).
 
 Zero-length traces are dropped with a warning and counted (``input.dropped_zero_length``); a map of
 more than ``--max-traces`` traces (default 200 000, or ``ROCKMASS_MAX_TRACES``) is refused before
@@ -19,7 +23,7 @@ import argparse
 
 from .budgets import DEFAULT_MAX_TRACES, MAX_TRACES_ENV, TRACE_SECONDS, trace_limit_arg
 from .outputs import print_summary
-from .traces_stage import produce
+from .traces_stage import GIS_FORMATS, produce
 
 __all__ = ["add_parser", "run"]
 
@@ -30,9 +34,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         "traces", help="statistics of a digitised trace map (sets, P20, P21, topology, D)",
         description="Joint sets, intensities (P20, P21), trace lengths with censoring, Mauldon "
                     "estimators, topology and the box-counting dimension of a trace map.")
-    p.add_argument("file", help="traces (.geojson, .json or .csv)")
+    p.add_argument("file", help="traces (.geojson, .json, .csv, .gpkg or .shp)")
+    p.add_argument("--layer", help="the traces layer of a GeoPackage with several line layers (default: "
+                                   "the only line layer, else the one named 'traces')")
     p.add_argument("--area", metavar="POLYGON.geojson|bbox|hull",
-                   help="the mapped area: a GeoJSON file with one polygon (in the map's CRS), or "
+                   help="the mapped area: a GeoJSON, GeoPackage or Shapefile with one polygon (in "
+                        "the map's CRS; a GeoPackage of traces may hold it as its polygon layer), or "
                         "'bbox' / 'hull' to take the traces' bounding box / convex hull, named in "
                         "every output (default: the map's own window polygon; a map without one "
                         "needs --area)")
@@ -44,6 +51,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help=f"refuse a map of more than N traces before the statistics start (default "
                         f"{DEFAULT_MAX_TRACES}, or the environment variable {MAX_TRACES_ENV}; "
                         f"about {TRACE_SECONDS:.1e} s a trace)")
+    p.add_argument("--gis", choices=GIS_FORMATS,
+                   help="also write the traces, area, nodes and branches as GIS layers with "
+                        "fractopo's field names under --out: traces.gpkg, or traces*.shp "
+                        "(needs pyogrio: pip install 'rockmass[gis]')")
     p.add_argument("--out", help="write summary.json, rose.png, traces.png and manifest.json here")
     p.add_argument("--json", action="store_true", help="print the summary as JSON on stdout")
     p.set_defaults(handler=run)
@@ -63,6 +74,11 @@ def summary_text(summary: dict) -> str:
              f"D_box = {value('Box-counting Dimension', '.4f')}"]
     if area:
         lines.append(f"  area {value('Area')}: {area['text']}")
+    checked = summary.get("validation") or {}
+    if checked:
+        flagged = ", ".join(f"{label} {n}" for label, n in checked["errors"].items() if n)
+        lines.append(f"  fractopo validation: {checked['traces_flagged']} of "
+                     f"{summary['Number of Traces']['value']} traces flagged" + (f" ({flagged})" if flagged else ""))
     dropped = summary.get("input", {}).get("dropped_zero_length") or {}
     if dropped.get("count"):
         lines.append(f"  {dropped['count']} zero-length traces dropped (not counted)")
@@ -82,5 +98,9 @@ def summary_text(summary: dict) -> str:
 
 def run(args) -> int:
     """Handler of ``rockmass traces``."""
+    if args.gis and not args.out:
+        from .errors import InputError
+
+        raise InputError(f"--gis {args.gis} writes its layers under --out DIR; give --out")
     print_summary(produce(args, args.out), args.json, summary_text)
     return 0

@@ -2,7 +2,8 @@
 
 Statistics of a digitised trace map: :func:`compute` reads the map and analyses it (trace-map
 statistics and the box-counting dimension); :func:`produce` also writes ``summary.json``,
-``rose.png``, ``traces.png`` and ``manifest.json`` into a folder, all of them or none.
+``rose.png``, ``traces.png`` and ``manifest.json`` into a folder, all of them or none, and with
+``gis`` set (``--gis gpkg|shp``) the GIS layers of :func:`gis_layers`.
 
 The command (:mod:`rockmass.traces_cmd`) parses the arguments, calls :func:`produce` and prints;
 ``rockmass run`` calls :func:`produce` with the arguments it planned.
@@ -18,7 +19,11 @@ from .budgets import check_traces
 from .inputs import read_trace_file, read_trace_map, warn
 from .outputs import output_set, plot_text
 
-__all__ = ["AREA_CHOICES", "area_window", "dimension_entry", "compute", "produce"]
+__all__ = ["AREA_CHOICES", "GIS_FORMATS", "area_window", "dimension_entry", "compute", "gis_layers", "produce"]
+
+#: ``--gis`` formats and the file each writes (:func:`rockmass.dfn.gis_io.write_gis`; a Shapefile's
+#: other layers go beside it as ``traces_area.shp``, ``traces_nodes.shp``, ``traces_branches.shp``).
+GIS_FORMATS = {"gpkg": "traces.gpkg", "shp": "traces.shp"}
 
 
 def dimension_entry(result) -> dict:
@@ -63,8 +68,8 @@ def area_window(trace_map, area, file, option: str = "--area"):
         with reading(area, option):
             polygon = read_trace_file(Path(area), option)
         if polygon.window_xy_m is None:
-            raise InputError(f"{area}: the {option} file holds no polygon (a GeoJSON Polygon feature "
-                             "is expected)")
+            raise InputError(f"{area}: the {option} file holds no polygon (a GeoJSON Polygon feature, "
+                             "or a polygon layer of a GeoPackage or Shapefile, is expected)")
         if polygon.crs != trace_map.crs:
             raise InputError(f"{area}: the {option} polygon is in crs {polygon.crs!r} but the trace "
                              f"map {file} is in {trace_map.crs!r}; give both in one CRS")
@@ -75,7 +80,8 @@ def area_window(trace_map, area, file, option: str = "--area"):
 
 @reads("file")
 def compute(args):
-    """Read and analyse; return (summary dict, trace map with the window used, timings).
+    """Read and analyse; return (summary dict, trace map with the window used, the
+    :class:`~rockmass.dfn.SamplingWindow`, timings).
 
     Zero-length traces are dropped with a warning and counted in ``input.dropped_zero_length``
     (:func:`rockmass.inputs.drop_zero_length` says why), and a map of more traces than the limit
@@ -85,7 +91,7 @@ def compute(args):
     from .fractal import box_count
 
     t0 = time.perf_counter()
-    trace_map, dropped = read_trace_map(Path(args.file))
+    trace_map, dropped = read_trace_map(Path(args.file), layer=getattr(args, "layer", None))
     if dropped["count"]:
         warn(dropped["text"])
     if trace_map.n_traces == 0:
@@ -107,7 +113,63 @@ def compute(args):
                         "frame": trace_map.frame, "crs": trace_map.crs, "area": area,
                         "dropped_zero_length": {k: v for k, v in dropped.items() if k != "text"}}
     timings = {"read_s": t1 - t0, "statistics_s": t2 - t1, "box_count_s": t3 - t2}
-    return summary, trace_map, timings
+    return summary, trace_map, window, timings
+
+
+def gis_layers(trace_map, window, summary):
+    """The map to write as GIS layers, and its branches and nodes.
+
+    Returns ``(TraceMap, BranchesAndNodes)``: the traces with the window used as their area and,
+    besides their own attributes, the fields ``set`` (-1: none), ``length`` (of the whole trace),
+    ``length_in_area`` (inside the area, as P21 counts it), ``azimuth`` on a map (clockwise from
+    North; ``angle_deg``, counter-clockwise from +u, on a face), ``censored``, ``connections`` and
+    fractopo's ``VALIDATION_ERRORS`` (:func:`rockmass.dfn.trace_validation.errors_text`). Traces
+    that miss the area were not analysed: set -1, length_in_area 0, no angle, no validation text.
+    Computed fields replace attributes of the same name.
+    """
+    import dataclasses
+
+    import numpy as np
+    import shapely
+
+    from .dfn import branches_and_nodes
+    from .dfn.gis_io import VALIDATION_FIELD
+    from .dfn.trace_validation import errors_text
+
+    traces = summary["traces"]
+    mapped = trace_map.with_window(window.polygon)
+    reaches = shapely.intersects(mapped.to_shapely(), window.polygon)
+
+    def every(values, fill, dtype):
+        column = np.full(mapped.n_traces, fill, dtype=dtype)
+        column[reaches] = np.asarray(values, dtype=dtype)
+        return column
+
+    angles = [np.nan if a is None else a for a in traces["angle_deg"]]
+    fields = {
+        "set": every(traces["set"], -1, np.int64),
+        "length": mapped.lengths_m(),
+        "length_in_area": every(traces["length"], 0.0, np.float64),
+        ("azimuth" if summary["angle_convention"] == "azimuth" else "angle_deg"): every(angles, np.nan, np.float64),
+        "censored": every(traces["censored"], False, bool),
+        "connections": every(traces["connections"], 0, np.int64),
+        VALIDATION_FIELD: every(errors_text(traces["validation_errors"]), "", object).astype(str),
+    }
+    mapped = dataclasses.replace(mapped, attributes={**mapped.attributes, **fields})
+    network = branches_and_nodes(mapped, snap_tolerance_m=summary["settings"]["snap_tolerance"]["value"],
+                                 window=window)
+    return mapped, network
+
+
+def _require_gis(args) -> None:
+    """``--gis`` without pyogrio is bad input, found before any work (exit 2, with the pip hint)."""
+    if getattr(args, "gis", None):
+        from .dfn.gis_io import require_pyogrio
+
+        try:
+            require_pyogrio()
+        except ImportError as exc:
+            raise InputError(f"--gis {args.gis}: {exc}") from exc
 
 
 def _set_per_trace(trace_map, set_ids):
@@ -131,7 +193,9 @@ def produce(args, out_dir=None):
     """
     from contextlib import ExitStack
 
-    summary, trace_map, timings = compute(args)
+    _require_gis(args)
+    summary, trace_map, window, timings = compute(args)
+    gis = getattr(args, "gis", None)
     if out_dir:
         import numpy as np
 
@@ -153,11 +217,16 @@ def produce(args, out_dir=None):
             plot_trace_map(trace_map, paths["traces.png"], set_ids=set_ids,
                            title=f"{plot_text(Path(args.file).name)}: traces by set")
             atomic_write_json(paths["summary.json"], summary)
+            if gis:
+                from .dfn import write_gis
+
+                gis_map, network = gis_layers(trace_map, window, summary)
+                write_gis(gis_map, out / GIS_FORMATS[gis], network)
             manifest = build_manifest(
                 command=args.argv,
                 inputs=[args.file] + ([args.area] if args.area and args.area not in AREA_CHOICES else []),
                 config={"n_sets": args.n_sets, "snap_tolerance_m": args.snap_tolerance_m,
-                        "area": args.area},
+                        "area": args.area, "layer": getattr(args, "layer", None), "gis": gis},
                 timings_s=timings)
             atomic_write_json(paths["manifest.json"], manifest)
     return summary

@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 
 from rockmass.dfn import TraceMap, read_csv, read_geojson, read_traces, write_csv, write_geojson, write_traces
 from rockmass.dfn import csv_io, geojson_io
+from rockmass.dfn.tracemap import MAX_COORDINATE_M
 
 from ._fixtures import CATALOGUE, assert_same_map, rich_map
 
@@ -71,7 +72,8 @@ def test_csv_round_trip_keeps_every_attribute_type_frame_and_crs(tmp_path, layou
     assert_same_map(tm, read_csv(tmp_path / "rich.csv"), window=False)
 
 
-floats = st.floats(allow_nan=False, allow_infinity=False)
+# every finite coordinate a trace map holds (beyond ±MAX_COORDINATE_M is refused as a unit slip)
+floats = st.floats(min_value=-MAX_COORDINATE_M, max_value=MAX_COORDINATE_M)
 polylines_strategy = st.lists(st.lists(st.tuples(floats, floats), min_size=2, max_size=5), min_size=1, max_size=5)
 text = st.text(st.characters(blacklist_categories=("Cs",), blacklist_characters="\x00"), max_size=8)
 
@@ -402,9 +404,10 @@ def test_geojson_writer_rejects_infinite_attributes(tmp_path):
 
 @pytest.mark.parametrize("function", [read_traces, lambda path: write_traces(CATALOGUE["empty"].build(), path)])
 def test_unknown_suffix_is_rejected_with_the_accepted_suffixes(tmp_path, function):
-    message = r"traces\.shp: .*'\.shp'; accepted suffixes: \.geojson or \.json \(GeoJSON\), \.csv \(CSV\)"
+    message = (r"traces\.kml: .*'\.kml'; accepted suffixes: \.geojson or \.json \(GeoJSON\), \.csv \(CSV\), "
+               r"\.gpkg \(GeoPackage\), \.shp \(Shapefile\)")
     with pytest.raises(ValueError, match=message):
-        function(tmp_path / "traces.shp")
+        function(tmp_path / "traces.kml")
 
 
 def test_missing_file_raises_oserror(tmp_path):

@@ -26,7 +26,10 @@ SAMPLES = Path(__file__).resolve().parents[2] / "samples"
 # the fixture's blocks are rigid: no plastic-zone map (tests/pipeline/test_solve_deformable.py
 # draws one)
 ALL_SECTIONS = {sid for sid, *_ in SECTIONS} - {"plastic"}
-IMAGES_PER_STAGE = {"extract": 2, "traces": 2, "scanline": 1, "boxcount": 1, "blocks": 1, "solve": 2}
+# issue 19 item 5: the traces stage adds the XYI diagram, the length distribution and the P21 map; the
+# scanline adds the pole density, RQD bars and spacing histograms; dfn the pole density of its first
+# realization; solve adds the contact maps
+IMAGES_PER_STAGE = {"extract": 2, "traces": 5, "scanline": 4, "boxcount": 1, "dfn": 1, "blocks": 1, "solve": 3}
 
 
 def _write_run_json(out: Path, stages, statuses=None) -> dict:
@@ -224,8 +227,8 @@ def test_sections_of_absent_stages_are_left_out(run_dir, tmp_path):
         shutil.copytree(run_dir[0] / stage, out / stage)
     _write_run_json(out, ["scanline", "boxcount"])
     page = _Page.parse(write_run_report(out))
-    assert set(page.sections) == {"run", "inputs", "stereonet", "boxcount", "intensity"}
-    assert len(page.images) == 2 and not page.notes
+    assert set(page.sections) == {"run", "inputs", "stereonet", "scanline", "boxcount", "intensity"}
+    assert len(page.images) == 5 and not page.notes
     assert [r[0] for r in page.tables["t-timings"][1:]] == ["scanline", "boxcount"]
 
 
@@ -234,7 +237,8 @@ def test_only_the_solver_stage_gives_the_solver_sections(run_dir, tmp_path):
     shutil.copytree(run_dir[0] / "solve", out / "solve")
     _write_run_json(out, ["solve"])
     page = _Page.parse(write_run_report(out))
-    assert set(page.sections) == {"run", "inputs", "solver", "displacement", "histories", "energy"}
+    assert set(page.sections) == {"run", "inputs", "solver", "displacement", "contacts", "histories",
+                                  "energy"}
 
 
 def test_every_image_is_an_embedded_png_and_nothing_is_referenced(run_dir):
@@ -256,8 +260,8 @@ def test_images_per_section_follow_the_stages(run_dir):
     counts = {}
     for section, _ in run_dir[3].images:
         counts[section] = counts.get(section, 0) + 1
-    assert counts == {"traces": 4, "stereonet": 1, "boxcount": 1, "blocks": 1, "displacement": 1,
-                      "histories": 1}
+    assert counts == {"traces": 4, "topology": 1, "lengths": 1, "p21map": 1, "stereonet": 2, "scanline": 2,
+                      "boxcount": 1, "dfn": 1, "blocks": 1, "displacement": 1, "contacts": 1, "histories": 1}
 
 
 # ------------------------------------------------------------------------------------ values --
@@ -417,6 +421,122 @@ def test_fitted_dfn_sets_show_the_fitted_orientation_and_size_law(run_dir, tmp_p
             "tolerance") in page.sections["dfn"]
 
 
+# ------------------------------------------------------- issue 19 item 5: what a geologist expects --
+
+
+def _captions(page, section: str) -> list[str]:
+    return [a["alt"] for s, a in page.images if s == section]
+
+
+def test_geologist_figures_appear_in_their_sections(run_dir):
+    page = run_dir[3]
+    assert "XYI ternary diagram" in _captions(page, "topology")[0]
+    assert "complementary cumulative, log-log" in _captions(page, "lengths")[0]
+    assert "P21 on" in _captions(page, "p21map")[0]
+    assert any("Density of the" in c and "multiples of a uniform density" in c
+               for c in _captions(page, "stereonet"))
+    assert [c.split(":")[0] for c in _captions(page, "scanline")] == [
+        "RQD per group of the scanline", "Spacings between consecutive hits along the scanline (of one set"]
+    assert "plastic shear slip" in _captions(page, "contacts")[0]
+
+
+def test_dfn_pole_density_counts_the_disks_of_the_first_realization(run_dir):
+    out, _, _, page = run_dir
+    rows = (out / "dfn" / "realization_0000" / "fractures.csv").read_text().splitlines()[1:]
+    caption = _captions(page, "dfn")[0]
+    shown = -(-len(rows) // 5000)  # every k-th disk beyond 5000
+    assert f"Density of the poles of the {len(rows[::shown])} disks of realization 0" in caption
+
+
+def test_node_count_table_equals_the_trace_summary(run_dir):
+    out, _, _, page = run_dir
+    t = _stage_json(out, "traces", "summary.json")
+    for node, count in t["Node Counts"].items():
+        assert page.cell("t-nodes", node, "value") == str(count)
+    assert _same(page.cell("t-nodes", "Connections per Branch", "value"), t["Connections per Branch"]["value"])
+
+
+def test_trace_length_caption_states_the_censoring_of_the_summary(run_dir):
+    out, _, _, page = run_dir
+    t = _stage_json(out, "traces", "summary.json")["traces"]
+    one = sum(1 for e in t["end_class"] if list(e).count("E") == 1)
+    both = sum(1 for e in t["end_class"] if list(e).count("E") == 2)
+    caption = _captions(page, "lengths")[0]
+    assert (f"{len(t['length'])} traces, {sum(t['censored'])} censored by the window edge ({one} with one "
+            f"end, {both} with both ends on it") in caption
+    assert "no size law was fitted in this run" in caption  # the fixture's dfn stage fits nothing
+
+
+def test_p21_map_caption_adds_up_to_the_summary_p21(run_dir):
+    out, _, _, page = run_dir
+    t = _stage_json(out, "traces", "summary.json")
+    caption = _captions(page, "p21map")[0]
+    total = sum(t["traces"]["length"])
+    assert f"{total:.4g} m of traces on {t['Area']['value']:.4g} m²" in caption
+    assert f"P21 {t['Fracture Intensity P21']['value']:.4g} m/m² overall" in caption
+
+
+def test_rqd_table_equals_the_scanline_summary(run_dir):
+    out, _, _, page = run_dir
+    s = _stage_json(out, "scanline", "summary.json")
+    for label, group in [("all", s["all"])] + [(f"set {g['set']}", g) for g in s["sets"]]:
+        assert _same(page.cell("t-rqd", label, "RQD measured (%)"), group["rqd_direct_percent"])
+        assert _same(page.cell("t-rqd", label, "RQD Priest & Hudson (%)"), group["rqd_priest_hudson_percent"])
+        assert page.cell("t-rqd", label, "hits") == str(group["n_intersections"])
+
+
+def test_fitted_size_law_is_drawn_over_the_lengths_of_the_traces_it_was_fitted_to(run_dir, tmp_path):
+    out = _copy(run_dir, tmp_path)
+    manifest = _stage_json(out, "dfn", "manifest.json")
+    traces = _stage_json(out, "traces", "summary.json")["input"]["path"]
+    manifest.setdefault("config", {}).setdefault("dfn", {})["fit"] = {"faces": [{"file": traces}]}
+    (out / "dfn" / "manifest.json").write_text(json.dumps(manifest), encoding="utf-8")
+    law = {"family": "power_law", "params": {"alpha": 3.0, "r_min_m": 0.5, "r_max_m": 20.0},
+           "n_traces": 10, "ok": True}
+    (out / "dfn" / "fitted.json").write_text(json.dumps({"sets": [{"name": "S1", "size": law}]}))
+    page = _Page.parse(write_run_report(out))
+    caption = _captions(page, "lengths")[0]
+    assert "line: the trace-length survival S(l) of the disk radius laws fitted in the dfn stage" in caption
+    assert "S1: power_law alpha 3, r_min_m 0.5, r_max_m 20" in caption
+
+
+def test_summaries_without_the_new_numbers_give_notes_not_a_crash(run_dir, tmp_path):
+    out = _copy(run_dir, tmp_path)
+    s = _stage_json(out, "scanline", "summary.json")
+    del s["intersections"]
+    for group in [s["all"], *s["sets"]]:
+        del group["spacings_m"]
+    (out / "scanline" / "summary.json").write_text(json.dumps(s), encoding="utf-8")
+    t = _stage_json(out, "traces", "summary.json")
+    del t["P21 Map"]
+    t["Node Counts"] = {"I": 0, "Y": 0, "X": 0, "E": 4}   # every end censored
+    t["traces"]["length"], t["traces"]["censored"] = [], []
+    (out / "traces" / "summary.json").write_text(json.dumps(t), encoding="utf-8")
+    (out / "solve" / "contacts.vtu").unlink()
+    page = _Page.parse(write_run_report(out))
+    notes = {k: " ".join(v) for k, v in page.notes.items()}
+    assert "lists no poles" in notes["stereonet"]
+    assert "holds no spacings" in notes["scanline"] and "t-rqd" in page.tables
+    assert "no I, Y or X node: no ternary diagram" in notes["topology"]
+    assert "lists no trace lengths" in notes["lengths"]
+    assert "has no P21 map" in notes["p21map"]
+    assert "solve/contacts.vtu is missing" in notes["contacts"]
+    for section in ("topology", "lengths", "p21map", "contacts"):
+        assert not _captions(page, section)
+
+
+def test_a_map_without_trace_statistics_gives_notes_in_the_trace_sections(run_dir, tmp_path):
+    out = tmp_path / "out"
+    shutil.copytree(run_dir[0] / "extract", out / "extract")
+    e = _stage_json(out, "extract", "summary.json")
+    e["statistics"] = None                                # extract found no trace
+    (out / "extract" / "summary.json").write_text(json.dumps(e), encoding="utf-8")
+    _write_run_json(out, ["extract"])
+    page = _Page.parse(write_run_report(out))
+    for section in ("topology", "lengths", "p21map"):
+        assert "has no trace statistics (no trace was found)" in " ".join(page.notes[section])
+
+
 # ---------------------------------------------------------------------------- bad or missing --
 
 
@@ -442,8 +562,10 @@ def test_corrupt_and_missing_stage_files_give_notes_not_a_crash(run_dir, tmp_pat
     assert "solve/result.json is not readable JSON" in notes["energy"]
     assert f"solve/{last.name} is not a readable VTU file" in notes["displacement"]
     assert "dfn/realization_0001/summary.json is missing" in notes["dfn"]
-    # what is still readable is still shown
-    assert {s for s, _ in page.images} == {"traces", "boxcount", "blocks"}
+    # what is still readable is still shown (the pole density is drawn from the scanline summary,
+    # the contact maps from contacts.vtu, without the broken frame's outlines)
+    assert {s for s, _ in page.images} == {"traces", "topology", "lengths", "p21map", "stereonet", "scanline",
+                                           "boxcount", "dfn", "blocks", "contacts"}
     assert len([s for s, _ in page.images if s == "traces"]) == 3
     assert "t-intensity" in page.tables and "t-blocks" in page.tables
     assert {r[0] for r in page.tables["t-dfn"][1:]} == {"0"}  # the readable realization
