@@ -49,6 +49,55 @@ def _network(document, settings, config_path):
 MAX_REALIZATIONS = 1000
 
 
+def _dfn_counts(document, settings) -> list[float]:
+    """Expected disks of each ``[dfn]`` set that a DFN realization draws around the box
+    (:func:`rockmass.dfn.generation.expected_counts`); empty without a DFN or with a bad set (the
+    generator says which)."""
+    from .dfn.generation import expected_counts
+
+    if settings.dfn_realization is None or document.dfn is None or not document.dfn.sets:
+        return []
+    try:
+        specs = [s.to_spec() for s in document.dfn.sets]
+        return [float(n) for n in expected_counts(specs, [settings.box_min_m, settings.box_max_m])]
+    except ValueError:
+        return []
+
+
+def _check_memory_budget(config_path, document, settings, count: int) -> None:
+    """Refuse, before any fracture is drawn or piece cut, models whose pieces need more memory than
+    the limit (:mod:`rockmass.budgets`; every realization's model is held until the outputs are
+    written), naming the field that makes most of them: the densest persistent set or the DFN set
+    with the most disks.
+
+    Pieces: those of the persistent sets (:func:`rockmass.budgets.block3d_count_terms`) plus one
+    per DFN disk drawn. A disk cuts every piece it touches by its whole plane, so the pieces of a
+    DFN follow its disk count: measured 0.8 and 0.6 pieces per disk drawn (1297 pieces of 1631
+    disks, tests' two-set DFN in a 6 m cube; 6457 of 10489, samples/blocks3d_seed001.toml)."""
+    from .budgets import BLOCK3D_BYTES, block3d_count_terms, check_memory
+    from .dfn.orientation import normal_from_dip
+
+    disks = _dfn_counts(document, settings)
+    if not settings.sets and not disks:
+        return  # the box and its tunnels: a few pieces
+    box = [settings.box_min_m, settings.box_max_m]
+    terms = block3d_count_terms(box, [(normal_from_dip(j.dip_deg, j.dip_direction_deg), j.spacing_m)
+                                      for j in settings.sets])
+    persistent = sum(terms.values())
+    pieces = 1.0 + persistent + sum(disks)
+    if not settings.sets or sum(disks) > persistent:
+        densest = max(range(len(disks)), key=disks.__getitem__)
+        field = f"dfn.sets[{densest}].intensity"
+    else:
+        densest = min(range(len(settings.sets)), key=lambda i: settings.sets[i].spacing_m)
+        field = f"blocks3d.sets[{densest}].spacing_m"
+    check_memory(count * pieces * BLOCK3D_BYTES, f"{config_path}: {field}",
+                 f"{count} model(s) of about {pieces:.3g} pieces ({persistent:.3g} from the "
+                 f"persistent sets, {sum(disks):.3g} from DFN disks)",
+                 "raise the spacings or lower the DFN intensity, make the box smaller or build "
+                 "fewer realizations")
+
+
 def compute(args, document=None):
     """Load (unless given), validate, generate and build; return (document, models, timings) with
     one model per realization (``args.realizations``, default 1: realizations ``dfn_realization``,
@@ -69,6 +118,7 @@ def compute(args, document=None):
     if count > 1 and settings.dfn_realization is None:
         raise ConfigError(args.config, [("blocks3d.dfn_realization", f"--realizations {count} needs "
                                          "a DFN: set the first realization here")])
+    _check_memory_budget(args.config, document, settings, count)
     models, t_dfn, t_build = [], 0.0, 0.0
     for k in range(count):
         t1 = time.perf_counter()

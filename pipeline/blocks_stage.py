@@ -64,14 +64,15 @@ def dfn_section_traces(document, config_path):
     return traces, [tuple(p) for p in sec.window_uv_m]
 
 
-def _check_memory_budget(config_path, cfg, domain_xy, joint_sets) -> None:
-    """Refuse, before building, a model whose blocks need more memory than the limit
-    (:mod:`rockmass.budgets`), naming the field that makes most of them: the spacings of the joint
-    sets or the size of the cracks (each against the domain)."""
-    from .budgets import BLOCK_BYTES, block_count_terms, check_memory
+def block_memory_estimate(cfg, domain_xy, joint_sets) -> tuple[float, str, str, str] | None:
+    """Memory the blocks of ``[blocks]`` ``cfg`` need (:mod:`rockmass.budgets`): ``(bytes, field,
+    what, fix)`` with the field that makes most of them (the spacings of the joint sets or the
+    size of the cracks, each against the domain), what the estimate is made of and what to lower;
+    None without a domain."""
+    from .budgets import BLOCK_BYTES, block_count_terms
 
     if domain_xy is None:
-        return
+        return None
     crack = cfg.cracks.size_m if cfg.cracks is not None else None
     terms = block_count_terms(domain_xy, [(j.angle_deg, j.spacing_m) for j in joint_sets], crack)
     total = 1.0 + sum(terms.values())
@@ -80,9 +81,20 @@ def _check_memory_budget(config_path, cfg, domain_xy, joint_sets) -> None:
     else:
         field = "blocks.two_sets.spacing_m" if cfg.two_sets is not None else "blocks.sets"
         fix = "raise the joint spacings or make the domain smaller"
-    check_memory(total * BLOCK_BYTES, f"{config_path}: {field}",
-                 f"about {total:.3g} blocks ({terms['crossings']:.3g} from joint crossings, "
-                 f"{terms['cracks']:.3g} from cracks)", fix)
+    what = (f"about {total:.3g} blocks ({terms['crossings']:.3g} from joint crossings, "
+            f"{terms['cracks']:.3g} from cracks)")
+    return total * BLOCK_BYTES, field, what, fix
+
+
+def _check_memory_budget(config_path, cfg, domain_xy, joint_sets) -> None:
+    """Refuse, before building, a model whose blocks need more memory than the limit
+    (:func:`block_memory_estimate`, :func:`rockmass.budgets.check_memory`)."""
+    from .budgets import check_memory
+
+    estimate = block_memory_estimate(cfg, domain_xy, joint_sets)
+    if estimate is not None:
+        needed, field, what, fix = estimate
+        check_memory(needed, f"{config_path}: {field}", what, fix)
 
 
 def compute(args, document=None, section=None):

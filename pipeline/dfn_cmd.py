@@ -8,7 +8,8 @@ writes ``realization_NNNN/fractures.csv`` (``set,cx,cy,cz,nx,ny,nz,radius``),
 ``realization_NNNN/summary.json`` (target and achieved P32, P30 and counts per set), and one top-level
 ``manifest.json``. Everything is computed first and written all-or-nothing. Realization i depends only
 on the root seed and i (docs/design.md §3.5), so ``--first 7 --realizations 1`` reproduces realization 7 of
-any batch, on any worker.
+any batch, on any worker. CONFIG may hold other stages' sections too (a ``[blocks]`` cut by a
+``[blocks.dfn_section]`` of these sets, say): the whole file is validated and ``[dfn]`` runs.
 
 With ``[dfn.fit]`` the sets are first fitted from the field data the config names (scanlines and face
 trace maps, :func:`rockmass.dfn.fit_field`): ``fitted.json`` holds every fitted parameter with its
@@ -34,7 +35,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
         "dfn", help="generate seeded DFN realizations (disks) from a config",
         description="Poisson disk fracture networks filled to each set's clipped P32 target; "
                     "reproducible by seed and realization index.")
-    p.add_argument("config", help="TOML file with a [dfn] section")
+    p.add_argument("config", help="TOML file with a [dfn] section (its other sections are "
+                                  "validated, not run)")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--seed", type=int, help="root seed (overrides dfn.seed)")
     p.add_argument("--realizations", type=int, help="number of realizations (overrides dfn.realizations)")

@@ -271,6 +271,7 @@ class DFNConfig(StrictModel):
 
 
 class DFNDocument(StrictModel):
-    """A configuration file read by ``rockmass dfn``: the ``[dfn]`` section only."""
+    """The ``[dfn]`` section of a configuration file: what ``rockmass dfn`` runs and records in its
+    manifest (the file may hold other sections too)."""
 
     dfn: DFNConfig

@@ -116,9 +116,13 @@ def compute(args, document=None):
     """Load (unless ``document``, a validated document with a ``dfn`` section, is given), fit if
     asked, generate, validate if asked; files named in ``[dfn.fit]`` are relative to ``args.config``.
 
+    The file may hold other stages' sections too (``[blocks]`` cut by a ``[blocks.dfn_section]``,
+    ``[blocks3d]``, ...): the whole document is validated, as every command validates it, and the
+    ``[dfn]`` section is what runs and what the manifest records (as a :class:`DFNDocument`).
+
     Returns (config, specs, seed, [(index, network, summary, validation rows or None)], timings, fit).
     """
-    from .config import load_config
+    from .config import load_config, required_section
     from .dfn_config import DFNDocument
     from .progress import count_bar
 
@@ -127,7 +131,7 @@ def compute(args, document=None):
     _check_flag(args.first, "--first", 0)
     t0 = time.perf_counter()
     if document is None:
-        document = load_config(args.config, model=DFNDocument)
+        document = DFNDocument(dfn=required_section(load_config(args.config), "dfn", args.config))
     cfg = document.dfn
     specs, fit, field = [], None, None
     if cfg.fit is not None:

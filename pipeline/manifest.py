@@ -25,7 +25,7 @@ from .atomic import atomic_write_json, to_jsonable
 from .errors import InputError
 
 __all__ = ["MANIFEST_NAME", "TRACKED_DISTRIBUTIONS", "build_manifest", "digest_cache", "file_sha256",
-           "write_manifest"]
+           "write_manifest", "portable_paths", "portable_config_paths"]
 
 MANIFEST_NAME = "manifest.json"
 MANIFEST_VERSION = 1
@@ -49,6 +49,9 @@ _CHUNK = 1 << 20  # 1 MiB
 
 #: The digest cache of :func:`digest_cache` in force (None: every call reads its file).
 _DIGESTS: contextvars.ContextVar[dict | None] = contextvars.ContextVar("rockmass_digests", default=None)
+#: ``(base, run folder)`` of :func:`portable_config_paths` in force (None: paths as they are).
+_PORTABLE: contextvars.ContextVar[tuple[Path, Path] | None] = contextvars.ContextVar(
+    "rockmass_portable_paths", default=None)
 
 
 def _dist_version(name: str) -> str | None:
@@ -107,6 +110,41 @@ def digest_cache(cache: dict) -> Iterator[dict]:
         yield cache
     finally:
         _DIGESTS.reset(token)
+
+
+def portable_paths(obj: Any, base: str | os.PathLike, out_dir: str | os.PathLike) -> Any:
+    """``obj`` (JSON-like) with its absolute paths written so that they do not depend on where the
+    project or the run folder is: a path inside ``out_dir`` (a run's own output, such as the
+    ``"@traces"`` of a photo) as ``<run>/<stage>/<file>``, any other relative to ``base`` (the
+    config's folder, as the config would name it). File contents are hashed apart.
+
+    >>> portable_paths({"traces": "/p/out/extract/t.geojson", "f": ["/p/data/s.csv", "x.csv"]},
+    ...                "/p", "/p/out")
+    {'traces': '<run>/extract/t.geojson', 'f': ['data/s.csv', 'x.csv']}
+    """
+    base, out_dir = Path(base), Path(out_dir)
+    if isinstance(obj, dict):
+        return {k: portable_paths(v, base, out_dir) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [portable_paths(v, base, out_dir) for v in obj]
+    if isinstance(obj, str) and os.path.isabs(obj):
+        path = Path(obj)
+        if path.is_relative_to(out_dir):
+            return "<run>/" + path.relative_to(out_dir).as_posix()
+        return os.path.relpath(path, base)
+    return obj
+
+
+@contextlib.contextmanager
+def portable_config_paths(base: str | os.PathLike, out_dir: str | os.PathLike) -> Iterator[None]:
+    """Within the block, :func:`build_manifest` records and hashes its config with
+    :func:`portable_paths` (``rockmass run`` around its stages: a stage's ``config_hash`` is then
+    the same whatever --out the run writes to, issue 18)."""
+    token = _PORTABLE.set((Path(base).resolve(), Path(out_dir).resolve()))
+    try:
+        yield
+    finally:
+        _PORTABLE.reset(token)
 
 
 def _cache_key(path) -> tuple | None:
@@ -170,7 +208,8 @@ def build_manifest(
         list of strings (path-like items converted with ``os.fspath``).
     config : pydantic model, mapping or None, default None
         The configuration. A model is stored *resolved* (defaults filled in) with
-        ``model_dump(mode="json")``; ``config_hash`` is :func:`rockmass.config.config_hash` of it.
+        ``model_dump(mode="json")``; ``config_hash`` is :func:`rockmass.config.config_hash` of it
+        (within :func:`portable_config_paths`, of it with :func:`portable_paths`).
     inputs : iterable of path-like, default ()
         Input files. Each is hashed now (streamed) and recorded as ``{"path", "sha256", "bytes"}``,
         with ``path`` as given.
@@ -220,7 +259,10 @@ def build_manifest(
         else:
             config_json = config
         config_json = to_jsonable(config_json)  # refuses NaN, naming the key
-        digest = config_hash(config)
+        portable = _PORTABLE.get()
+        if portable is not None:
+            config_json = portable_paths(config_json, *portable)
+        digest = config_hash(config_json)
 
     records = []
     for item in inputs:

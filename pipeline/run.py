@@ -15,7 +15,10 @@ SHA-256 of every input file it reads, the hashes of the upstream stages it reads
 version. ``DIR/<stage>/stage.json`` records it and each output's SHA-256; when the hash matches and
 every output recorded there has its SHA-256 (a truncated or edited output does not), the stage is
 reused (not recomputed) and the log says ``reused <stage> (hash …)``. A changed
-setting changes its stage's hash and so every downstream hash: exactly those stages rerun.
+setting changes its stage's hash and so every downstream hash: exactly those stages rerun. The
+hashes, and the config each stage's ``manifest.json`` records and hashes, write the run's own
+outputs as ``<run>/<stage>/<file>`` and other paths relative to the config's folder
+(:func:`rockmass.manifest.portable_paths`), so they do not depend on where DIR or the project is.
 
 Atomicity. A stage writes into ``DIR/<stage>.partial/`` (every file atomically, ``stage.json``
 last), which then replaces ``DIR/<stage>/``; a killed stage never looks finished, and the next run
@@ -125,7 +128,9 @@ def _check_file(config_path, key: str, path: Path | None) -> None:
 
 
 def _check_photo(path: Path) -> None:
-    """The photo's header: within the pixel limit, and an image Pillow can open."""
+    """The photo: within the pixel limit (from its header), an image Pillow can open, and its
+    pixel data decodes to the end (a truncated JPEG passes ``verify``; JPEGs are decoded at 1/8
+    scale, which reads the whole stream at a fraction of the cost)."""
     from PIL import Image, UnidentifiedImageError
 
     from .image_limits import check_image_pixels
@@ -134,8 +139,13 @@ def _check_photo(path: Path) -> None:
     try:
         with Image.open(path) as image:
             image.verify()
+        with Image.open(path) as image:
+            image.draft(image.mode, (1, 1))
+            image.load()
     except (UnidentifiedImageError, SyntaxError) as exc:
         raise InputError(f"not a readable image (JPEG, PNG or TIFF expected): {exc}") from exc
+    except OSError as exc:  # the decoder's: truncated or corrupt data
+        raise InputError(f"the image could not be decoded (truncated or corrupt?): {exc}") from exc
 
 
 def _read_traces(path: Path) -> None:
@@ -161,27 +171,30 @@ def _read_scanline(path: Path) -> None:
     read_scanline(path)
 
 
-#: What planning reads of each kind of input file (the stages read them again, whole).
-_CONTENT_CHECKS = {"photo": _check_photo, "traces": _read_traces,
-                   "stage traces": _read_stage_traces, "scanline": _read_scanline}
+def _history_reader(history) -> Callable[[Path], Any]:
+    """The reader of a ``type = "csv"`` velocity history: the table, read whole."""
+    from .solve_config import read_history_csv
+
+    return lambda path: read_history_csv(path, history.kind, history.scale)
 
 
-def _check_contents(config_path, files: list[tuple[str, Path, str]]) -> None:
-    """Read what the stages will read before any runs (issue 18): each ``(field, path, kind)``
-    with its :data:`_CONTENT_CHECKS` reader; a problem is bad input naming the config, the field
-    and the file (by its name only, nothing quoted from it)."""
-    for field, path, kind in files:
+def _check_contents(config_path, files: list[tuple[str, Path, Callable[[Path], Any]]]) -> None:
+    """Read what the stages will read before any runs (issue 18): each ``(field, path, reader)``;
+    a problem is bad input naming the config, the field and the file (by its name only, nothing
+    quoted from it). Returns nothing: the stages read the files again, whole."""
+    for field, path, read in files:
         with reading(path, field, config=config_path):
-            _CONTENT_CHECKS[kind](path)
+            read(path)
 
 
-def _check_excavation_names(config_path, solve, blocks) -> None:
-    """The excavation stages ``[solve]`` removes exist in the run's ``[blocks]`` (by name or region
-    number), checked while planning: found by the solve stage, after the blocks were built, they
-    cost every stage before it (issue 18)."""
+def _check_excavation_names(config_path, solve, region_names) -> None:
+    """The excavation stages ``[solve]`` removes exist in the blocks it solves (by name or region
+    number: ``region_names`` of the run's ``[blocks]`` or of ``solve.blocks_file``), checked while
+    planning: found by the solve stage, after the blocks were built, they cost every stage before
+    it (issue 18)."""
     from types import SimpleNamespace
 
-    model = SimpleNamespace(region_names=("rock", *(e.name for e in blocks.excavations)))
+    model = SimpleNamespace(region_names=tuple(region_names))
     for i, stage in enumerate(solve.stages):
         try:
             stage.regions(model)
@@ -228,9 +241,9 @@ def plan_run(config_path, out_dir, document=None) -> RunPlan:
     photo, traces_file, scanline = (run.path(k, config_path) for k in ("photo", "traces", "scanline"))
     for key, path in (("run.photo", photo), ("run.traces", traces_file), ("run.scanline", scanline)):
         _check_file(config_path, key, path)
-    contents = [(key, path, kind) for key, path, kind in (
-        ("run.photo", photo, "photo"), ("run.traces", traces_file, "stage traces"),
-        ("run.scanline", scanline, "scanline")) if path is not None]
+    contents = [(key, path, read) for key, path, read in (
+        ("run.photo", photo, _check_photo), ("run.traces", traces_file, _read_stage_traces),
+        ("run.scanline", scanline, _read_scanline)) if path is not None]
     trace_map = (out_dir.resolve() / "extract" / "traces.geojson" if photo is not None
                  else traces_file)
     as_written = {**document.model_dump(mode="json"), "run": run.model_dump(mode="json")}
@@ -302,14 +315,14 @@ def plan_run(config_path, out_dir, document=None) -> RunPlan:
         for i, name in enumerate(fit.scanlines):
             p = fit.path(name, config_path)
             _check_file(config_path, f"dfn.fit.scanlines[{i}]", p)
-            contents.append((f"dfn.fit.scanlines[{i}]", p, "scanline"))
+            contents.append((f"dfn.fit.scanlines[{i}]", p, _read_scanline))
             stage_files["dfn"].append(p)
         for i, face in enumerate(fit.faces):
             p = fit.path(face.file, config_path)
             if p != trace_map or photo is None:
                 _check_file(config_path, f"dfn.fit.faces[{i}].file", p)
                 if p != traces_file:
-                    contents.append((f"dfn.fit.faces[{i}].file", p, "traces"))
+                    contents.append((f"dfn.fit.faces[{i}].file", p, _read_traces))
                 stage_files["dfn"].append(p)
             # scanline TOML beside a CSV is read by read_scanline: hash it too
         for p in list(stage_files["dfn"]):
@@ -323,21 +336,25 @@ def plan_run(config_path, out_dir, document=None) -> RunPlan:
         if p is not None and (p != trace_map or photo is None):
             _check_file(config_path, "blocks.traces", p)
             if p != traces_file:
-                contents.append(("blocks.traces", p, "traces"))
+                contents.append(("blocks.traces", p, _read_traces))
             stage_files["blocks"].append(p)
+    blocks_file = None
     if "solve" in needed:
         cfg = document.solve
-        p = cfg.blocks_path(config_path)
-        if p is not None:
-            _check_file(config_path, "solve.blocks_file", p)
-            stage_files["solve"].append(p)
+        blocks_file = cfg.blocks_path(config_path)
+        if blocks_file is not None:
+            _check_file(config_path, "solve.blocks_file", blocks_file)
+            stage_files["solve"].append(blocks_file)
         elif document.blocks is not None:
-            _check_excavation_names(config_path, cfg, document.blocks)
+            _check_excavation_names(config_path, cfg,
+                                    ("rock", *(e.name for e in document.blocks.excavations)))
         base = config_path.parent
         for i, v in enumerate(cfg.velocity_inputs):
             if v.history.type == "csv":
+                field = f"solve.velocity_inputs[{i}].history.file"
                 hp = v.history.path(base)
-                _check_file(config_path, f"solve.velocity_inputs[{i}].history.file", hp)
+                _check_file(config_path, field, hp)
+                contents.append((field, hp, _history_reader(v.history)))
                 stage_files["solve"].append(hp)
 
     from .traces_stage import AREA_CHOICES
@@ -348,6 +365,12 @@ def plan_run(config_path, out_dir, document=None) -> RunPlan:
         stage_files["traces"].append(Path(area))
     read = {p for name in needed for p in stage_files[name]}  # files only unneeded stages read
     _check_contents(config_path, [c for c in contents if c[1] in read])  # are not read
+    if blocks_file is not None:  # the model solved, and the excavations [solve] names in it
+        from .solve_stage import read_blocks_file
+
+        with reading(blocks_file, "solve.blocks_file", config=config_path):
+            region_names = read_blocks_file(blocks_file).region_names
+        _check_excavation_names(config_path, document.solve, region_names)
     if "traces" in needed:
         _check_area(config_path, traces_file if photo is None else None, area)
 
@@ -456,6 +479,7 @@ def stage_hash(stage: StagePlan, upstream_hashes: dict[str, str], version: str, 
     hash, not as files.
     """
     from .config import config_hash
+    from .manifest import portable_paths
 
     base = Path(config_path).resolve().parent
     files = []
@@ -463,26 +487,10 @@ def stage_hash(stage: StagePlan, upstream_hashes: dict[str, str], version: str, 
         rp = Path(p).resolve()
         shown = os.path.relpath(rp, base)
         files.append([shown, _file_digest(rp)])
-    sections = _relative_paths(stage.sections, base, Path(out_dir).resolve())
+    sections = portable_paths(stage.sections, base, Path(out_dir).resolve())
     doc = {"stage": stage.name, "sections": sections, "files": files,
            "upstream": upstream_hashes, "rockmass_version": version}
     return config_hash(doc)
-
-
-def _relative_paths(obj: Any, base: Path, out_dir: Path) -> Any:
-    """Absolute paths inside a section (resolved ``@`` references) written so that a hash does not
-    depend on where the project or the run folder is (file contents are hashed separately): a run
-    output as ``<run>/<stage>/<file>``, anything else relative to the config's folder."""
-    if isinstance(obj, dict):
-        return {k: _relative_paths(v, base, out_dir) for k, v in obj.items()}
-    if isinstance(obj, list):
-        return [_relative_paths(v, base, out_dir) for v in obj]
-    if isinstance(obj, str) and os.path.isabs(obj):
-        path = Path(obj)
-        if path.is_relative_to(out_dir):
-            return "<run>/" + path.relative_to(out_dir).as_posix()
-        return os.path.relpath(path, base)
-    return obj
 
 
 # ---------------------------------------------------------------------------------- executing --
@@ -662,6 +670,7 @@ def _execute(plan: RunPlan, force: bool, argv, log: Callable[[str], None]) -> di
     from . import __version__
     from .atomic import atomic_write_json
     from .config import config_hash
+    from .manifest import portable_config_paths
     from .run_report import write_run_report
 
     t_start = time.perf_counter()
@@ -685,7 +694,8 @@ def _execute(plan: RunPlan, force: bool, argv, log: Callable[[str], None]) -> di
             partial = out / (stage.name + _PARTIAL)
             remove_entry(partial)  # a link is removed, never written through (issue 18)
             try:
-                notes = _run_stage(plan, stage, partial, argv)
+                with portable_config_paths(plan.config_path.parent, out):  # hash without --out
+                    notes = _run_stage(plan, stage, partial, argv)
             except BaseException:
                 with contextlib.suppress(OSError):
                     remove_entry(partial)

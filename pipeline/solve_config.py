@@ -115,44 +115,46 @@ class CsvHistoryConfig(StrictModel):
         """The file, relative to the folder ``base`` of the config file."""
         return in_folder(base, self.file)
 
-    def to_solver(self, base: Path, where: str):
+    def to_solver(self, base: Path, where: str | None = None):
+        """The :class:`~rockmass.solver.TableHistory` of the file (:func:`read_history_csv`)."""
         return read_history_csv(self.path(base), self.kind, self.scale, where)
 
 
 HistoryConfig = Annotated[Sine | TableSine | Ricker | CsvHistoryConfig, Field(discriminator="type")]
 
 
-def read_history_csv(path: Path, kind: str, scale: float, where: str):
+def read_history_csv(path: Path, kind: str, scale: float, where: str | None = None):
     """A :class:`~rockmass.solver.TableHistory` from a ``time,value`` CSV (velocity in m/s, or
-    acceleration in m/s² integrated once). Raises ``InputError`` naming the file, line and ``where``."""
+    acceleration in m/s² integrated once). Raises ``InputError`` naming the file, line and ``where``
+    (the config field, when the caller does not name it itself)."""
     import csv
 
     from .errors import InputError
     from .solver import TableHistory
 
+    shown = f"{path}: {where}" if where else f"{path}"
     try:
         text = Path(path).read_text(encoding="utf-8-sig")
     except OSError as exc:
-        raise InputError(f"{path}: {where}: cannot read the history file: "
-                         f"{exc.strerror or exc}") from exc
+        raise InputError(f"{shown}: cannot read the history file: {exc.strerror or exc}") from exc
     times, values = [], []
     for lineno, row in enumerate(csv.reader(text.splitlines()), start=1):
         if not row or not "".join(row).strip() or row[0].lstrip().startswith("#"):
             continue
         if len(row) < 2:
-            raise InputError(f"{path}: {where}: line {lineno}: expected time,value, got {row!r}")
+            raise InputError(f"{shown}: line {lineno}: expected time,value, got {row!r}")
         try:
             t, v = float(row[0]), float(row[1])
         except ValueError as exc:
             if not times and lineno == 1:
                 continue  # a header line
-            raise InputError(f"{path}: {where}: line {lineno}: not a number: {row[:2]!r}") from exc
+            raise InputError(f"{shown}: line {lineno}: not a number: {row[:2]!r}") from exc
         times.append(t)
         values.append(v * scale)
     try:
         table = TableHistory(tuple(times), tuple(values), source=str(path))
     except ValueError as exc:
-        raise InputError(f"{where}: {exc}") from exc
+        raise InputError(f"{where}: {exc}" if where else str(exc)) from exc
     return table.integrated() if kind == "acceleration" else table
 
 

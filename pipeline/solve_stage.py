@@ -18,13 +18,30 @@ from pathlib import Path
 from .errors import ConfigError, InputError, RunError, reading
 from .outputs import csv_text, output_set
 
-__all__ = ["prepare", "solve", "build_outputs", "produce"]
+__all__ = ["read_blocks_file", "prepare", "solve", "build_outputs", "produce"]
 
 #: names ``rockmass solve`` may write besides those of the new set, dropped with the old set
 #: rather than kept as the user's: the frames of an earlier solve (``blocks_0000.vtu`` …; a
 #: ParaView series must not mix two runs, issue 18) and outputs written only for some models
 #: (``bolts.csv``). A new optional output belongs here.
 _OWNED = (r"blocks_\d{4,}\.vtu", r"bolts\.csv", r"zones\.csv", r"contacts\.vtu")
+
+
+def read_blocks_file(path):
+    """The block model of ``solve.blocks_file`` (a ``blocks.json`` of ``rockmass blocks``), read
+    and checked against the model's invariants; a file that is not one raises :class:`InputError`
+    (callers read it within :func:`rockmass.errors.reading`, which names the config, the field and
+    the file, and quotes nothing from it)."""
+    from .blockgen import check_model, read_json
+
+    try:
+        model = read_json(path)
+    except (KeyError, TypeError) as exc:
+        raise InputError(f"not a valid blocks.json: {exc}") from exc
+    invariants = check_model(model)
+    if not invariants["ok"]:
+        raise InputError(f"fails the block-model invariants {invariants}")
+    return model
 
 
 def prepare(config_path, document=None, model=None):
@@ -51,17 +68,8 @@ def prepare(config_path, document=None, model=None):
     if model is not None:
         source = {"blocks_model": "given"}
     elif path is not None:
-        from .blockgen import check_model, read_json
-
         with reading(path, "solve.blocks_file", config=config_path):  # names it, quotes nothing
-            try:
-                model = read_json(path)
-            except (KeyError, TypeError) as exc:
-                raise InputError(f"not a valid blocks.json: {exc}") from exc
-        invariants = check_model(model)
-        if not invariants["ok"]:
-            raise InputError(f"{config_path}: solve.blocks_file: {path} fails the block-model "
-                             f"invariants {invariants}")
+            model = read_blocks_file(path)
         inputs.append(str(path))
         source = {"blocks_file": str(path)}
     elif document.blocks is not None:

@@ -58,9 +58,9 @@ from .solver.failure import MECHANISMS, mechanism_counts
 from .solver.result import FAILED_STATUSES, STATUS_FAILED_BLOCKS, STATUS_OK
 
 __all__ = ["run_case", "joint_network_segments", "CSV_COLUMNS", "results_rows", "csv_text",
-           "run_tasks", "init_worker", "load_finished", "case_cost", "case_outcome",
-           "outcome_counts", "outcome_summary", "OUTCOMES", "IN_EQUILIBRIUM", "RETRIED",
-           "displacement_m",
+           "run_tasks", "init_worker", "load_finished", "case_domain_xy", "case_cost",
+           "case_outcome", "outcome_counts", "outcome_summary", "OUTCOMES", "IN_EQUILIBRIUM",
+           "RETRIED", "displacement_m",
            "failed_mechanism_counts", "MONITOR_COLUMNS"]
 
 CASE_FILE = "case.json"
@@ -74,7 +74,7 @@ CSV_COLUMNS = ("d_box", "d_box_r2", "d_box_stderr", "d_box_offset_sd", "p21_per_
                "crown_displacement_m", "left_wall_displacement_m", "right_wall_displacement_m",
                "invert_displacement_m", "failed_blocks", "failed_area_m2", "failed_mechanisms",
                "worst_ratio", "converged", "solve_status", "steps", "broken_contacts",
-               "detached_blocks", "plastic_area_m2", "status", "error", "wall_time_s")
+               "new_cracks", "detached_blocks", "plastic_area_m2", "status", "error", "wall_time_s")
 
 #: A case's outcome (results.csv ``status``), in the order reports list them.
 OUTCOMES = ("ok", "failed_blocks", "not_converged", "unstable", "overlap", "error")
@@ -84,8 +84,9 @@ IN_EQUILIBRIUM = ("ok", "failed_blocks")
 #: Outcomes a re-run of the study runs again; a case of any other outcome is kept (deterministic).
 RETRIED = ("error",)
 #: Version of case.json records; a record of another version runs again on resume (version 1,
-#: before outcomes, counted falls as displacements).
-RECORD_VERSION = 2
+#: before outcomes, counted falls as displacements; version 2 counted frictional joints touched
+#: at a corner as broken and had no new_cracks).
+RECORD_VERSION = 3
 #: Monitoring points on the excavation boundary -> results.csv column.
 MONITOR_COLUMNS = {"crown": "crown_displacement_m", "left_wall": "left_wall_displacement_m",
                    "right_wall": "right_wall_displacement_m",
@@ -205,6 +206,16 @@ def dask_worker_plugin():
     return RockmassWorkerInit()
 
 
+def case_domain_xy(document):
+    """The polygon of a case's block domain: ``[blocks.domain]``, or the window of the
+    ``[[dfn.sections]]`` entry its ``[blocks.dfn_section]`` names. Raises ``ValueError``,
+    ``AttributeError`` or ``StopIteration`` for a config without either (its case reports it)."""
+    cfg = document.blocks
+    if cfg.domain is not None:
+        return cfg.domain.xy_m()
+    return next(s.window_uv_m for s in document.dfn.sections if s.name == cfg.dfn_section.section)
+
+
 def case_cost(document) -> float:
     """Relative cost of a case, from its config alone, to order cases longest first: an estimate
     of the block count (1 + the joint crossings in the domain: area x sum over pairs of sets of
@@ -213,12 +224,7 @@ def case_cost(document) -> float:
     cases of one study depends on it, never a result."""
     cfg = document.blocks
     try:
-        if cfg.domain is not None:
-            xy = cfg.domain.xy_m()
-        else:
-            xy = next(s.window_uv_m for s in document.dfn.sections
-                      if s.name == cfg.dfn_section.section)
-        area = polygon_area(xy)
+        area = polygon_area(case_domain_xy(document))
         sets = []  # (P21 per m, angle rad)
         for js in cfg.joint_sets():
             persistence = 1.0
@@ -402,7 +408,14 @@ def _solve(document, config_path, model) -> dict:
 
     if document.solve is None:
         return {}
-    result = solve_stages(model, document.solve.to_settings(model, config_path), config_path)
+    from .solver.runner import reference_stage
+
+    settings = document.solve.to_settings(model, config_path)
+    result = solve_stages(model, settings, config_path)
+    ref = reference_stage(settings)
+    # broken before the reference state (all of them if the run stopped in that stage)
+    cracks_before = (result.stages[ref].broken_contacts
+                     if ref is not None and len(result.stages) > ref else 0)
     outcome, reason = case_outcome(result)
     last = result.stages[-1]
     stages = [{"name": s.name, "kind": s.kind, "status": s.status, "steps": int(s.steps),
@@ -428,6 +441,8 @@ def _solve(document, config_path, model) -> dict:
            "converged": bool(converged), "solve_status": str(result.status),
            "steps": int(sum(s.steps for s in result.stages)),
            "broken_contacts": int(last.broken_contacts),
+           # bonds broken after the initial equilibrium: the cracks the excavation made
+           "new_cracks": int(last.broken_contacts - cracks_before),
            "detached_blocks": int(last.detached_blocks),
            # deformable blocks (docs/dem.md §16): the area of the zones that yielded; none if rigid
            "plastic_area_m2": (result.zone_summary()["plastic_area_m2"] if result.zones

@@ -115,43 +115,109 @@ def _preflight(pending, config_path) -> None:
     solve.to_settings(model, config_path)
 
 
-def _read_case_traces(path) -> None:
+def _read_case_traces(path, owner) -> None:
     """The trace map that cuts a case's blocks, read whole (its warnings come when the case runs)."""
     from .inputs import read_trace_file
 
     read_trace_file(path, "blocks.traces", quiet=True)
 
 
-#: File keys whose content a study reads before any case runs, and how; the others are read when
-#: their case runs.
-_CASE_FILE_CHECKS = {("blocks", "traces"): _read_case_traces}
+def _read_case_history(path, owner) -> None:
+    """A ``type = "csv"`` velocity history of a case's ``[solve]`` (``owner``: its history
+    table), read whole."""
+    from .solve_config import read_history_csv
+
+    read_history_csv(path, owner.kind, owner.scale)
+
+
+#: File keys (key paths without list indices) whose content a study reads before any case runs,
+#: and how: ``check(path, owner)``, ``owner`` the config table that holds the key. These are the
+#: file keys a case reads (:func:`rockmass.study_config._case_files`; ``solve.blocks_file`` is
+#: refused in a study, :func:`rockmass.study_config.expand_cases`); another would be read when its
+#: case runs.
+_CASE_FILE_CHECKS = {("blocks", "traces"): _read_case_traces,
+                     ("solve", "velocity_inputs", "history", "file"): _read_case_history}
+
+
+def _owner(document, keys):
+    """The config table that holds the file key at ``keys`` (a key path of
+    :func:`rockmass.strict.file_fields`)."""
+    node = document
+    for key in keys[:-1]:
+        node = node[key] if isinstance(key, int) or isinstance(node, dict) else getattr(node, key)
+    return node
 
 
 def _check_case_files(cases, config_path, digests: dict) -> None:
-    """Read the content of every case's trace file before the first case runs (issue 18): a
+    """Read the content of every file the cases read before the first case runs (issue 18): a
     broken file is bad input (exit 2) naming the config, the field, the file and the case, not an
-    error found case by case after others ran. Each distinct file is read once; a missing file is
-    left to fail its own case (a re-run retries it once the file is there)."""
+    error found case by case after others ran. Each distinct file is read once.
+
+    A missing file that every case reads (a base config's ``[solve]`` history, say) is bad input
+    too: no case could run. One that only some cases read (a grid over ``blocks.traces``) is left
+    to fail its own cases (a re-run retries them once the file is there)."""
     from .errors import reading
-    from .study_config import _case_files, params_text
+    from .study_config import _case_files, _show, params_text
     from .strict import config_file
 
+    def where(case) -> str:
+        return (f"study case {case.index}: {params_text(case.params) or 'the base config'}; no "
+                "case has run")
+
     checked: set[str] = set()
+    missing: dict[str, tuple[str, dict]] = {}  # path -> (field, {case index: case} reading it)
     for case in cases:
         for keys, name in _case_files(case.document):
-            check = _CASE_FILE_CHECKS.get(tuple(keys))
+            field = _show(keys)
             path = config_file(config_path, name)
             key = os.fspath(path)
-            if check is None or key in checked or digests.get(key) is None:
+            if digests.get(key) is None:
+                missing.setdefault(key, (field, {}))[1][case.index] = case
+                continue
+            check = _CASE_FILE_CHECKS.get(tuple(k for k in keys if not isinstance(k, int)))
+            if check is None or key in checked:
                 continue
             checked.add(key)
             try:
-                with reading(path, ".".join(keys), config=config_path):
-                    check(path)
+                with reading(path, field, config=config_path):
+                    check(path, _owner(case.document, keys))
             except InputError as exc:
-                raise InputError(f"{exc} (study case {case.index}: "
-                                 f"{params_text(case.params) or 'the base config'}; no case has "
-                                 "run)") from None
+                raise InputError(f"{exc} ({where(case)})") from None
+    for key, (field, readers) in missing.items():
+        if len(readers) == len(cases):
+            raise InputError(f"{config_path}: {field}: {os.path.basename(key)}: no such file, and "
+                             "every case reads it (paths are relative to the config file; "
+                             f"{where(next(iter(readers.values())))})")
+
+
+def _check_memory_budget(pending, config_path, workers: int) -> None:
+    """Refuse (exit 2), before any case runs, a study whose largest case needs more memory than
+    the limit when ``workers`` cases run at once (:mod:`rockmass.budgets`): each worker builds
+    and solves one case at a time, so the memory is the workers times the largest case's blocks
+    (:func:`rockmass.blocks_stage.block_memory_estimate`), whatever the number of cases and
+    realizations. The message names the field, the case and the estimate."""
+    from .blocks_stage import block_memory_estimate
+    from .budgets import check_memory
+    from .study import case_domain_xy
+    from .study_config import params_text
+
+    largest = None
+    for case in pending:
+        cfg = case.document.blocks
+        try:
+            estimate = block_memory_estimate(cfg, case_domain_xy(case.document), cfg.joint_sets())
+        except (ValueError, AttributeError, StopIteration):  # the case reports it when it runs
+            continue
+        if estimate is not None and (largest is None or estimate[0] > largest[0][0]):
+            largest = estimate, case
+    if largest is None:
+        return
+    (needed, field, what, fix), case = largest
+    check_memory(workers * needed, f"{config_path}: {field}",
+                 f"{workers} worker(s) at once, each on a case of up to {what} (study case "
+                 f"{case.index}: {params_text(case.params) or 'the base config'}, the largest of "
+                 f"{len(pending)} cases to run)",
+                 f"{fix}, or run fewer workers (--workers)")
 
 
 def _case_header(case, config_path) -> str:
@@ -236,14 +302,16 @@ def run(args) -> int:
         return 0
 
     scheduler = args.scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS") or None
+    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
+    workers = max(1, min(workers, len(pending) or 1))
     client = None
     if pending:
         _check_case_files(pending, args.config, digests)
+        # a Dask worker runs one case at a time, in memory of its own
+        _check_memory_budget(pending, args.config, workers if scheduler is None else 1)
         _preflight(pending, args.config)
         if scheduler is not None:
             client = _connect(scheduler, args.connect_timeout)
-    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
-    workers = max(1, min(workers, len(pending) or 1))
 
     config_path = os.path.abspath(args.config)
     tasks = [{"case": c.index, "case_id": c.case_id, "config": c.raw, "config_path": config_path,

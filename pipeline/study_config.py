@@ -383,6 +383,11 @@ def expand_cases(document: StudyDocument, raw: dict, config_path,
                 except ValidationError as exc:
                     raise ConfigError(shown, _case_problems(exc, data, params, entry, index)) \
                         from None
+                if doc.solve is not None and doc.solve.blocks_file is not None:
+                    raise ConfigError(shown, [("solve.blocks_file", "a study builds each case's "
+                                               "blocks from its [blocks] section and does not "
+                                               "read blocks_file: remove it (rockmass solve "
+                                               "solves a blocks.json)")])
                 inputs = _input_files(doc, config_path, digests)
                 digest = hashlib.sha256(canonical_json(
                     {"config_hash": config_hash(doc), "inputs": inputs}).encode()).hexdigest()

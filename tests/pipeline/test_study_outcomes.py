@@ -37,7 +37,7 @@ FALL_M = 13.6  # a keyblock falling under gravity at the step cap (issue 14: 0.4
 
 def _stage(name, *, status="converged", kind="static", converged=True, steps=120,
            equilibrium_m=0.0, boundary_equilibrium_m=0.0, any_block_m=None, failed=(),
-           monitors=None, worst_ratio=1e-6, worst_block=4, diagnostic=None):
+           monitors=None, worst_ratio=1e-6, worst_block=4, diagnostic=None, broken=0):
     """A StageResult as the solver returns it. ``any_block_m``: the displacement over every block, falls included
     (default: the equilibrium one)."""
     from rockmass.solver.result import StageResult
@@ -48,7 +48,7 @@ def _stage(name, *, status="converged", kind="static", converged=True, steps=120
         stable_time_step_s=2e-4, simulated_time_s=steps * 1e-4, converged=converged,
         unbalanced_ratio=worst_ratio / 10, max_displacement_m=any_block_m,
         max_displacement_boundary_m=any_block_m, max_displacement_stage_m=any_block_m,
-        slipping_contacts=0, open_contacts=0, newly_broken_contacts=0, broken_contacts=0,
+        slipping_contacts=0, open_contacts=0, newly_broken_contacts=0, broken_contacts=broken,
         detached_blocks=0, blocks_removed=len(failed), energy={}, wall_time_s=0.01,
         contact_rebuilds=0, diagnostic=diagnostic,
         # the fields issue 14 adds
@@ -430,3 +430,16 @@ def test_overlap_case_is_kept_on_resume_and_the_study_exits_1(study_file, tmp_pa
     assert _run(cfg, out) == 1
     assert "1 already finished (skipped), 0 to run" in capsys.readouterr().err
     assert len(calls) == 1
+
+
+def test_new_cracks_are_the_bonds_broken_after_the_initial_equilibrium(study_file, tmp_path,
+                                                                       fake_solver, monkeypatch):
+    """Three bonds broke settling under gravity, seven by the end: broken_contacts 7, of which
+    the excavation made new_cracks = 4."""
+    cracked = _result([_stage("equilibrium", broken=3),
+                       _stage("tunnel", equilibrium_m=1e-3, boundary_equilibrium_m=1e-3,
+                              monitors=_monitors(1e-3), broken=7)])
+    monkeypatch.setitem(OUTCOMES, (250, 0), cracked)
+    assert _run(study_file, tmp_path / "o") in (0, 1)
+    row = next(r for r in _rows(tmp_path / "o" / "results.csv") if _key(r) == (250, 0))
+    assert (int(row["broken_contacts"]), int(row["new_cracks"])) == (7, 4)
