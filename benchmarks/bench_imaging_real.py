@@ -2,6 +2,7 @@
 
     python benchmarks/bench_imaging_real.py [--quick] [--detectors ridge,learned] [--splits val,train]
                                             [--no-synthetic] [--no-settings]
+                                            [--face-masks full,border,off]
 
 1. Real faces: ``../shared/data/rock-face-fractures`` (natural rock faces, 300-400 px, with
    hand-traced major fractures painted red about 5 px wide; AGPL-3.0, read from the shared data
@@ -26,8 +27,16 @@
    (:func:`rockmass.imaging.synthetic_field.field_face`), buffered F1 at 3 px, dP21, dP20, run time;
    the learned detector also at the last session's setting (not with ``--no-settings``).
 
+   With ``--face-masks`` (e.g. ``full,border,off``), each detector's defaults are run once per
+   ``ExtractParams.face_mask`` mode listed (docs/imaging.md §2.1), the extraction time including
+   the mask's; the default mode alone otherwise (the same for the synthetic faces of section 2).
+   Section 4 then times the mask by itself.
+
 3. Throughput (not with ``--quick``): one 12 MP moderate face (4000 x 3000 px, processed
    down-sampled to the default 4 MP), whole ``extract`` call per detector, MP/s of the input.
+
+4. Face mask alone (with ``--face-masks``): :func:`rockmass.imaging.face_mask.face_mask` on a
+   12 MP (3000 x 4000) RGB photo (the moderate face of section 3 in colour), best of 5, one core.
 
 The header names the shipped model file and its size. Rows also go to
 benchmarks/results/bench_imaging_real.json (``..._quick.json`` with ``--quick``).
@@ -167,14 +176,20 @@ def main(argv=None) -> int:
     parser.add_argument("--no-synthetic", action="store_true", help="real images only")
     parser.add_argument("--no-settings", action="store_true",
                         help="real images at the defaults only (not the other learned settings)")
+    parser.add_argument("--face-masks", default="",
+                        help="comma-separated ExtractParams.face_mask modes to compare on the real "
+                             "faces (full, border, off); default: the default mode only")
     args = parser.parse_args(argv)
     detectors = [d.strip() for d in args.detectors.split(",") if d.strip()]
     splits = [d.strip() for d in args.splits.split(",") if d.strip()]
+    masks = [m.strip() for m in args.face_masks.split(",") if m.strip()]
 
     print(header("photo -> traces on real labelled faces and synthetic faces"))
     print(f"learned model: {MODEL_FILE.name}, {MODEL_FILE.stat().st_size} bytes")
     payload: dict = {"data": str(DATA), "tolerance_px": TOLERANCE_PX, "real": [], "synthetic": []}
-    settings = [("defaults", {})]
+    settings = ([("defaults", {})] if not masks else
+                [(f"face_mask={m}" + (" (default)" if m == ExtractParams().face_mask else ""),
+                  {"face_mask": m}) for m in masks])
     for split in splits:
         pairs = real_pairs(split) if (DATA / split / "images").is_dir() else []
         if not pairs:
@@ -207,8 +222,11 @@ def main(argv=None) -> int:
         rows = []
         for name, make in makers.items():
             for detector in detectors:
-                rows.append({"detector": detector, "faces": f"{name}, seeds {seeds}",
-                             **score_synthetic(make, seeds, ExtractParams(detector=detector))})
+                for mode in masks or [None]:
+                    label = detector if mode is None else f"{detector}, face_mask={mode}"
+                    extra = {} if mode is None else {"face_mask": mode}
+                    rows.append({"detector": label, "faces": f"{name}, seeds {seeds}",
+                                 **score_synthetic(make, seeds, ExtractParams(detector=detector, **extra))})
                 if detector == "learned" and not args.no_settings:
                     label, extra = LEARNED_SETTINGS[0]
                     rows.append({"detector": f"learned, {label}", "faces": f"{name}, seeds {seeds}",
@@ -230,7 +248,25 @@ def main(argv=None) -> int:
         print("\n3. throughput (12 MP moderate face, down-sampled to 4 MP; one core)")
         print(table(rows, [("detector", "s"), ("MP", ".1f"), ("time_s", ".2f"), ("MP_per_s", ".2f")]))
         payload["throughput"] = rows
-    path = save("bench_imaging_real_quick" if args.quick else "bench_imaging_real", payload)
+    if masks:
+        from rockmass.imaging.face_mask import face_mask
+        from rockmass.imaging.synthetic import synthetic_face
+
+        grey = synthetic_face("moderate", seed=1, shape_px=(3000, 4000), m_per_px=0.003).image
+        rgb = np.clip(np.stack([grey * 1.05, grey, grey * 0.9], axis=2) * 255, 0, 255).astype(np.uint8)
+        rows = []
+        for mode in [m for m in masks if m != "off"]:
+            times = []
+            for _ in range(5):
+                t0 = time.perf_counter()
+                face_mask(rgb, mode=mode)
+                times.append(time.perf_counter() - t0)
+            rows.append({"mode": mode, "MP": rgb.shape[0] * rgb.shape[1] / 1e6, "time_s": min(times)})
+        print("\n4. face mask alone (12 MP RGB, best of 5; one core)")
+        print(table(rows, [("mode", "s"), ("MP", ".1f"), ("time_s", ".3f")]))
+        payload["face_mask_time"] = rows
+    suffix = "_face_mask" if masks else ""
+    path = save(("bench_imaging_real_quick" if args.quick else "bench_imaging_real") + suffix, payload)
     print(f"\nrows saved to {path}")
     return 0
 

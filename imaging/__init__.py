@@ -4,6 +4,8 @@
   for dark lines, hysteresis threshold, cleanup, skeleton graph, spur pruning, X-node repair, gap
   bridging, linking of pieces that continue one another (:mod:`~rockmass.imaging.link`),
   simplified polylines in metres; every setting in :class:`ExtractParams`.
+- :mod:`~rockmass.imaging.face_mask` — the rock face against the image border, over-exposed
+  regions, lining / shotcrete / sky and machinery (``ExtractParams.face_mask``; a ROI replaces it).
 - :mod:`~rockmass.imaging.metrics` — accuracy against ground truth (buffered F1, P21 / P20, set
   angles, D_box, nodes).
 - :mod:`~rockmass.imaging.synthetic` — synthetic face photographs with known traces (easy /
@@ -19,6 +21,7 @@
 
 from .enhance import flatten_illumination, read_photo, to_grey
 from .extract import ExtractParams, Extraction, ScaleInfo, extract, scale_from_control_points
+from .face_mask import FaceMaskParams, face_mask, face_mask_cues
 from .frame import rc_to_uv, uv_to_rc
 from .learned import joint_probability, load_model
 from .link import extend_to_border, link_traces
@@ -38,6 +41,7 @@ __all__ = [
     "read_photo", "to_grey", "flatten_illumination",
     "ridge_response", "ridge_sigmas",
     "segment_ridges", "hysteresis_mask", "roi_mask", "robust_thresholds",
+    "face_mask", "face_mask_cues", "FaceMaskParams",
     "joint_probability", "load_model",
     "SkeletonGraph", "skeletonize", "build_graph", "prune_spurs", "repair_crossings", "bridge_gaps",
     "chain_traces", "link_traces", "extend_to_border",

@@ -1,5 +1,8 @@
 """The extraction overlay: traces coloured by joint set, drawn over the photograph.
 
+The sampling window (a ROI, or the face-mask outline of docs/imaging.md §2.1) is drawn as a dashed
+yellow line when it is not the photo's edge.
+
 When the traces carry a ``confidence`` attribute (:func:`rockmass.imaging.extract`, docs/imaging.md
 §7), each is drawn with opacity 0.25 + 0.75 · confidence, so doubtful traces fade.
 
@@ -57,6 +60,13 @@ def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title
             alpha = np.clip(np.asarray(confidence, dtype=float), 0.0, 1.0)
             colours[:, 3] = 0.25 + 0.75 * np.nan_to_num(alpha)[trace_map.segment_trace_index()]
         ax.add_collection(LineCollection(lines, colors=colours, linewidths=1.2))
+    window = trace_map.window_xy_m
+    if window is not None:  # a ROI or face-mask outline: drawn dashed unless it is the photo's edge
+        ring = uv_to_rc(np.vstack([window, window[:1]]), h, m_per_px)
+        x, y = ring[:, 1], ring[:, 0]
+        area = 0.5 * abs(np.dot(x[:-1], y[1:]) - np.dot(x[1:], y[:-1]))
+        if area < 0.995 * h * w:
+            ax.plot(x, y, color="#ffd400", linewidth=1.0, linestyle="--", label="_window")
     _set_legend(ax, set_ids)
     ax.set_xlim(-0.5, w - 0.5)
     ax.set_ylim(h - 0.5, -0.5)

@@ -4,8 +4,10 @@ Runs :func:`rockmass.imaging.extract`, then the trace-map statistics of ``rockma
 sets, P20, P21, lengths, topology) and the box-counting dimension, and writes under ``--out DIR``:
 ``traces.geojson`` (one LineString per trace in the face frame, properties ``id``, ``set``,
 ``length_m``, ``angle_deg``), ``summary.json`` (statistics, parameters, scale, timings, units,
-warnings), ``overlay.png`` (traces by set over the photo), ``rose.png``, ``manifest.json`` and, with
-``--debug``, the intermediate images ``debug_*.png`` — all of them or none.
+warnings, and under ``extraction.face_mask`` whether a face mask or ROI limited the traces and
+the share of the photo it left out), ``overlay.png`` (traces by set over the photo, and the
+sampling window's outline when it is not the photo's edge), ``rose.png``, ``manifest.json``
+and, with ``--debug``, the intermediate images ``debug_*.png`` — all of them or none.
 
 Without a scale (``--m-per-px``, ``--control-points`` or ``[imaging] m_per_px``) everything is in
 pixels and labelled so, with a warning.
@@ -46,6 +48,16 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     roi.add_argument("--roi-px", dest="roi_px",
                      help="region of interest: GeoJSON polygon in image pixels (x = column, y = row "
                           "down, as image annotation tools write it)")
+    mask = p.add_mutually_exclusive_group()
+    mask.add_argument("--face-mask", choices=("border", "full", "off"), dest="face_mask",
+                      help="where traces may be found when no ROI is given: 'border' (default) "
+                           "leaves out a band along the image border (1 %% of the short side); "
+                           "'full' also leaves out over-exposed regions, large smooth ones "
+                           "(shotcrete, lining, sky) and large strongly coloured ones (machinery); "
+                           "'off' uses the whole photo (see docs/imaging.md §2.1). --roi / --roi-px "
+                           "replace it")
+    mask.add_argument("--no-face-mask", action="store_const", const="off", dest="face_mask",
+                      help="same as --face-mask off")
     p.add_argument("--bright-lines", action="store_true", dest="bright_lines",
                    help="look for bright joints (filled joints, veins, mortar) instead of dark ones; "
                         "set --joint-width to their full width (about 8 px for the mortar of "

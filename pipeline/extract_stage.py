@@ -3,7 +3,9 @@
 Joint traces from a face photograph, with their statistics: :func:`compute` reads the photograph,
 extracts the traces (:func:`rockmass.imaging.extract`) and analyses them; :func:`produce` also
 writes ``traces.geojson``, ``summary.json``, ``overlay.png``, ``rose.png``, ``manifest.json`` and
-the ``debug_*.png`` images into a folder, all of them or none.
+the ``debug_*.png`` images into a folder, all of them or none. Each trace of ``traces.geojson``
+carries fractopo's validation labels in ``VALIDATION_ERRORS`` (:mod:`rockmass.dfn.trace_validation`;
+flagged, never fixed), counted in ``summary.json`` under ``statistics.validation``.
 
 The command (:mod:`rockmass.extract_cmd`) parses the arguments, calls :func:`produce` and prints;
 ``rockmass run`` calls :func:`produce` with the arguments it planned.
@@ -45,6 +47,8 @@ def _settings(args, document=None):
         values["params"] = {**values["params"], "line_polarity": "bright"}
     if getattr(args, "detector", None) is not None:  # ``rockmass run`` plans args without it
         values["params"] = {**values["params"], "detector": args.detector}
+    if getattr(args, "face_mask", None) is not None:  # likewise
+        values["params"] = {**values["params"], "face_mask": args.face_mask}
     return values
 
 
@@ -104,15 +108,20 @@ def compute(args, document=None):
     summary = {"input": {"path": str(path), "shape_px": list(image.shape[:2])},
                "extraction": result.summary()}
     set_ids = np.full(traces.n_traces, -1, dtype=np.int64)
+    validation = np.full(traces.n_traces, "", dtype=str)
     if traces.n_traces >= 1:
+        from .dfn.trace_validation import errors_text
+
         stats = trace_map_statistics(traces, n_sets=args.n_sets, length_unit=unit)
         set_ids = np.array(stats.traces.set_id, dtype=np.int64)
+        validation = errors_text(stats.traces.validation_errors)
         dimension = box_count(traces)
         summary["statistics"] = {**stats.to_dict(), "Box-counting Dimension": dimension_entry(dimension)}
     else:
         summary["statistics"] = None
         summary["extraction"]["warnings"].append("no trace was found: nothing to analyse")
-    attributes = {**traces.attributes, "set": set_ids}
+    # fractopo's VALIDATION_ERRORS per trace (issue 19): what fractopo would flag, never fixed here
+    attributes = {**traces.attributes, "set": set_ids, "VALIDATION_ERRORS": validation}
     traces = dataclasses.replace(traces, attributes=attributes)
     timings = {"read_s": t1 - t0, "extract_s": t2 - t1, "analyse_s": time.perf_counter() - t2}
     return summary, result, traces, image, set_ids, timings, settings

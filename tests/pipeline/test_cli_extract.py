@@ -111,3 +111,25 @@ def test_extract_debug_images_do_not_switch_on_tracebacks(tmp_path, capsys):
     assert main(["extract", str(bad), "--m-per-px", "0.02", "--out", str(tmp_path / "out"), "--debug"]) == 2
     err = capsys.readouterr().err
     assert "face.png" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("flags, used, mode", [([], True, "border"), (["--face-mask", "full"], True, "full"),
+                                               (["--no-face-mask"], False, "off")])
+def test_face_mask_is_on_by_default_and_recorded_in_the_summary(face_png, tmp_path, flags, used, mode):
+    path, _ = face_png
+    out = tmp_path / "out"
+    assert main(["extract", str(path), "--m-per-px", "0.02", "--out", str(out), *flags]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    info = summary["extraction"]["face_mask"]
+    assert info["used"] is used and info["mode"] == mode
+    assert summary["extraction"]["params"]["face_mask"] == mode
+    # the border band alone: 1 % of the 300 px short side (3 px) on each side of a 300 x 450 photo
+    expected = 1 - (300 - 6) * (450 - 6) / (300 * 450) if used else 0.0
+    assert info["masked_fraction"] == pytest.approx(expected, abs=0.005)
+
+
+def test_face_mask_flags_are_exclusive(face_png, tmp_path, capsys):
+    path, _ = face_png
+    with pytest.raises(SystemExit) as exc:
+        main(["extract", str(path), "--out", str(tmp_path / "o"), "--no-face-mask", "--face-mask", "full"])
+    assert exc.value.code == 2
