@@ -5,11 +5,12 @@ cavern costs against what it changes.
 
 Table 1 — zones alone (docs/dem.md §16.7, problems 19–21). A circular opening of radius a in a
 plate under σ_xx = 10, σ_yy = 20 MPa (Kirsch; elastic) and under hydrostatic 30 MPa in
-Mohr–Coulomb rock (Salençon): the quarter model of tests/solver/test_zones.py at 12–48 zones
+Mohr–Coulomb rock (Salençon) and in Hoek–Brown rock (σ_ci = 10 MPa, GSI 100, m_i = 10;
+Carranza-Torres & Fairhurst): the quarter model of tests/solver/test_zones.py at 12–48 zones
 around the quarter. Per row: zones, steps to equilibrium (unbalanced ratio 1e-7), wall time,
 zone updates per second (zones × steps / time: stress update, nodal forces and node motion), and
 the error — Kirsch: the wall's radial displacement and the hoop stress extrapolated to the wall,
-in % of their peaks; Salençon: the plastic radius from the yielded area.
+in % of their peaks; Salençon, Hoek–Brown: the plastic radius from the yielded area.
 
 Table 2 (``--cavern``) — the seed-000 cavern of samples/solve_cavern.toml, rigid, against
 samples/solve_cavern_deformable.toml (the blocks within about two spans of the opening zoned at
@@ -34,8 +35,9 @@ if str(_HERE.parent) not in sys.path:  # the opening model of tests/solver
     sys.path.append(str(_HERE.parent))
 from _common import header, save, table  # noqa: E402
 
-from rockmass.solver.zones import Elastic, MohrCoulomb  # noqa: E402
-from tests.solver._zone_models import kirsch_errors, opening, salencon_plastic_radius  # noqa: E402
+from rockmass.solver.zones import Elastic, HoekBrown, MohrCoulomb  # noqa: E402
+from tests.solver._zone_models import (hoek_brown_plastic_radius, kirsch_errors, opening,  # noqa: E402
+                                      salencon_plastic_radius)
 
 K_BULK, G_SHEAR = 10e9, 6e9
 NU = (3 * K_BULK - 2 * G_SHEAR) / (2 * (3 * K_BULK + G_SHEAR))
@@ -62,7 +64,23 @@ def zones_table(quick: bool) -> list[dict]:
                      "zone_updates_per_s": len(z.tri) * info["steps"] / secs,
                      "error_1_pct": 100 * (rp / exact - 1), "error_2_pct": None,
                      "what": f"plastic radius (exact {exact:.3f} a)"})
+    hb = HoekBrown(K_BULK, G_SHEAR, sigma_ci_pa=10e6, gsi=100.0, mi=10.0)
+    exact = hoek_brown_plastic_radius(1.0, 30e6, 0.0, 10e6, hb.mb, hb.s)
+    for nt in sizes:
+        z, *_rest, info, secs = opening(hb, nt, 1.05, 30e6, 30e6, NU)
+        rp = math.sqrt(1.0 + 4 * z.plastic_area() / math.pi)
+        rows.append({"problem": "Hoek-Brown", "sectors": nt, "zones": len(z.tri),
+                     "steps": info["steps"], "wall_s": secs,
+                     "zone_updates_per_s": len(z.tri) * info["steps"] / secs,
+                     "error_1_pct": 100 * (rp / exact - 1), "error_2_pct": None,
+                     "what": f"plastic radius (exact {exact:.3f} a)"})
     return rows
+
+
+def _mm(metres: float | None) -> float | None:
+    """A monitor's displacement in mm; None (printed "-") when its point has no block left (the
+    crown's block failed and was taken out)."""
+    return None if metres is None else 1e3 * metres
 
 
 def cavern_row(config: str, label: str) -> dict:
@@ -80,9 +98,9 @@ def cavern_row(config: str, label: str) -> dict:
             "dt_first_stage_s": r.stages[0].time_step_s,
             "pieces": r.info["blocks"], "pairs": r.info["pairs"],
             "zones": r.info.get("zones", 0), "status": r.status,
-            "crown_mm": 1e3 * last.monitors.get("crown", math.nan),
-            "left_wall_mm": 1e3 * last.monitors.get("left_wall", math.nan),
-            "right_wall_mm": 1e3 * last.monitors.get("right_wall", math.nan),
+            "crown_mm": _mm(last.monitors.get("crown")),
+            "left_wall_mm": _mm(last.monitors.get("left_wall")),
+            "right_wall_mm": _mm(last.monitors.get("right_wall")),
             "boundary_mm": 1e3 * last.max_displacement_boundary_equilibrium_m,
             "failed_blocks": sum(len(s.failed_blocks) for s in r.stages),
             "plastic_area_m2": zs.get("plastic_area_m2", 0.0)}

@@ -4,15 +4,28 @@
 selects the disks that the box cuts and applies the polygon-to-disk area correction;
 :func:`clip_polygons` gives the clipped polygons themselves, for ``fractures.vtu``
 (:mod:`rockmass.dfn.network_io`). Private; imported lazily (numba is heavy).
+
+Each kernel has one explicit signature (compiled, or read from numba's cache, when this module is
+imported): C-contiguous float64 arrays, the inputs typed read-only so that read-only and writable
+arrays share the one compiled version. Plain loops only: whole-array assignment and array
+expressions pull numba's broadcasting and error-message machinery into the compile (seconds).
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+
+_F1 = types.float64[::1]
+_F2 = types.float64[:, ::1]
+_F3 = types.float64[:, :, ::1]
+_I1 = types.int64[::1]
+_F1R = types.Array(types.float64, 1, "C", readonly=True)
+_F2R = types.Array(types.float64, 2, "C", readonly=True)
+_F3R = types.Array(types.float64, 3, "C", readonly=True)
 
 
-@njit(cache=True)
+@njit(types.int64(_F2, types.int64, _F2, types.int64, types.float64, types.boolean), cache=True)
 def _clip_axis(src, n_src, dst, axis, value, keep_below):
     """Sutherland-Hodgman step: clip the polygon src[:n_src] by x_axis <= value (or >= value).
 
@@ -51,7 +64,7 @@ def _clip_axis(src, n_src, dst, axis, value, keep_below):
     return n_out
 
 
-@njit(cache=True)
+@njit(types.int64(_F2, _F2, types.int64, _F1R, _F1R), cache=True)
 def _clip_box(buf_a, buf_b, n, box_lo, box_hi):
     """Clip the convex polygon buf_a[:n] by the six planes of the box; return its vertex count.
 
@@ -68,7 +81,14 @@ def _clip_box(buf_a, buf_b, n, box_lo, box_hi):
     return n
 
 
-@njit(cache=True)
+@njit(types.boolean(types.float64, types.float64, types.float64, types.float64, types.float64,
+                    types.float64, types.float64), cache=True)
+def _same_vertex(ax, ay, az, bx, by, bz, tol):
+    """Whether the points a and b differ by at most tol on every axis."""
+    return abs(ax - bx) <= tol and abs(ay - by) <= tol and abs(az - bz) <= tol
+
+
+@njit(types.void(_F3R, _F1R, _F1R, _F1R, _F3, _I1), cache=True)
 def clip_polygons(polygons, box_lo, box_hi, tol, out, counts):
     """Clip convex planar polygons by the box [box_lo, box_hi]; write the parts that remain.
 
@@ -86,25 +106,24 @@ def clip_polygons(polygons, box_lo, box_hi, tol, out, counts):
     buf_a = np.empty((m + 6, 3))
     buf_b = np.empty((m + 6, 3))
     for i in range(polygons.shape[0]):
-        buf_a[:m] = polygons[i]
+        for j in range(m):
+            for c in range(3):
+                buf_a[j, c] = polygons[i, j, c]
         n = _clip_box(buf_a, buf_b, m, box_lo, box_hi)
         k = 0
         for j in range(n):
-            if k == 0 or not _same_vertex(buf_a, j, out[i], k - 1, tol[i]):
-                out[i, k] = buf_a[j]
+            if k == 0 or not _same_vertex(buf_a[j, 0], buf_a[j, 1], buf_a[j, 2], out[i, k - 1, 0],
+                                          out[i, k - 1, 1], out[i, k - 1, 2], tol[i]):
+                for c in range(3):
+                    out[i, k, c] = buf_a[j, c]
                 k += 1
-        while k > 1 and _same_vertex(out[i], k - 1, out[i], 0, tol[i]):  # the ring closes on itself
-            k -= 1
+        while k > 1 and _same_vertex(out[i, k - 1, 0], out[i, k - 1, 1], out[i, k - 1, 2],
+                                     out[i, 0, 0], out[i, 0, 1], out[i, 0, 2], tol[i]):
+            k -= 1  # the ring closes on itself
         counts[i] = k if k >= 3 else 0
 
 
-@njit(cache=True)
-def _same_vertex(a, j, b, k, tol):
-    """Whether a[j] and b[k] differ by at most tol on every axis."""
-    return abs(a[j, 0] - b[k, 0]) <= tol and abs(a[j, 1] - b[k, 1]) <= tol and abs(a[j, 2] - b[k, 2]) <= tol
-
-
-@njit(cache=True)
+@njit(types.void(_F2R, _F2R, _F2R, _F1R, _F1R, _F1R, types.int64, _F1), cache=True)
 def clipped_polygon_areas(centre, e1, e2, radius, box_lo, box_hi, n_vertices, out):
     """Area of each regular n-gon inscribed in a disk, clipped by the box [box_lo, box_hi].
 
@@ -117,8 +136,11 @@ def clipped_polygon_areas(centre, e1, e2, radius, box_lo, box_hi, n_vertices, ou
     buf_a = np.empty((cap, 3))
     buf_b = np.empty((cap, 3))
     step = 2.0 * np.pi / n_vertices
-    cos_t = np.cos(np.arange(n_vertices) * step)
-    sin_t = np.sin(np.arange(n_vertices) * step)
+    cos_t = np.empty(n_vertices)
+    sin_t = np.empty(n_vertices)
+    for k in range(n_vertices):
+        cos_t[k] = np.cos(k * step)
+        sin_t[k] = np.sin(k * step)
     for i in range(centre.shape[0]):
         r = radius[i]
         for k in range(n_vertices):

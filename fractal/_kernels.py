@@ -24,6 +24,15 @@ anti-diagonals are treated alike); a piece running along a grid line is given to
 the right. A coordinate equal to the far edge of the grid is given to the last box. With
 ``strict=True`` pieces lying on a grid line mark nothing: that is the rule for polygon *boundaries*,
 whose interior cells are found from cell centres instead.
+
+Compile time
+------------
+The helpers used by every count have one explicit signature each (compiled, or read from numba's
+cache, on import), so a literal argument (``strict=True`` at one call, ``False`` at another) does
+not compile them twice; the kernels use plain loops, not numba's sort, ``np.round`` or
+``reshape``, whose implementations add seconds of compilation to a first run. The rare paths
+(Bresenham lines, grids too large for a mark array) are kernels of their own behind the Python
+dispatchers :func:`rasterize_segments` and :func:`count_crossed_boxes`: compiled only when used.
 """
 
 import numpy as np
@@ -32,8 +41,13 @@ from numba.extending import intrinsic
 
 _PIECE_EPS = 1e-9  # pieces shorter than this (box units) are corner touches, not crossings
 
+_F8, _I8 = types.float64, types.int64
+_SEG = types.Array(types.float64, 2, "C", readonly=True)  # read-only: writable arrays convert
+_MARKS = types.uint8[:, ::1]
+_IDS = types.int64[::1]
 
-@njit(cache=True)
+
+@njit(types.UniTuple(_F8, 2)(_F8, _F8), cache=True)
 def _first_crossing(p0, dp):
     """Parameter t of the first grid line crossed along one axis, and the step between lines.
 
@@ -47,7 +61,7 @@ def _first_crossing(p0, dp):
     return np.inf, np.inf
 
 
-@njit(cache=True)
+@njit(_I8(_F8, _F8, _F8, _F8, _I8, _I8, types.boolean, _IDS), cache=True)
 def _segment_cells(x0, y0, x1, y1, nbx, nby, strict, ids):
     """Write the ids ``j * nbx + i`` of the cells crossed by one segment (box units) into ``ids``.
 
@@ -91,7 +105,7 @@ def _segment_cells(x0, y0, x1, y1, nbx, nby, strict, ids):
     return n
 
 
-@njit(cache=True)
+@njit(_I8(_SEG, _F8), cache=True)
 def _cell_bound(seg, scale):
     """Upper bound on the cells one segment of ``seg`` (n, 4) crosses at 1/scale box size."""
     bound = 0
@@ -101,15 +115,17 @@ def _cell_bound(seg, scale):
     return bound
 
 
-@njit(cache=True)
+@njit(_I8(_F8, _F8, _F8, _F8, _I8, _I8, _MARKS, types.boolean, _IDS), cache=True)
 def _mark_segment(x0, y0, x1, y1, nbx, nby, marks, strict, scratch):
     """Mark the cells crossed by one segment in ``marks`` (nby, nbx) uint8; return cells newly marked."""
     n = _segment_cells(x0, y0, x1, y1, nbx, nby, strict, scratch)
-    flat = marks.reshape(-1)
+    cols = marks.shape[1]  # the id is a flat index into the C-ordered marks
     new = 0
     for m in range(n):
-        if flat[scratch[m]] == 0:
-            flat[scratch[m]] = 1
+        r = scratch[m] // cols
+        c = scratch[m] - r * cols
+        if marks[r, c] == 0:
+            marks[r, c] = 1
             new += 1
     return new
 
@@ -143,21 +159,36 @@ def _mark_bresenham(x0, y0, x1, y1, nbx, nby, marks):
     return new
 
 
-@njit(cache=True)
 def rasterize_segments(seg, nbx, nby, marks, bresenham):
-    """Mark the cells of all segments ``seg`` (n, 4) float64 in box units; return cells marked."""
+    """Mark the cells of all segments ``seg`` (n, 4) float64 in box units; return cells marked.
+
+    A Python dispatcher over two kernels, so that a run compiles only the line rule it uses."""
+    if bresenham:
+        return _rasterize_bresenham(seg, nbx, nby, marks)
+    return _rasterize_supercover(seg, nbx, nby, marks)
+
+
+@njit(cache=True)
+def _rasterize_supercover(seg, nbx, nby, marks):
+    """:func:`rasterize_segments` with the cell rule (every cell a segment passes through)."""
     scratch = np.empty(_cell_bound(seg, 1.0), dtype=np.int64)
     total = 0
     for k in range(seg.shape[0]):
-        if bresenham:
-            total += _mark_bresenham(seg[k, 0], seg[k, 1], seg[k, 2], seg[k, 3], nbx, nby, marks)
-        else:
-            total += _mark_segment(seg[k, 0], seg[k, 1], seg[k, 2], seg[k, 3], nbx, nby, marks,
-                                   False, scratch)
+        total += _mark_segment(seg[k, 0], seg[k, 1], seg[k, 2], seg[k, 3], nbx, nby, marks,
+                               False, scratch)
     return total
 
 
 @njit(cache=True)
+def _rasterize_bresenham(seg, nbx, nby, marks):
+    """:func:`rasterize_segments` with 8-connected Bresenham lines."""
+    total = 0
+    for k in range(seg.shape[0]):
+        total += _mark_bresenham(seg[k, 0], seg[k, 1], seg[k, 2], seg[k, 3], nbx, nby, marks)
+    return total
+
+
+@njit(types.boolean(_F8, _F8, _SEG), cache=True)
 def _point_in_ring(px, py, ring):
     """Even-odd rule: is (px, py) inside the closed ring (k, 2) (first vertex not repeated)?"""
     inside = False
@@ -217,7 +248,7 @@ def mark_polygon_cells(ring, nbx, nby, marks):
     return total
 
 
-@njit(cache=True)
+@njit(_I8(_MARKS, _I8, _I8), cache=True)
 def fold_and_count(marks, nbx, nby):
     """Fold a shifted grid onto the torus and count marked boxes.
 
@@ -350,7 +381,6 @@ def count_occupied_boxes(bits, sizes, order, off_r, off_c, counts):
     return counts
 
 
-@njit(cache=True)
 def count_crossed_boxes(seg, side, sizes, offsets, max_mark_cells, counts, n_boxes):
     """Exact vector box counting: boxes of side ``sizes[a]`` crossed by the segments.
 
@@ -362,19 +392,42 @@ def count_crossed_boxes(seg, side, sizes, offsets, max_mark_cells, counts, n_box
     edges. Grids of at most ``max_mark_cells`` boxes use a mark array; larger ones collect the box
     ids of every piece and count distinct ids after a sort, so any box size works.
     No checks: sizes > 0, segments inside the frame.
+
+    A Python dispatcher: :func:`_count_marked_boxes` counts the grids that fit a mark array and
+    leaves the others at -1 for :func:`_count_distinct_boxes`, compiled only when a grid needs it.
     """
+    _count_marked_boxes(seg, side, sizes, offsets, max_mark_cells, counts, n_boxes)
+    if (counts < 0).any():
+        _count_distinct_boxes(seg, side, sizes, offsets, max_mark_cells, counts)
+    return counts
+
+
+@njit(types.UniTuple(_I8, 4)(_F8, _F8, _F8, _F8), cache=True)
+def _shifted_grid(side, d, ox, oy):
+    """Boxes per axis (nbx, nby) of the grid of side ``d`` shifted by (ox, oy) that covers
+    [0, side]^2, and the boxes per axis that count (nbx_eff, nby_eff): a cyclic grid (``d``
+    divides ``side`` to 1e-9) folds its extra column and row onto the first."""
+    whole = side / d
+    nearest = round(whole)  # round half to even, as np.round
+    cyclic = abs(whole - nearest) <= 1e-9 * whole
+    nbx = max(int(np.ceil((side + ox) / d - 1e-9)), 1)
+    nby = max(int(np.ceil((side + oy) / d - 1e-9)), 1)
+    nbx_eff = min(nbx, nearest) if cyclic else nbx
+    nby_eff = min(nby, nearest) if cyclic else nby
+    return nbx, nby, nbx_eff, nby_eff
+
+
+@njit(cache=True)
+def _count_marked_boxes(seg, side, sizes, offsets, max_mark_cells, counts, n_boxes):
+    """:func:`count_crossed_boxes` on the grids of at most ``max_mark_cells`` boxes (a mark
+    array); the counts of larger grids are set to -1."""
     for a in range(sizes.shape[0]):
         d = sizes[a]
         scratch = np.empty(_cell_bound(seg, 1.0 / d), dtype=np.int64)
-        whole = side / d
-        cyclic = abs(whole - np.round(whole)) <= 1e-9 * whole
         for b in range(offsets.shape[0]):
             ox = offsets[b, 0] * d
             oy = offsets[b, 1] * d
-            nbx = max(int(np.ceil((side + ox) / d - 1e-9)), 1)
-            nby = max(int(np.ceil((side + oy) / d - 1e-9)), 1)
-            nbx_eff = min(nbx, int(np.round(whole))) if cyclic else nbx
-            nby_eff = min(nby, int(np.round(whole))) if cyclic else nby
+            nbx, nby, nbx_eff, nby_eff = _shifted_grid(side, d, ox, oy)
             n_boxes[a, b] = nbx_eff * nby_eff
             if nbx * nby <= max_mark_cells:
                 marks = np.zeros((nby, nbx), dtype=np.uint8)
@@ -384,6 +437,21 @@ def count_crossed_boxes(seg, side, sizes, offsets, max_mark_cells, counts, n_box
                                   nbx, nby, marks, False, scratch)
                 counts[a, b] = fold_and_count(marks, nbx_eff, nby_eff)
             else:
+                counts[a, b] = -1
+    return counts
+
+
+@njit(cache=True)
+def _count_distinct_boxes(seg, side, sizes, offsets, max_mark_cells, counts):
+    """:func:`count_crossed_boxes` on the grids of more than ``max_mark_cells`` boxes."""
+    for a in range(sizes.shape[0]):
+        d = sizes[a]
+        scratch = np.empty(_cell_bound(seg, 1.0 / d), dtype=np.int64)
+        for b in range(offsets.shape[0]):
+            ox = offsets[b, 0] * d
+            oy = offsets[b, 1] * d
+            nbx, nby, nbx_eff, nby_eff = _shifted_grid(side, d, ox, oy)
+            if nbx * nby > max_mark_cells:
                 counts[a, b] = _count_distinct_cells(seg, d, ox, oy, nbx, nby, nbx_eff, nby_eff,
                                                      scratch)
     return counts
@@ -415,9 +483,37 @@ def _count_distinct_cells(seg, d, ox, oy, nbx, nby, nbx_eff, nby_eff, scratch):
             n += 1
     if n == 0:
         return 0
-    s = np.sort(ids[:n])
+    s = _sorted_ids(ids[:n])
     distinct = 1
     for m in range(1, n):
         if s[m] != s[m - 1]:
             distinct += 1
     return distinct
+
+
+@njit(cache=True)
+def _sorted_ids(ids):
+    """``ids`` sorted ascending, in a new array (a bottom-up merge sort in plain loops: numba's
+    ``np.sort`` adds about a second of compilation)."""
+    n = ids.shape[0]
+    a = np.empty(n, np.int64)
+    b = np.empty(n, np.int64)
+    for k in range(n):
+        a[k] = ids[k]
+    width = 1
+    while width < n:
+        for lo in range(0, n, 2 * width):
+            mid = min(lo + width, n)
+            hi = min(lo + 2 * width, n)
+            i = lo
+            j = mid
+            for k in range(lo, hi):
+                if j >= hi or (i < mid and a[i] <= a[j]):
+                    b[k] = a[i]
+                    i += 1
+                else:
+                    b[k] = a[j]
+                    j += 1
+        a, b = b, a
+        width *= 2
+    return a

@@ -13,7 +13,9 @@ _DR = np.array([-1, -1, -1, 0, 0, 1, 1, 1], dtype=np.int64)
 _DC = np.array([-1, 0, 1, -1, 1, -1, 0, 1], dtype=np.int64)
 
 
-@numba.njit(cache=True)
+# the helpers have one explicit signature each: called with literal arguments (0, -1) they would
+# otherwise compile once per combination of literal and variable arguments
+@numba.njit(numba.int64(numba.int64[:, ::1], numba.int64, numba.int64, numba.int64), cache=True)
 def _push(out_rc, n_v, r, c):
     """Append pixel (r, c) as vertex ``n_v`` of ``out_rc``; return the new vertex count."""
     out_rc[n_v, 0] = r
@@ -21,7 +23,8 @@ def _push(out_rc, n_v, r, c):
     return n_v + 1
 
 
-@numba.njit(cache=True)
+@numba.njit(numba.int64(numba.int64[::1], numba.int64[::1], numba.int64[::1], numba.int64,
+                        numba.int64, numba.int64, numba.int64), cache=True)
 def _close(out_offsets, out_src, out_dst, n_b, n_v, src, dst):
     """End branch ``n_b`` (nodes ``src`` -> ``dst``) at vertex count ``n_v``; return the new branch count."""
     out_src[n_b] = src

@@ -66,6 +66,9 @@ def main(argv: list[str] | None = None) -> int:
         _error(args.command, "error", f"{out}: --out names an existing file, not a folder; give a "
                                       "folder (created if missing) or move the file away")
         return EXIT_BAD_INPUT
+    from .kernel_cache import ensure_writable_cache
+
+    ensure_writable_cache()  # a read-only install without a writable user cache: numba's cache in /tmp
     try:
         with warnings.catch_warnings():  # restores Python's own form when the command ends
             if not args.debug:

@@ -68,7 +68,7 @@ import math
 from collections import namedtuple
 
 import numpy as np
-from numba import njit
+from numba import njit, types
 
 # --- slot state columns (table above) -----------------------------------------------------------
 (ACT, U0, DIL, TAU, PHIM, RREV, DIR, COORD, BRK, LEN, FN, FS, SLIP, OVL, PX, PY, NX, NY, USP,
@@ -200,6 +200,41 @@ def world_vertices(loc, lgeo, off, pos, rot, active, wv):
             wv[k, W_RAD] = lgeo[k, 5]
 
 
+@njit(types.int64[::1](types.float64[::1], types.int64), cache=True)
+def _stable_argsort(keys, n):
+    """Indices that sort keys[:n] (float64) ascending, ties in their input order, NaN last: what
+    ``np.argsort(keys[:n], kind="mergesort")`` gives, as a bottom-up merge sort in plain loops
+    (numba's own mergesort takes seconds to compile)."""
+    order = np.empty(n, np.int64)
+    tmp = np.empty(n, np.int64)
+    for i in range(n):
+        order[i] = i
+    width = 1
+    while width < n:
+        for lo in range(0, n, 2 * width):
+            mid = min(lo + width, n)
+            hi = min(lo + 2 * width, n)
+            i = lo
+            j = mid
+            for k in range(lo, hi):
+                if i < mid and j < hi:
+                    a = keys[order[i]]
+                    b = keys[order[j]]
+                    # right before left only when strictly less (NaN counts as largest): stable
+                    take_right = b < a or (a != a and b == b)
+                else:
+                    take_right = i >= mid
+                if take_right:
+                    tmp[k] = order[j]
+                    j += 1
+                else:
+                    tmp[k] = order[i]
+                    i += 1
+        order, tmp = tmp, order
+        width *= 2
+    return order
+
+
 @njit(cache=True)
 def broad_phase(wv, off, active, movable, group, margin):
     """Candidate pairs (a < b) whose bounding boxes, grown by ``margin``, overlap (sweep and prune
@@ -228,8 +263,13 @@ def broad_phase(wv, off, active, movable, group, margin):
         hi[b, 1] = y1 + margin
         ids[m] = b
         m += 1
-    ids = ids[:m]
-    order = ids[np.argsort(lo[ids, 0], kind="mergesort")]
+    x_lo = np.empty(m)
+    for i in range(m):
+        x_lo[i] = lo[ids[i], 0]
+    srt = _stable_argsort(x_lo, m)
+    order = np.empty(m, np.int64)
+    for i in range(m):
+        order[i] = ids[srt[i]]
     cap = 8 * m + 16
     pa = np.empty(cap, np.int64)
     pb = np.empty(cap, np.int64)
@@ -250,19 +290,50 @@ def broad_phase(wv, off, active, movable, group, margin):
                 cap *= 2
                 pa2 = np.empty(cap, np.int64)
                 pb2 = np.empty(cap, np.int64)
-                pa2[:n] = pa[:n]
-                pb2[:n] = pb[:n]
+                for q in range(n):
+                    pa2[q] = pa[q]
+                    pb2[q] = pb[q]
                 pa = pa2
                 pb = pb2
             pa[n] = min(a, b)
             pb[n] = max(a, b)
             n += 1
-    key = pa[:n] * nb + pb[:n]
-    srt = np.argsort(key, kind="mergesort")
-    return pa[:n][srt].copy(), pb[:n][srt].copy()
+    # sorted by (pa, pb), i.e. by the unique key pa nb + pb: two stable counting sorts, by pb
+    # then by pa (the pairs are unique, so this is the order any sort of the key gives)
+    cnt = np.zeros(nb + 1, np.int64)
+    tmp = np.empty(n, np.int64)
+    for q in range(n):
+        cnt[pb[q] + 1] += 1
+    for b in range(nb):
+        cnt[b + 1] += cnt[b]
+    for q in range(n):
+        tmp[cnt[pb[q]]] = q
+        cnt[pb[q]] += 1
+    for b in range(nb + 1):
+        cnt[b] = 0
+    for q in range(n):
+        cnt[pa[q] + 1] += 1
+    for b in range(nb):
+        cnt[b + 1] += cnt[b]
+    out_a = np.empty(n, np.int64)
+    out_b = np.empty(n, np.int64)
+    for r in range(n):
+        q = tmp[r]
+        k = cnt[pa[q]]
+        cnt[pa[q]] += 1
+        out_a[k] = pa[q]
+        out_b[k] = pb[q]
+    return out_a, out_b
 
 
-@njit(cache=True)
+# explicit signatures for helpers that callers pass literal arguments (0, 1, -1): without them numba
+# compiles one version per literal (C arrays: _WV the world vertex table, _OFF the offsets)
+_WV = types.float64[:, ::1]
+_OFF = types.int64[::1]
+
+
+@njit(types.Tuple((types.float64,) * 6 + (types.int64,))(_WV, _OFF, types.int64, types.int64),
+      cache=True)
 def _edge(wv, off, b, i):
     """Start, unit direction, outward unit normal and end vertex of edge i (global index)."""
     j = i + 1
@@ -454,7 +525,8 @@ def _update_slot(S, p, k, prop, delta, dus, length, cy_clamp, cy_slipping_f, E):
         _cy_law(S, p, k, prop, un, dus, length, cy_clamp, cy_slipping_f, E)
 
 
-@njit(cache=True)
+@njit(types.void(types.float64[:, :, ::1], types.int64, types.int64, types.float64[::1],
+                 types.int64[::1], types.float64[::1], types.float64[::1]), cache=True)
 def _open_slot(S, p, k, prop, pinit, init_brk, E):
     """Open slot k of pair p: the blocks moved apart beyond the detection gap there (or the
     contact no longer uses the slot).
@@ -600,7 +672,8 @@ def _prev_vertex(off, b, i):
     return off[b + 1] - 1 if i == off[b] else i - 1
 
 
-@njit(cache=True)
+@njit(types.UniTuple(types.float64, 5)(_WV, _OFF, types.int64, types.int64, types.int64,
+                                        types.int64), cache=True)
 def _rounded_corner(wv, off, rb, e, ib, inc):
     """Distance between the inner polygons (arc centres, columns ``W_CX, W_CY``) of blocks rb and
     ib near a contact, and its two closest points (on rb's, then on ib's).
@@ -900,7 +973,9 @@ def block_pair_index(pa, pb, nb):
         cnt[pb[p] + 1] += 1
     for b in range(nb):
         cnt[b + 1] += cnt[b]
-    fill = cnt[:-1].copy()
+    fill = np.empty(nb, np.int64)
+    for b in range(nb):
+        fill[b] = cnt[b]
     idx = np.empty(2 * len(pa), np.int64)
     for p in range(len(pa)):
         idx[fill[pa[p]]] = 2 * p
@@ -925,12 +1000,21 @@ def remap_pairs(old_pa, old_pb, old_S, old_pref, old_pinit, new_pa, new_pb, nb, 
                 init_brk[old_pinit[i]] = 1.0
             i += 1
         if i < n_old and old_pa[i] * nb + old_pb[i] == key:
-            S[p] = old_S[i]
+            for k in range(S.shape[1]):
+                for c in range(S.shape[2]):
+                    S[p, k, c] = old_S[i, k, c]
             pref[p] = old_pref[i]
             pinit[p] = old_pinit[i]
             i += 1
         else:
-            j = np.searchsorted(init_key, key)
+            j = 0  # binary search: the first init_key >= key (np.searchsorted, side left)
+            hi = len(init_key)
+            while j < hi:
+                mid = (j + hi) >> 1
+                if init_key[mid] < key:
+                    j = mid + 1
+                else:
+                    hi = mid
             if j < len(init_key) and init_key[j] == key:
                 pinit[p] = j
             else:
@@ -1206,7 +1290,8 @@ def advance(n_steps, blocks, pairs, loads, zoning, prm, E, out):
 
     Arguments: ``blocks`` (:class:`Blocks`), ``pairs`` (:class:`Pairs`), ``loads``
     (:class:`Loads`), ``zoning`` (:class:`Zoning`: the deformable blocks' zones and nodes, stepped
-    by :func:`zone_step`; their blocks are not integrated as rigid bodies), the float64 parameter
+    by :func:`zone_step`; their blocks are not integrated as rigid bodies; or None when the model
+    has none, which compiles a version without the zone kernels), the float64 parameter
     vector ``prm`` (indices ``PRM_*``), the energy
     accumulators ``E`` (``E_*``) and ``out`` (8,).
 
@@ -1254,10 +1339,12 @@ def advance(n_steps, blocks, pairs, loads, zoning, prm, E, out):
     fe = np.zeros(3)
     ratio = np.inf
     ke_prev = out[7]
-    zoned = len(zoning.tri) > 0
+    # zoning None (no deformable block): numba prunes the zone branches, so this specialisation
+    # compiles none of the zone kernels (the `zoning is not None` tests below do that pruning)
+    zoned = zoning is not None and len(zoning.tri) > 0
     for step in range(n_steps):
         world_vertices(loc, lgeo, off, pos, rot, active, wv)
-        if zoned:
+        if zoned and zoning is not None:
             zone_world_vertices(zoning, off, lgeo, wv)
         max_ovl, max_pair = contact_forces(blocks, pairs, asleep, prm, E)
         if max_ovl > ovl_limit:
@@ -1290,7 +1377,7 @@ def advance(n_steps, blocks, pairs, loads, zoning, prm, E, out):
                 presc_val[step, ref_col[1]] if ref_col[1] >= 0 else 0.0, E, bf)
         moved = False
         vmax = 0.0
-        if zoned:  # docs/dem.md §16.8
+        if zoned and zoning is not None:  # docs/dem.md §16.8
             z_unb, z_app, z_ke, z_vmax, moved = zone_step(
                 zoning, blocks, pairs, presc_val, step, gravity, alpha_local, alpha_mass, ref_col,
                 dt, rebuild_fraction * margin, bf if len(bolt_node) else bf[:0], E)

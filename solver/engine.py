@@ -377,8 +377,11 @@ class Engine(DeformableBlocks):
                 **params) -> int:
         """Run :func:`rockmass.solver._kernels.advance` for up to ``n_steps`` steps of ``dt``
         (``params``: the keywords of :meth:`kernel_params`); returns its ``RC_*`` code."""
+        # no deformable block: None, so the kernel's specialisation without zones is the one
+        # compiled (a rigid model does not pay the zone kernels' compilation)
         return K.advance(n_steps, self.blocks_tuple(), self.pairs_tuple(),
-                         self.loads_tuple(presc_val), self.zones_tuple(),
+                         self.loads_tuple(presc_val),
+                         self.zones_tuple() if self.zoned is not None else None,
                          self.kernel_params(dt, **params), self.E, out)
 
     def detect(self):
@@ -483,9 +486,14 @@ class Engine(DeformableBlocks):
 
     def _stiffness_bound(self, scale) -> float:
         """Gershgorin bound ω² of M^(-1/2) K M^(-1/2) for the active contact slots (0: none)."""
+        return float(self._stiffness_rows(scale).max(initial=0.0))
+
+    def _stiffness_rows(self, scale) -> np.ndarray:
+        """(B, 3) Gershgorin row sums of |S K S| per block dof (x, y, θ) for the active contact
+        slots, S = diag(``scale``) (all zero without contacts)."""
         p, k, slot = self._active_slots()
         if not len(p):
-            return 0.0
+            return np.zeros((self.nb, 3))
         length = slot[:, K.LEN]
         props = self.props[self.pprop[p]]
         kn = props[:, K.P_KN] * length
@@ -511,7 +519,25 @@ class Engine(DeformableBlocks):
             s = ga.sum(1) + gb.sum(1)  # row i of |g gᵀ| sums to |g_i| Σ|g|
             _add_rows(rows, a, (stiff * s)[:, None] * ga)
             _add_rows(rows, b, (stiff * s)[:, None] * gb)
-        return float(rows.max())
+        return rows
+
+    def scale_block_masses(self, static: bool) -> None:
+        """Density scaling of the rigid blocks in a static stage (``Settings.density_scaling``,
+        docs/dem.md §10.4). With R_i the Gershgorin row of the contact stiffness at dof i (unit
+        masses) and ω²_i = R_i/m_i, the dofs with ω²_i above the median ω̃² over the free rigid
+        dofs step with the mass m_i = R_i/ω̃² instead: M⁻¹K then has no row above ω̃² (Gershgorin
+        on M⁻¹K, similar to M^(-1/2) K M^(-1/2)), so the step grows by up to ω_max/ω̃. Gravity
+        keeps the true mass (the kernel weighs with ``mass``, steps with ``inv_mass``). Dynamic
+        stages, zones (§16.6) and a model without contacts keep the true masses."""
+        if not (static and self.settings.density_scaling):
+            return
+        rows = self._stiffness_rows(np.ones((self.nb, 3)))
+        free = (self.inv_mass > 0) & (self.zone_of < 0)[:, None] & (rows > 0)
+        if not free.any():
+            return
+        target = float(np.median(rows[free] * self.inv_mass[free]))
+        inv = np.minimum(self.inv_mass, target / np.maximum(rows, T.TINY))
+        self.inv_mass = np.where(free, inv, self.inv_mass)
 
     # ---------------------------------------------------------------------- state summaries --
     def strain_energy(self) -> float:
@@ -552,8 +578,10 @@ class Engine(DeformableBlocks):
         return float(np.sum(slot[:, K.FN] * -vn) * dt), float(np.sum(slot[:, K.FS] * vt) * dt)
 
     def kinetic_energy(self) -> float:
-        """½ Σ m v² over the free dofs of the active blocks, and the bolt nodes' (J per m)."""
-        m = self.mass
+        """½ Σ m v² over the free dofs of the active blocks, and the bolt nodes' (J per m); m is
+        the mass a dof steps with (1/``inv_mass``: the true mass but in density-scaled static
+        stages, §10.4, whose ledger must book the kinetic energy the steps put in)."""
+        m = 1.0 / np.where(self.inv_mass > 0, self.inv_mass, 1.0)
         free = self.active[:, None] & (self.mode == FREE)  # prescribed dofs are the boundary's
         free &= (self.zone_of < 0)[:, None]  # a zone's motion is its nodes'
         v2 = np.column_stack([self.vel ** 2, self.omg ** 2])
@@ -589,7 +617,15 @@ class Engine(DeformableBlocks):
                 "length_m": slot[:, K.LEN], "normal_stress_pa": slot[:, K.FN] / length,
                 "shear_stress_pa": slot[:, K.TAU], "plastic_slip_m": slot[:, K.USP],
                 "overlap_m": slot[:, K.OVL], "slipping": slot[:, K.SLIP] != 0,
-                "broken": slot[:, K.BRK] != 0}
+                "broken": (slot[:, K.BRK] != 0) & self.bonds(self.pprop[p])}
+
+    def bonds(self, prop: np.ndarray) -> np.ndarray:
+        """Whether the joint models of rows ``prop`` of the joint table are bonds (cohesion or
+        tension > 0; docs/dem.md §7): only a bond can be broken. A contact of another model is
+        flagged "broken" in its slots (a corner that touched across a gap, never bonded) but has
+        nothing to break."""
+        rows = self.props[prop]
+        return (rows[:, K.P_COH] > 0.0) | (rows[:, K.P_TEN] > 0.0)
 
     def snapshot(self) -> tuple:
         zone = {k: self.zone_state[k].copy() for k in ZONE_STATE}

@@ -40,7 +40,7 @@ from .selectors import block_at_point
 from .settings import Settings, Stage
 from .wavelength import warn_coarse_zones, wave_checks
 
-__all__ = ["run"]
+__all__ = ["reference_stage", "run"]
 
 
 
@@ -178,7 +178,8 @@ def _contact_counts(eng: Engine):
     live = eng.active[a] & eng.active[b]
     broken = eng.init_brk.copy()
     broken[eng.pinit[has]] = np.maximum(broken[eng.pinit[has]], S[has, :, K.BRK].max(axis=1))
-    return slipping, int((live & ~closed).sum()), int((broken > 0).sum())
+    broken = (broken > 0) & eng.bonds(eng.init_prop)  # only a bond breaks (docs/dem.md §7)
+    return slipping, int((live & ~closed).sum()), int(broken.sum())
 
 
 def _boundary_blocks(eng: Engine, removed: np.ndarray) -> np.ndarray:
@@ -299,7 +300,8 @@ class _StageRun:
                            else np.zeros((0, 8)))  # before the step limit: the dashpots lower it
         set_free_field(eng, settings.free_field if dynamic else None)  # docs/dem.md §14.2
         install_bolts(eng, settings, stage.name)  # docs/dem.md §15, before the step limit
-        eng.scale_node_masses(static=not dynamic)  # docs/dem.md §16.6, before the step limit
+        eng.scale_block_masses(static=not dynamic)  # docs/dem.md §10.4, before the step limit
+        eng.scale_node_masses(static=not dynamic)  # docs/dem.md §16.6, after the blocks'
         self.dt, self.limit = self._first_time_step()
         self.n_steps = math.ceil(stage.duration_s / self.dt) if dynamic else stage.max_steps
         self.inputs = settings.velocity_inputs if dynamic else ()
@@ -551,6 +553,16 @@ class _StageRun:
             time_step_cuts=self.step_cuts)
 
 
+def reference_stage(settings: Settings) -> int | None:
+    """The stage whose end is the reference state of the run's displacements (and of the cracks
+    a study counts as new): the first, when it is static, excavates nothing and other stages
+    follow — the initial equilibrium under gravity and in-situ stress; None: the start."""
+    first = settings.stages[0]
+    if first.kind == "static" and not first.excavate and len(settings.stages) > 1:
+        return 0
+    return None
+
+
 def run(model, settings: Settings, *,
         progress: Callable[[int, int, str], None] | None = None) -> Result:
     """Solve a :class:`~rockmass.blockgen.BlockModel` stage by stage (see the module docstring).
@@ -591,7 +603,7 @@ def run(model, settings: Settings, *,
             break
         if res.failed_blocks and status == STATUS_OK:
             status, diagnostic = STATUS_FAILED_BLOCKS, res.diagnostic
-        if i == 0 and not stage.excavate and stage.kind == "static" and len(settings.stages) > 1:
+        if i == reference_stage(settings):
             ref = (eng.pos.copy(), eng.rot.copy())  # displacements after initial equilibrium
     mass = eng.mass[:, 0]
     block_energy = {"volume_m3": model.area_m2.copy(), "mass_kg": mass.copy(),

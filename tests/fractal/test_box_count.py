@@ -422,3 +422,19 @@ def test_image_mask_of_the_wrong_shape_is_refused():
     img = np.eye(60, dtype=np.uint8)
     with pytest.raises(ValueError, match="shape"):
         box_count(img, mask=np.ones((30, 30), dtype=np.uint8))
+
+
+def test_vector_count_by_sorting_box_ids_equals_the_mark_array():
+    """Grids too large for a mark array (here: every grid) count distinct box ids instead."""
+    from rockmass.fractal import _kernels
+
+    seg = random_network(200, seed=21, extent=1.0)
+    side = 1.0
+    sizes = np.array([0.5, 0.1, 0.013, 0.002])
+    offsets = np.array([[0.0, 0.0], [0.3, 0.7]])
+    marked = np.zeros((4, 2), dtype=np.int64)
+    sorted_ = np.zeros((4, 2), dtype=np.int64)
+    totals = np.zeros((4, 2), dtype=np.int64)
+    _kernels.count_crossed_boxes(seg, side, sizes, offsets, 1 << 24, marked, totals)
+    _kernels.count_crossed_boxes(seg, side, sizes, offsets, 0, sorted_, totals)
+    assert np.array_equal(marked, sorted_) and marked.min() > 0

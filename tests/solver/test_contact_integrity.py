@@ -15,7 +15,7 @@ from rockmass.solver import (BoundaryStress, Coulomb, Fix, InSituStress, Materia
 from rockmass.solver.engine import FREE, Engine
 from rockmass.solver.loading import apply_boundary_stress, apply_insitu
 
-from ._models import column, jointed_rectangle
+from ._models import column, hand_model, jointed_rectangle, rect
 
 G = 9.81
 
@@ -94,6 +94,25 @@ def test_bond_with_tension_above_the_tolerance_breaks_when_it_opens():
     result, t2 = _pull_push_pull(kn, strength)
     residual = _check_stays_broken(result, t2, kn, 0.5 * kn * _TOL ** 2 * 1.0)
     assert abs(residual) < 1e-3, residual
+
+
+def test_a_frictional_joint_touched_at_a_corner_is_never_counted_broken():
+    """A square tilted 30° dropped corner-first from 1 mm onto the base it shares a joint with
+    (Coulomb, no cohesion or tension): the corner touches across the gap — a slot flagged as no
+    bond — and the block bounces. A joint without strength has nothing to break: 0 broken
+    contacts, 0 broken slots in the contact table (before the fix: 1, which made the zoned
+    cavern report 28 "broken" joints that never held anything)."""
+    c, s = np.cos(np.radians(30.0)), np.sin(np.radians(30.0))
+    square = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]]) @ [[c, s], [-s, c]]
+    square[:, 1] += 1e-3 - square[:, 1].min()
+    model = hand_model([rect(-5.0, -1.0, 5.0, 0.0), square], pairs=[(0, 1)])
+    settings = Settings(joints={"default": Coulomb(1e9, 1e9, 40.0)}, material=Material(2500.0),
+                        stages=(Stage("drop", "dynamic", duration_s=0.05),),
+                        fixes=(Fix("blocks:0"),))
+    result = run(model, settings)
+    assert result.ok and result.displacement_m[1, 1] < -1e-3  # it fell onto its corner
+    assert result.stages[0].broken_contacts == 0
+    assert not result.contacts["broken"].any()
 
 
 # ------------------------------------------------------- in-situ start in moment equilibrium --
