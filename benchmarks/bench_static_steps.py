@@ -13,7 +13,7 @@ converged further). Per row: the static steps of all stages, the wall time of th
 model is run once first, so no row pays compilation), the first stage's time step, and the
 error against the reference of every monitor point and of the largest block displacement after
 the last stage, in % of the reference value (the largest over the monitors, and the largest
-displacement's). Frictional equilibria depend on the path, and density scaling changes the path:
+displacement's), and the blocks that failed (kept moving and were taken out). Frictional equilibria depend on the path, and density scaling changes the path:
 its error is the price of the speed.
 
 Rows also go to benchmarks/results/bench_static_steps.json.
@@ -88,6 +88,7 @@ def rows_for(label, model, settings) -> list[dict]:
         rows.append({"model": label, "setting": name, "status": r.status,
                      "steps": sum(st.steps for st in r.stages), "wall_s": secs,
                      "dt_first_s": r.stages[0].time_step_s,
+                     "failed_blocks": sum(len(st.failed_blocks) for st in r.stages),
                      "speedup": runs["plain"][1] / secs,
                      "monitor_error_pct": None if err_mon is None else 100 * err_mon,
                      "max_disp_error_pct": 100 * abs(m["max_disp"] / ref["max_disp"] - 1),
@@ -101,6 +102,7 @@ def main(quick: bool = False) -> None:
     rows = [row for case in cases for row in rows_for(*case)]
     print(table(rows, [("model", "s"), ("setting", "s"), ("status", "s"), ("steps", "d"),
                        ("wall_s", ".2f"), ("speedup", ".2f"), ("dt_first_s", ".3g"),
+                       ("failed_blocks", "d"),
                        ("monitor_error_pct", ".3f"), ("max_disp_error_pct", ".3f"),
                        ("monitors", "s")]))
     save("bench_static_steps", {"rows": rows})
