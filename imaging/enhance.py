@@ -60,6 +60,8 @@ def read_photo(path, max_pixels: int | None = None) -> np.ndarray:
     from PIL import Image, ImageOps, UnidentifiedImageError
 
     path = Path(path)
+    if path.is_dir():
+        raise IsADirectoryError(f"{path}: a folder, not a photograph")
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such file")
     try:

@@ -393,7 +393,7 @@ class Extraction:
                 "warnings": list(self.warnings)}
 
 
-def scale_from_control_points(control_points) -> float:
+def scale_from_control_points(control_points, shape_px: tuple[int, int] | None = None) -> float:
     """Metres per pixel from two pixel positions and the real distance between them.
 
     Parameters
@@ -401,6 +401,9 @@ def scale_from_control_points(control_points) -> float:
     control_points : mapping or sequence
         ``{"rc_px": [(r1, c1), (r2, c2)], "distance_m": d}`` or ``((r1, c1), (r2, c2), d)``: two
         points in input-image pixels (row, col) and their distance on the face in metres.
+    shape_px : (int, int), optional
+        (rows, cols) of the image: then both points must lie on it (a point off the photo is a
+        typo or a point of another photo).
 
     Returns
     -------
@@ -445,6 +448,13 @@ def scale_from_control_points(control_points) -> float:
         raise ValueError(f"control_points.distance_m must be a number, got {distance!r}") from exc
     if not (np.isfinite(d) and d > 0):
         raise ValueError(f"control_points.distance_m must be a finite distance > 0 (metres), got {distance!r}")
+    if shape_px is not None:
+        h, w = shape_px
+        off = [i for i in range(2) if not (-0.5 <= rc[i, 0] <= h - 0.5 and -0.5 <= rc[i, 1] <= w - 0.5)]
+        if off:
+            raise ValueError(f"control_points.rc_px: point {off[0] + 1} (row {rc[off[0], 0]:g}, col "
+                             f"{rc[off[0], 1]:g}) lies outside the {h} x {w} pixel image (rows "
+                             f"0..{h - 1}, cols 0..{w - 1})")
     pixels = float(np.hypot(*(rc[1] - rc[0])))
     if pixels == 0:
         raise ValueError("control_points.rc_px: the two points coincide; pick two points apart")
@@ -585,6 +595,8 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     if h < MIN_SIDE_PX or w < MIN_SIDE_PX:
         raise ValueError(f"{name} is {h} x {w} pixels; at least {MIN_SIDE_PX} x {MIN_SIDE_PX} are "
                          "needed to find joints")
+    if control_points is not None:  # the points must lie on this photo
+        scale_from_control_points(control_points, shape_px=(h, w))
     if joint_width_px >= min(h, w):  # else OpenCV's kernels get sizes it cannot parse (TypeError)
         raise ValueError(f"joint_width_px = {joint_width_px:g} px is not narrower than the {h} x "
                          f"{w} pixel image; give the width of one joint in pixels (default 3)")

@@ -98,6 +98,23 @@ def _check_memory_budget(config_path, document, settings, count: int) -> None:
                  "fewer realizations")
 
 
+def _check_tunnels_reach_the_box(config_path, settings) -> None:
+    """A tunnel that misses the box is a mistake (a centre in other coordinates, a swapped axis),
+    refused as ``[blocks]`` refuses an excavation wholly outside its domain: built, it gave a model
+    without the opening and without a word."""
+    import itertools
+
+    import numpy as np
+
+    corners = np.array(list(itertools.product(*zip(settings.box_min_m, settings.box_max_m))), float)
+    for k, spec in enumerate(settings.tunnels):
+        if not spec.tunnel().reaches(corners, 0.0):
+            raise ConfigError(config_path, [(f"blocks3d.tunnels[{k}]", f"({spec.name!r}) lies "
+                                             f"wholly outside the box {list(settings.box_min_m)} .. "
+                                             f"{list(settings.box_max_m)}; centre_m is in the "
+                                             "box's frame (x East, y North, z up)")])
+
+
 def compute(args, document=None):
     """Load (unless given), validate, generate and build; return (document, models, timings) with
     one model per realization (``args.realizations``, default 1: realizations ``dfn_realization``,
@@ -118,6 +135,7 @@ def compute(args, document=None):
     if count > 1 and settings.dfn_realization is None:
         raise ConfigError(args.config, [("blocks3d.dfn_realization", f"--realizations {count} needs "
                                          "a DFN: set the first realization here")])
+    _check_tunnels_reach_the_box(args.config, settings)
     _check_memory_budget(args.config, document, settings, count)
     models, t_dfn, t_build = [], 0.0, 0.0
     for k in range(count):

@@ -24,8 +24,10 @@ __all__ = ["dfn_section_traces", "compute", "produce"]
 _FIELD_NAMES = (("joint_sets[", "sets["), ("domain_xy_m", "domain"))
 
 
-def _field_message(exc: Exception) -> str:
+def _field_message(exc: Exception, two_sets: bool = False) -> str:
     text = str(exc)
+    if two_sets:  # the joint sets came from [blocks.two_sets]: name its key, not a [[blocks.sets]]
+        text = re.sub(r"^joint_sets\[(\d)\]", r"two_sets.spacing_m[\1]", text)
     for lib, cfg in _FIELD_NAMES:
         text = text.replace(lib, cfg)
     return text if re.match(r"^(blocks\.)", text) else f"blocks.{text}"
@@ -134,7 +136,7 @@ def compute(args, document=None, section=None):
     except InputError:
         raise
     except ValueError as exc:
-        raise InputError(f"{args.config}: {_field_message(exc)}") from exc
+        raise InputError(f"{args.config}: {_field_message(exc, cfg.two_sets is not None)}") from exc
     t2 = time.perf_counter()
     invariants = check_model(model)
     if not invariants["ok"]:

@@ -263,6 +263,9 @@ class DFNConfig(StrictModel):
         if bool(self.sets) == (self.fit is not None):
             raise field_problem(self, "sets", "give the fracture sets either as [[dfn.sets]] or as [dfn.fit] "
                                 "(fitted from field data), exactly one of them", [])
+        named = [s.name for s in self.sections if s.name]
+        if len(set(named)) < len(named):  # [blocks.dfn_section] picks a section by its name
+            raise field_problem(self, "sections", f"names must be unique, got {named}", named)
         return self
 
     def domain_m(self) -> np.ndarray:

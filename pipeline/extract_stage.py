@@ -101,6 +101,9 @@ def compute(args, document=None):
                              params=ExtractParams(**settings["params"]), debug=args.debug_images,
                              progress=bar)
         except ValueError as exc:
+            if roi is not None and str(exc).startswith("roi"):  # the region's file is at fault
+                flag, roi_file = ("--roi", args.roi) if args.roi else ("--roi-px", args.roi_px)
+                raise InputError(f"{roi_file}: {flag}: {exc} (photo {path})") from None
             raise InputError(f"{path}: {exc}") from None
     t2 = time.perf_counter()
     traces = result.traces

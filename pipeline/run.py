@@ -122,6 +122,9 @@ def _resolve_refs(config_path, document, trace_map: Path | None, scanline: Path 
 
 
 def _check_file(config_path, key: str, path: Path | None) -> None:
+    if path is not None and Path(path).is_dir():
+        raise InputError(f"{config_path}: {key}: {path}: a folder, not a file (give the file "
+                         "inside it)")
     if path is not None and not Path(path).is_file():
         raise InputError(f"{config_path}: {key}: {path}: no such file (paths are relative to the "
                          "config file)")

@@ -215,7 +215,7 @@ class SolveConfig(library_section(Settings, stages=list[StageConfig],
         regions, CSV histories read relative to ``config_path``). Raises ``InputError`` naming the
         file and the field (``solve.stages[1].excavate``)."""
         from .blockgen.model import CONTACT_KINDS
-        from .errors import InputError
+        from .errors import InputError, reading
 
         base = Path(config_path).parent
         shown = str(config_path)
@@ -234,6 +234,7 @@ class SolveConfig(library_section(Settings, stages=list[StageConfig],
                 raise InputError(f"{shown}: solve.joints.{label}: no contact has this label (a "
                                  f"joint set name of the block model, a contact kind or default: "
                                  f"{', '.join(map(repr, known))})")
+        _check_model_references(self, model, build)
         stages = []
         for i, s in enumerate(self.stages):
             regions = build(f"stages[{i}].excavate", lambda s=s: s.regions(model))
@@ -242,13 +243,37 @@ class SolveConfig(library_section(Settings, stages=list[StageConfig],
         for i, v in enumerate(self.velocity_inputs):
             field = f"velocity_inputs[{i}].history"
             history = v.history
-            if isinstance(history, CsvHistoryConfig):
-                history = build(field, lambda h=history, field=field: h.to_solver(
-                    base, f"solve.{field}"))
+            if isinstance(history, CsvHistoryConfig):  # named as run and study name it
+                with reading(history.path(base), f"solve.{field}.file", config=config_path):
+                    history = history.to_solver(base)
             inputs.append(build(f"velocity_inputs[{i}]", lambda v=v, h=history: v.to_library(
                 history=h)))
         return build("", lambda: self.to_library(stages=tuple(stages),
                                                  velocity_inputs=tuple(inputs)))
+
+
+def _check_model_references(cfg, model, build) -> None:
+    """The selectors of ``fixes`` / ``velocity_inputs`` and the monitors checked against ``model``
+    before the solver starts, so that a problem names its key path (the solver itself finds them
+    too, but names only the monitor or the selector)."""
+    from .solver.runner import _require_in_domain
+    from .solver.selectors import SIDES, select_blocks
+
+    for table in ("fixes", "velocity_inputs"):
+        for i, item in enumerate(getattr(cfg, table)):
+            if item.where.strip() not in SIDES:  # a side needs the engine's edges: always valid
+                build(f"{table}[{i}].where", lambda w=item.where: select_blocks(model, w, None))
+    for i, m in enumerate(cfg.monitors):
+        if m.block is not None and not 0 <= m.block < model.n_blocks:
+            build(f"monitors[{i}].block", lambda m=m: _raise(
+                f"must be a block index in [0, {model.n_blocks}), got {m.block}"))
+        elif m.block is None:
+            build(f"monitors[{i}].point_xy_m", lambda m=m: _require_in_domain(
+                model, m.name, m.point_xy_m))
+
+
+def _raise(message: str):
+    raise ValueError(message)
 
 
 class SolveDocument(StrictModel):

@@ -381,7 +381,8 @@ def expand_cases(document: StudyDocument, raw: dict, config_path,
                 try:
                     doc = RockmassConfig.model_validate(data)
                 except ValidationError as exc:
-                    raise ConfigError(shown, _case_problems(exc, data, params, entry, index)) \
+                    raise ConfigError(shown, _case_problems(exc, data, params, entry, index,
+                                                            entry_index, seed_fields)) \
                         from None
                 if doc.solve is not None and doc.solve.blocks_file is not None:
                     raise ConfigError(shown, [("solve.blocks_file", "a study builds each case's "
@@ -429,18 +430,23 @@ def params_text(params: dict) -> str:
                      zip(params, last, params.values()))
 
 
-def _case_problems(exc: ValidationError, data: dict, params: dict, entry: dict, index: int):
+def _case_problems(exc: ValidationError, data: dict, params: dict, entry: dict, index: int,
+                   entry_index: int = 0, seed_fields=()):
     """(field, message) problems of a case that fails validation, each charged to the study field
-    that set the value when one did, naming the case and its parameters."""
+    that set the value when one did (``study.cases[entry_index]``, ``study.grid`` or
+    ``study.seed_fields``), naming the case and its parameters."""
     case = f"study case {index}: {params_text(params) or 'the base config'}"
     problems = []
     for fld, message in problems_from_validation_error(exc, RockmassConfig, data):
         culprit = next((p for p in params if fld == p or fld.startswith(p + ".")
                         or fld.startswith(p + "[") or p.startswith(fld + ".")), None)
         if culprit is not None:
-            where = f"study.cases.{culprit}" if culprit in entry else f"study.grid.{culprit}"
+            where = (f"study.cases[{entry_index}].{culprit}" if culprit in entry
+                     else f"study.grid.{culprit}")
             message = f"{fld}: {message} ({case})"
             problems.append((where, message))
+        elif fld in seed_fields:  # a seed field that names no field of the config
+            problems.append(("study.seed_fields", f"{fld}: {message} ({case})"))
         else:
             problems.append((fld, f"{message} ({case})"))
     return problems
