@@ -3,10 +3,10 @@
 A zoning transmits a wave faithfully only if a zone is at most about a tenth of the wavelength
 (Kuhlemeyer & Lysmer 1973; seed 001 §2 asks for λ/10–λ/8). The shortest wavelength a dynamic
 stage carries is that of the S wave at the highest frequency of its velocity inputs,
-λ = c_s / f_max, c_s = √(G/ρ). ``f_max`` is read off the inputs' spectra the same way for every
-kind of history: the frequency below which :data:`ENERGY_FRACTION` of the input velocity's energy
-(its mean removed) lies over the stage, from the history sampled at :data:`SAMPLES` points
-and zero-padded :data:`PADDING`-fold.
+λ = c_s / f_max, c_s = √(G/ρ). ``f_max`` is read off each input's spectrum: the frequency below
+which :data:`ENERGY_FRACTION` of the input velocity's energy (its mean removed) lies over the
+stage, from the history sampled at :data:`SAMPLES` points and zero-padded :data:`PADDING`-fold;
+a sine gives its own frequency (:func:`highest_frequency_hz`).
 
 :func:`wave_checks` gives, per dynamic stage and deformable entry, f_max, λ, the largest zone
 edge h and the zones per wavelength λ/h; :func:`warn_coarse_zones` warns about those under
