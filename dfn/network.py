@@ -232,13 +232,13 @@ def clipped_disk_areas(centre: np.ndarray, normal: np.ndarray, radius: np.ndarra
     if cut.size:
         from ._clip_kernels import clipped_polygon_areas  # numba: loaded only when a disk is cut
 
-        c = np.ascontiguousarray(centre[cut])
-        nn = np.ascontiguousarray(normal[cut])
+        f64 = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731 (one signature)
+        c = f64(centre[cut])
+        nn = f64(normal[cut])
         e1, e2 = disk_basis(nn)
         part = np.empty(cut.size)
-        clipped_polygon_areas(c, np.ascontiguousarray(e1), np.ascontiguousarray(e2),
-                              np.ascontiguousarray(radius[cut]), np.ascontiguousarray(box[0]),
-                              np.ascontiguousarray(box[1]), np.int64(n_vertices), part)
+        clipped_polygon_areas(c, f64(e1), f64(e2), f64(radius[cut]), f64(box[0]), f64(box[1]),
+                              np.int64(n_vertices), part)
         m = n_vertices
         out[cut] = part * (np.pi / (0.5 * m * np.sin(2.0 * np.pi / m)))  # polygon -> disk area
     return out

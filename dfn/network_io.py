@@ -238,8 +238,9 @@ def _ragged_polygons(network: DiskNetwork, per_disk: np.ndarray, b: np.ndarray |
             padded[:, :m] = polygons
             part = np.empty((int(cut.sum()), width, 3))
             n_part = np.empty(part.shape[0], dtype=np.int64)
-            clip_polygons(np.ascontiguousarray(polygons[cut]), np.ascontiguousarray(b[0]),
-                          np.ascontiguousarray(b[1]), _MERGE * network.radius_m[rows[cut]], part, n_part)
+            f64 = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731 (one signature)
+            clip_polygons(f64(polygons[cut]), f64(b[0]), f64(b[1]),
+                          f64(_MERGE * network.radius_m[rows[cut]]), part, n_part)
             padded[cut] = part
             counts[rows[cut]] = n_part
             polygons = padded

@@ -247,6 +247,8 @@ def plot_pole_density(poles: ArrayLike, *, kappa: float | None = None, n_grid: i
 
     unit = _as_vectors(poles, "poles").reshape(-1, 3)
     n = unit.shape[0]
+    if n == 0:
+        raise ValueError("poles: no pole to contour (a density needs at least one)")
     k = kamb_kappa(n) if kappa is None else float(kappa)
     g = np.linspace(-1.0, 1.0, int(n_grid))
     xy = np.stack(np.meshgrid(g, g), axis=-1)

@@ -43,11 +43,10 @@ fractopo reports a slightly overlapping trace.
 Not checked: ``NULL GEOMETRY`` (the readers refuse it), ``TRACE UNDERLAPS TARGET AREA``,
 ``EMPTY TARGET AREA``, and the buffered part of ``STACKED TRACES`` (fractopo also flags stretches
 that run within a buffer of another trace without touching it, and small triangles where two traces
-cross twice). Measured against fractopo 0.9.2 with the same snap threshold: the 77 traces extracted
-from the quickstart photo get the same labels trace by trace (15 flagged: 12 SHARP TURNS, 4 V NODE,
-3 MULTI JUNCTION); on a seeded map of 400 random traces with many defects (τ = 0.05 m) the counts
-of SHARP TURNS (43), V NODE (9), MULTI JUNCTION (79) and OVERLAPPING SNAP (4) agree, UNDERLAPPING
-SNAP gives 7 against 5, and the 17 buffered STACKED TRACES are missed.
+cross twice). Measured against fractopo 0.9.2 with the same snap threshold
+(``benchmarks/fractopo_crosscheck.py``): the 78 traces extracted from the quickstart photo get the
+same labels trace by trace (15 flagged: 14 SHARP TURNS, 2 V NODE); on maps dense with defects
+UNDERLAPPING SNAP counts differ and the buffered STACKED TRACES are missed (docs/fractures.md §9.1).
 
 References
 ----------

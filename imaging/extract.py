@@ -192,9 +192,10 @@ class ExtractParams:
         inside. With "full", when the cues leave out more than the border band, the sampling
         window becomes the face's outline. On the real labelled photographs (rock-face-fractures
         ``val/``, learned detector) "border" and "full" both take F1 from 0.887 to 0.895 (ridge
-        0.331 -> 0.340); on the synthetic field-like faces "full" costs 0.013 of F1 against
-        "border" (its margin around bright patches removes joints there), and on the plain
-        synthetic faces the band costs 0.008 (0.978 -> 0.970, ridge): hence "border" by default,
+        0.331 -> 0.338); on the synthetic field-like faces "full" costs 0.014 (learned) and 0.012
+        (ridge) of F1 against "border" (its margin around bright patches removes joints there),
+        and on the plain synthetic faces the band costs 0.008 (0.978 -> 0.970, ridge)
+        (``benchmarks/bench_imaging_real.py --face-masks``): hence "border" by default,
         "full" for photos showing lining, sky or machinery (docs/imaging.md §2.1).
     """
 

@@ -47,12 +47,11 @@ class FaceMaskParams:
         edge effects put dark rims there that the ridge filter reads as joints parallel to the
         border (9 % of the false trace pixels on real faces, issue 22). Traces that cross the
         border are not lost: ``ExtractParams.border_extend_px`` still carries their ends to it.
-        Chosen on the rock-face-fractures ``train/`` photos (99, never ``val/``; trace ends
-        carried across the band as above), learned detector F1 (mean over images) without a band
-        0.680, with 0.005 / 0.01 / 0.015 / 0.02 / 0.03 of the short side 0.687 / 0.689 / 0.685 /
-        0.673 / 0.679 (wider bands cut labelled traces near the border: recall 0.737 -> 0.724 at
-        0.03); the ridge detector, short of precision everywhere, gains with every width (0.220
-        without, 0.225 at 0.01, 0.231 at 0.03).
+        Chosen on the rock-face-fractures ``train/`` photos (99, never ``val/``): among widths of
+        0.005–0.03 of the short side, 0.01 gave the learned detector its best mean F1 there
+        (wider bands cut labelled traces near the border); the sweep is not kept as a benchmark,
+        the chosen band's effect on ``val/`` is (``benchmarks/bench_imaging_real.py
+        --face-masks``).
     bright_level : float, default 0.97
         Pixels whose brightest channel reaches this share of full scale are over-exposed: sky,
         lamps, specular highlights, reflective plates. Nothing is left there to trace, and the

@@ -13,7 +13,8 @@ numba picks the cache folder, in this order:
 When none of these can be written, numba refuses to import a cached kernel ("cannot cache function
 ...: no locator available"). :func:`ensure_writable_cache` then points ``NUMBA_CACHE_DIR`` at a
 folder in the temporary directory, so the command still runs. The command line calls it before any
-subcommand; it imports nothing heavy (no numba) and leaves a working setup alone.
+subcommand; it imports nothing heavy (no numba) and leaves a working setup alone; its fallback
+folder is private to the user.
 """
 
 from __future__ import annotations
@@ -40,19 +41,37 @@ def _writable(folder: Path) -> bool:
 
 
 def _user_cache_dir() -> Path:
-    """numba's user-wide cache folder on this system (``appdirs.user_cache_dir('numba')``)."""
-    from numba.misc.appdirs import AppDirs  # pure Python: does not import numba's compiler
+    """numba's user-wide cache folder on this system, as its bundled ``appdirs`` names it
+    (``user_cache_dir('numba')``), worked out here so that the check imports no numba:
+    ``%LOCALAPPDATA%\\numba\\Cache`` on Windows, ``~/Library/Caches/numba`` on macOS,
+    ``$XDG_CACHE_HOME/numba`` (default ``~/.cache/numba``) elsewhere."""
+    import sys
 
-    return Path(AppDirs(appname="numba", appauthor=False).user_cache_dir)
+    if sys.platform.startswith("win"):
+        base = os.environ.get("LOCALAPPDATA") or str(Path.home() / "AppData" / "Local")
+        return Path(base) / "numba" / "Cache"
+    if sys.platform == "darwin":
+        return Path.home() / "Library" / "Caches" / "numba"
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "numba"
 
 
 def fallback_cache_dir() -> Path:
     """The folder :func:`ensure_writable_cache` uses when numba has none: per user, in the
-    temporary directory."""
+    temporary directory — private to the user (mode 0700, owned by them: numba's cache index is
+    a pickle, so a folder another user could write into must not be read). When that name is
+    taken by a folder that is not private to the user, a fresh private folder (``mkdtemp``)."""
     import getpass
 
     user = os.getuid() if hasattr(os, "getuid") else getpass.getuser()
-    return Path(tempfile.gettempdir()) / f"rockmass-numba-cache-{user}"
+    folder = Path(tempfile.gettempdir()) / f"rockmass-numba-cache-{user}"
+    try:
+        folder.mkdir(mode=0o700, exist_ok=True)
+        st = folder.lstat()
+        private = (not folder.is_symlink() and (not hasattr(os, "getuid") or st.st_uid == os.getuid())
+                   and not st.st_mode & 0o022)
+    except OSError:
+        private = False
+    return folder if private else Path(tempfile.mkdtemp(prefix="rockmass-numba-"))
 
 
 def ensure_writable_cache() -> str | None:
@@ -77,10 +96,7 @@ def ensure_writable_cache() -> str | None:
         folders += [Path(loc) / "__pycache__" for loc in locations]
     if all(_writable(f) for f in folders):
         return None
-    try:
-        if _writable(_user_cache_dir()):
-            return None
-    except ImportError:  # numba missing: the kernels will say so when they are imported
+    if _writable(_user_cache_dir()):
         return None
     folder = fallback_cache_dir()
     if not _writable(folder):

@@ -135,6 +135,20 @@ def portable_paths(obj: Any, base: str | os.PathLike, out_dir: str | os.PathLike
     return obj
 
 
+def local_path(portable: str, base: str | os.PathLike, out_dir: str | os.PathLike) -> Path:
+    """The path a :func:`portable_paths` entry names: ``<run>/...`` inside ``out_dir``, another
+    relative path against ``base`` (the config's folder), an absolute one as it is.
+
+    >>> local_path("<run>/extract/t.geojson", "/p", "/p/out").as_posix()
+    '/p/out/extract/t.geojson'
+    >>> local_path("data/s.csv", "/p", "/p/out").as_posix()
+    '/p/data/s.csv'
+    """
+    if portable.startswith("<run>/"):
+        return Path(out_dir) / portable[len("<run>/"):]
+    return Path(base) / portable
+
+
 @contextlib.contextmanager
 def portable_config_paths(base: str | os.PathLike, out_dir: str | os.PathLike) -> Iterator[None]:
     """Within the block, :func:`build_manifest` records and hashes its config with

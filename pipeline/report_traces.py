@@ -64,12 +64,15 @@ def _size_survival(run: _Run, stage: str, stats: dict):
     to these traces, or (None, None, why not)."""
     from .dfn.size_fit import trace_length_functions
     from .dfn.sizes import ExponentialSize, LognormalSize, PowerLawSize
+    from .manifest import local_path
 
     if not run.has("dfn") or not (run.dirs["dfn"] / "fitted.json").exists():
         return None, None, "no size law was fitted in this run (a dfn stage with [dfn.fit] faces fits one)"
     faces = (((run.json("dfn", "manifest.json").get("config") or {}).get("dfn") or {}).get("fit") or {}).get("faces")
     traced = str((stats.get("input") or {}).get("path", "")) if stage == "traces" else ""
-    paths = {str(Path(f.get("file", "")).resolve()) for f in faces or [] if isinstance(f, dict)}
+    config_dir = Path(str((run.doc or {}).get("config", "."))).parent  # manifests: config-relative
+    paths = {str(local_path(str(f.get("file", "")), config_dir, run.out).resolve())
+             for f in faces or [] if isinstance(f, dict)}
     if not traced or str(Path(traced).resolve()) not in paths:
         return None, None, "the dfn stage's size law was not fitted to these traces"
     build = {"power_law": lambda p: PowerLawSize(p["r_min_m"], p["r_max_m"], p["alpha"]),

@@ -208,12 +208,16 @@ def dask_worker_plugin():
 
 def case_domain_xy(document):
     """The polygon of a case's block domain: ``[blocks.domain]``, or the window of the
-    ``[[dfn.sections]]`` entry its ``[blocks.dfn_section]`` names. Raises ``ValueError``,
-    ``AttributeError`` or ``StopIteration`` for a config without either (its case reports it)."""
+    ``[[dfn.sections]]`` entry its ``[blocks.dfn_section]`` names. Raises ``ValueError`` (or
+    ``AttributeError``) for a config without either (its case reports it)."""
     cfg = document.blocks
     if cfg.domain is not None:
         return cfg.domain.xy_m()
-    return next(s.window_uv_m for s in document.dfn.sections if s.name == cfg.dfn_section.section)
+    name = cfg.dfn_section.section
+    window = next((s.window_uv_m for s in document.dfn.sections if s.name == name), None)
+    if window is None:
+        raise ValueError(f"blocks.dfn_section.section: no [[dfn.sections]] entry named {name!r}")
+    return window
 
 
 def case_cost(document) -> float:

@@ -206,7 +206,7 @@ def _check_memory_budget(pending, config_path, workers: int) -> None:
         cfg = case.document.blocks
         try:
             estimate = block_memory_estimate(cfg, case_domain_xy(case.document), cfg.joint_sets())
-        except (ValueError, AttributeError, StopIteration):  # the case reports it when it runs
+        except (ValueError, AttributeError):  # the case reports it when it runs
             continue
         if estimate is not None and (largest is None or estimate[0] > largest[0][0]):
             largest = estimate, case

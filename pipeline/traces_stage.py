@@ -25,6 +25,10 @@ __all__ = ["AREA_CHOICES", "GIS_FORMATS", "area_window", "dimension_entry", "com
 #: other layers go beside it as ``traces_area.shp``, ``traces_nodes.shp``, ``traces_branches.shp``).
 GIS_FORMATS = {"gpkg": "traces.gpkg", "shp": "traces.shp"}
 
+#: GIS layers an earlier run wrote (``--gis gpkg|shp``): dropped when this run writes none or the
+#: other format, so the folder never holds layers of another map beside this summary
+_OWNED = (r"traces\.gpkg", r"traces(_area|_nodes|_branches)?\.(shp|shx|dbf|prj|cpg)")
+
 
 def dimension_entry(result) -> dict:
     """The "Box-counting Dimension" entry of a summary, from a :class:`~rockmass.fractal.BoxCount`."""
@@ -207,7 +211,7 @@ def produce(args, out_dir=None):
         set_ids = _set_per_trace(trace_map, np.array(traces["set"], dtype=np.int64))
         set_means = [s["Mean Angle"]["value"] for s in summary["sets"]]
         # all files renamed into place only when every one is written
-        with output_set(out_dir) as out, ExitStack() as stack:
+        with output_set(out_dir, owns=_OWNED) as out, ExitStack() as stack:
             paths = {name: stack.enter_context(atomic_path(out / name))
                      for name in ("rose.png", "traces.png", "summary.json", "manifest.json")}
             rose_diagram(np.array([np.nan if a is None else a for a in traces["angle_deg"]], dtype=float),

@@ -11,6 +11,10 @@ a sine gives its own frequency (:func:`highest_frequency_hz`).
 :func:`wave_checks` gives, per dynamic stage and deformable entry, f_max, λ, the largest zone
 edge h and the zones per wavelength λ/h; :func:`warn_coarse_zones` warns about those under
 :data:`ZONES_PER_WAVELENGTH`. A run records the checks in ``Result.info["wave_checks"]``.
+
+Reference: Kuhlemeyer, R. L., Lysmer, J. (1973). Finite element method accuracy for wave
+propagation problems. Journal of the Soil Mechanics and Foundations Division (ASCE) 99(SM5),
+421–427 (docs/dem.md, References).
 """
 
 from __future__ import annotations
@@ -34,7 +38,9 @@ def highest_frequency_hz(history, duration_s: float) -> float | None:
     history, any callable of a time array) lies over ``[0, duration_s]``: the one-sided power
     spectrum |V(f)|² of the sampled history with its mean removed (zero-padded ``PADDING``-fold,
     so that the bins are a fraction of the stage's own), accumulated from f = 0.
-    None when the history is constant over the stage (it carries no wave).
+    None when the history is constant over the stage (it carries no wave). Content above the
+    sampling's Nyquist frequency, ``SAMPLES / (2 duration_s)`` (131 kHz for a 1 s stage), is not
+    seen.
 
     A :class:`~rockmass.solver.settings.Sine` or
     :class:`~rockmass.solver.settings.TableSine` gives its own frequency: the windowed sine's

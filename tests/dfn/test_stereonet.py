@@ -51,3 +51,10 @@ def test_stereonet_writes_a_png(tmp_path):
     plot_stereonet(poles, path, membership=np.repeat([0, 1], 20), set_fits=fits,
                    line_direction=vector_from_trend_plunge(135.0, 10.0), title="test")
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_a_density_of_no_pole_is_refused():
+    from rockmass.dfn.stereonet import plot_pole_density
+
+    with pytest.raises(ValueError, match="no pole"):
+        plot_pole_density(np.zeros((0, 3)))

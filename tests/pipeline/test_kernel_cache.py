@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
+
+import pytest
 
 from rockmass import kernel_cache
 
@@ -49,3 +52,26 @@ def test_nothing_writable_falls_back_to_the_temporary_folder(monkeypatch, tmp_pa
     assert kernel_cache.ensure_writable_cache() == str(fallback)
     assert kernel_cache.os.environ["NUMBA_CACHE_DIR"] == str(fallback)
     assert numba.config.CACHE_DIR == str(fallback)
+
+
+def test_the_user_cache_folder_is_numbas_own_without_importing_numba():
+    code = ("import sys; from rockmass import kernel_cache as k; p = k._user_cache_dir(); "
+            "print('numba' in sys.modules); from numba.misc.appdirs import AppDirs; "
+            "print(str(p) == AppDirs(appname='numba', appauthor=False).user_cache_dir)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["False", "True"]
+
+
+@pytest.mark.skipif(not hasattr(os, "getuid"), reason="POSIX permissions")
+def test_a_fallback_folder_others_can_write_is_not_used(tmp_path, monkeypatch):
+    """numba's cache index is a pickle: a planted, world-writable folder of the predictable name
+    is refused for a fresh private one."""
+    monkeypatch.setattr(kernel_cache.tempfile, "gettempdir", lambda: str(tmp_path))
+    planted = tmp_path / f"rockmass-numba-cache-{os.getuid()}"
+    planted.mkdir()
+    planted.chmod(0o777)
+    chosen = kernel_cache.fallback_cache_dir()
+    assert chosen != planted and chosen.parent == tmp_path
+    assert chosen.stat().st_mode & 0o077 == 0
+    planted.chmod(0o700)
+    assert kernel_cache.fallback_cache_dir() == planted

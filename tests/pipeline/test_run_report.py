@@ -500,6 +500,28 @@ def test_fitted_size_law_is_drawn_over_the_lengths_of_the_traces_it_was_fitted_t
     assert "S1: power_law alpha 3, r_min_m 0.5, r_max_m 20" in caption
 
 
+def test_fitted_size_law_is_found_from_the_run_relative_path_rockmass_run_records(run_dir,
+                                                                                   tmp_path):
+    """``rockmass run`` records a face file of its own run as ``<run>/traces/...`` (issue 18: hashes
+    that do not depend on --out): the report maps it back to this run folder."""
+    out = _copy(run_dir, tmp_path)
+    manifest = _stage_json(out, "dfn", "manifest.json")
+    traces = Path(_stage_json(out, "traces", "summary.json")["input"]["path"])
+    (out / "given").mkdir()  # the traces stage's input, as a file of this run folder
+    (out / "given" / traces.name).write_bytes(traces.read_bytes())
+    summary = _stage_json(out, "traces", "summary.json")
+    summary["input"]["path"] = str(out / "given" / traces.name)
+    (out / "traces" / "summary.json").write_text(json.dumps(summary), encoding="utf-8")
+    portable = f"<run>/given/{traces.name}"
+    manifest.setdefault("config", {}).setdefault("dfn", {})["fit"] = {"faces": [{"file": portable}]}
+    (out / "dfn" / "manifest.json").write_text(json.dumps(manifest), encoding="utf-8")
+    law = {"family": "power_law", "params": {"alpha": 3.0, "r_min_m": 0.5, "r_max_m": 20.0},
+           "n_traces": 10, "ok": True}
+    (out / "dfn" / "fitted.json").write_text(json.dumps({"sets": [{"name": "S1", "size": law}]}))
+    caption = _captions(_Page.parse(write_run_report(out)), "lengths")[0]
+    assert "S1: power_law alpha 3, r_min_m 0.5, r_max_m 20" in caption
+
+
 def test_summaries_without_the_new_numbers_give_notes_not_a_crash(run_dir, tmp_path):
     out = _copy(run_dir, tmp_path)
     s = _stage_json(out, "scanline", "summary.json")

@@ -79,6 +79,18 @@ def test_gis_shp_writes_one_shapefile_per_layer(tmp_path, capsys):
     assert "VALIDATION" in pyogrio.read_info(str(out / "traces.shp"))["fields"].tolist()
 
 
+def test_a_rerun_without_gis_drops_the_layers_of_the_earlier_run(tmp_path, capsys):
+    """The folder never holds GIS layers of another map (or format) beside a new summary."""
+    write_traces(hash_and_t(), tmp_path / "hash.geojson")
+    out = tmp_path / "out"
+    assert main(["traces", str(tmp_path / "hash.geojson"), "--gis", "shp", "--out", str(out)]) == 0
+    assert main(["traces", str(tmp_path / "hash.geojson"), "--gis", "gpkg", "--out", str(out)]) == 0
+    assert not list(out.glob("traces*.shp")) and (out / "traces.gpkg").is_file()
+    (out / "notes.txt").write_text("mine")  # a file of the user's stays
+    assert main(["traces", str(tmp_path / "hash.geojson"), "--out", str(out)]) == 0
+    assert not (out / "traces.gpkg").exists() and (out / "notes.txt").read_text() == "mine"
+
+
 def test_area_from_a_geopackage_polygon_file(tmp_path, capsys):
     traces = TraceMap.from_segments([[1, 3, 9, 3], [3, 1, 3, 9]], frame="map", crs="EPSG:3067")
     write_traces(traces, tmp_path / "t.gpkg")
