@@ -149,11 +149,17 @@ def read_gis(path: str | os.PathLike[str], *, frame: str | None = None, layer: s
     polylines: list[np.ndarray] = []
     records: list[dict[str, Any]] = []
     crs, file_frame = None, None
-    if trace_layer is not None:
-        crs, file_frame = _read_trace_layer(pyogrio, name, trace_layer, polylines, records)
-    window = None
+    gdal_errors = (pyogrio.errors.DataLayerError, pyogrio.errors.FeatureError,
+                   pyogrio.errors.FieldError, pyogrio.errors.GeometryError, pyogrio.errors.CRSError)
+    try:
+        if trace_layer is not None:
+            crs, file_frame = _read_trace_layer(pyogrio, name, trace_layer, polylines, records)
+        window = None
+        if area_layer is not None:
+            window, area_crs = _read_area_layer(pyogrio, name, area_layer)
+    except gdal_errors as exc:  # a damaged layer is bad input (exit 2), named with its file
+        raise ValueError(f"{name}: a layer GDAL cannot read ({exc})") from exc
     if area_layer is not None:
-        window, area_crs = _read_area_layer(pyogrio, name, area_layer)
         if trace_layer is not None and area_crs != crs:
             raise ValueError(f"{name}: layer {area_layer!r} is in crs {area_crs!r} but layer {trace_layer!r} is "
                              f"in {crs!r}; give both in one CRS")

@@ -312,3 +312,17 @@ def test_failed_geopackage_write_keeps_the_previous_file(pyogrio, tmp_path, monk
         write_traces(hash_and_t(), path)
     assert path.read_bytes() == before
     assert [p.name for p in tmp_path.iterdir()] == ["keep.gpkg"]
+
+
+def test_a_layer_gdal_cannot_read_is_bad_input_naming_the_file(pyogrio, tmp_path, monkeypatch):
+    """GDAL's layer, field and geometry errors (RuntimeErrors: exit 1) become a ValueError (exit 2)
+    that names the file."""
+    path = tmp_path / "hash.gpkg"
+    write_traces(hash_and_t(), path)
+
+    def broken(*args, **kwargs):
+        raise pyogrio.errors.DataLayerError("simulated damaged table")
+
+    monkeypatch.setattr(pyogrio.raw, "read", broken)
+    with pytest.raises(ValueError, match=r"hash\.gpkg: a layer GDAL cannot read"):
+        read_traces(path)
