@@ -39,8 +39,10 @@ fractopo), and two fields that would get the same name are an error. Every layer
 CRS, or the WKT ``LOCAL_CS`` of its frame (:func:`rockmass.dfn.frames.local_crs_wkt`) when it has
 none, so a GIS never takes a face map for WGS 84.
 
-Each file is written under a temporary name in the destination's folder and renamed into place
-(:mod:`rockmass.dfn.atomic`): a failed write leaves any previous file as it was.
+A GeoPackage is written under a temporary name in the destination's folder and renamed into
+place (:mod:`rockmass.dfn.atomic`): a failed write leaves the previous file as it was. Shapefile
+layers are all written to a temporary folder first, then renamed file by file, each ``.shp``
+last (a failure while writing leaves the previous files; the renames are not one step).
 """
 
 from __future__ import annotations
@@ -316,12 +318,7 @@ def write_gis(trace_map: TraceMap, path: str | os.PathLike[str], network: Any = 
             for layer, (geometries, geometry_type, fields) in layers.items():
                 _write_layer(pyogrio, tmp, layer, geometries, geometry_type, fields, crs, driver, metadata)
         return [target]
-    written = []
-    for layer, (geometries, geometry_type, fields) in layers.items():
-        stem = target.stem if layer == TRACES_LAYER else f"{target.stem}_{layer}"
-        written += _write_shapefile(pyogrio, target.with_name(stem + target.suffix), geometries, geometry_type,
-                                    _shapefile_fields(fields, target.name), crs)
-    return written
+    return _write_shapefiles(pyogrio, target, layers, crs)
 
 
 def _layers(trace_map: TraceMap, network: Any) -> dict[str, tuple[np.ndarray, str, dict[str, np.ndarray]]]:
@@ -369,20 +366,34 @@ def _shapefile_fields(fields: dict[str, np.ndarray], shown: str) -> dict[str, np
     return out
 
 
-def _write_shapefile(pyogrio: Any, target: Path, geometries: np.ndarray, geometry_type: str,
-                     fields: dict[str, np.ndarray], crs: str) -> list[Path]:
-    """One Shapefile: written into a temporary folder beside ``target``, then each of its files
-    (``.shp``, ``.shx``, ``.dbf``, ``.prj``, ``.cpg``) renamed into place atomically."""
+#: The files of one Shapefile layer
+_SHAPEFILE_PARTS = (".shp", ".shx", ".dbf", ".prj", ".cpg")
+
+
+def _write_shapefiles(pyogrio: Any, target: Path, layers: dict, crs: str) -> list[Path]:
+    """Every layer as a Shapefile (``NAME.shp`` the traces, ``NAME_<layer>.shp`` the others):
+    all written into a temporary folder beside ``target`` first — a failure there leaves the
+    previous files as they were — then renamed into place, each ``.shp`` last so that a reader
+    never finds one before its ``.dbf``; layers an earlier write left and this one has not (an
+    area, nodes, branches) are removed. GDAL cannot make the renames of several files one step:
+    a GeoPackage (one file) is the all-or-nothing choice."""
     folder = Path(tempfile.mkdtemp(prefix=".tmp-", dir=target.parent))
     try:
-        _write_layer(pyogrio, folder / target.name, target.stem, geometries, geometry_type, fields, crs,
-                     "ESRI Shapefile", None)
+        stems = []
+        for layer, (geometries, geometry_type, fields) in layers.items():
+            stem = target.stem if layer == TRACES_LAYER else f"{target.stem}_{layer}"
+            _write_layer(pyogrio, folder / (stem + target.suffix), stem, geometries, geometry_type,
+                         _shapefile_fields(fields, target.name), crs, "ESRI Shapefile", None)
+            stems.append(stem)
         written = []
-        for part in sorted(folder.iterdir()):
+        for part in sorted(folder.iterdir(), key=lambda p: (p.suffix.lower() == ".shp", p.name)):
             destination = target.with_name(part.name)
-            with atomic_path(destination) as tmp:
-                os.replace(part, tmp)
+            os.replace(part, destination)  # same folder: one atomic rename per file
             written.append(destination)
+        for layer in (AREA_LAYER, NODES_LAYER, BRANCHES_LAYER):
+            if f"{target.stem}_{layer}" not in stems:
+                for suffix in _SHAPEFILE_PARTS:
+                    target.with_name(f"{target.stem}_{layer}{suffix}").unlink(missing_ok=True)
         return written
     finally:
         with contextlib.suppress(OSError):

@@ -326,3 +326,13 @@ def test_a_layer_gdal_cannot_read_is_bad_input_naming_the_file(pyogrio, tmp_path
     monkeypatch.setattr(pyogrio.raw, "read", broken)
     with pytest.raises(ValueError, match=r"hash\.gpkg: a layer GDAL cannot read"):
         read_traces(path)
+
+
+def test_shapefile_rewrite_without_area_or_topology_drops_their_old_layers(pyogrio, tmp_path):
+    tm = hash_and_t()
+    path = tmp_path / "net.shp"
+    write_gis(tm, path, branches_and_nodes(tm, snap_tolerance_m=TAU))
+    assert (tmp_path / "net_branches.shp").is_file() and (tmp_path / "net_area.shp").is_file()
+    bare = TraceMap.from_segments(HASH_AND_T_SEGMENTS, frame="map", crs="EPSG:3067")
+    write_gis(bare, path)
+    assert sorted(p.stem for p in tmp_path.glob("*.shp")) == ["net"]
