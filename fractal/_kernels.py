@@ -494,7 +494,8 @@ def _count_distinct_cells(seg, d, ox, oy, nbx, nby, nbx_eff, nby_eff, scratch):
 @njit(cache=True)
 def _sorted_ids(ids):
     """``ids`` sorted ascending, in a new array (a bottom-up merge sort in plain loops: numba's
-    ``np.sort`` adds about a second of compilation)."""
+    ``np.sort`` adds about a second of compilation; ``solver._kernels._stable_argsort`` is the
+    same merge as an argsort of floats — each kernel file stands alone)."""
     n = ids.shape[0]
     a = np.empty(n, np.int64)
     b = np.empty(n, np.int64)

@@ -176,9 +176,7 @@ def _read_scanline(path: Path) -> None:
 
 def _history_reader(history) -> Callable[[Path], Any]:
     """The reader of a ``type = "csv"`` velocity history: the table, read whole."""
-    from .solve_config import read_history_csv
-
-    return lambda path: read_history_csv(path, history.kind, history.scale)
+    return history.read
 
 
 def _check_contents(config_path, files: list[tuple[str, Path, Callable[[Path], Any]]]) -> None:

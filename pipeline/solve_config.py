@@ -115,9 +115,15 @@ class CsvHistoryConfig(StrictModel):
         """The file, relative to the folder ``base`` of the config file."""
         return in_folder(base, self.file)
 
+    def read(self, path: Path, where: str | None = None):
+        """The :class:`~rockmass.solver.TableHistory` of the CSV file ``path`` read with this
+        table's ``kind`` and ``scale`` (:func:`read_history_csv`; ``run`` and ``study`` read it
+        before any stage runs)."""
+        return read_history_csv(path, self.kind, self.scale, where)
+
     def to_solver(self, base: Path, where: str | None = None):
-        """The :class:`~rockmass.solver.TableHistory` of the file (:func:`read_history_csv`)."""
-        return read_history_csv(self.path(base), self.kind, self.scale, where)
+        """The :class:`~rockmass.solver.TableHistory` of the file."""
+        return self.read(self.path(base), where)
 
 
 HistoryConfig = Annotated[Sine | TableSine | Ricker | CsvHistoryConfig, Field(discriminator="type")]

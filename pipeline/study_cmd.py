@@ -125,9 +125,7 @@ def _read_case_traces(path, owner) -> None:
 def _read_case_history(path, owner) -> None:
     """A ``type = "csv"`` velocity history of a case's ``[solve]`` (``owner``: its history
     table), read whole."""
-    from .solve_config import read_history_csv
-
-    read_history_csv(path, owner.kind, owner.scale)
+    owner.read(path)
 
 
 #: File keys (key paths without list indices) whose content a study reads before any case runs,

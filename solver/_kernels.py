@@ -204,7 +204,8 @@ def world_vertices(loc, lgeo, off, pos, rot, active, wv):
 def _stable_argsort(keys, n):
     """Indices that sort keys[:n] (float64) ascending, ties in their input order, NaN last: what
     ``np.argsort(keys[:n], kind="mergesort")`` gives, as a bottom-up merge sort in plain loops
-    (numba's own mergesort takes seconds to compile)."""
+    (numba's own mergesort takes seconds to compile). ``fractal._kernels._sorted_ids`` is the
+    same merge on integer ids (each kernel file stands alone)."""
     order = np.empty(n, np.int64)
     tmp = np.empty(n, np.int64)
     for i in range(n):

@@ -79,3 +79,21 @@ def test_remap_pairs_finds_block_model_contacts_like_searchsorted():
 def test_helpers_called_with_literals_have_one_signature():
     for helper in (K._edge, K._open_slot, K._rounded_corner, K._stable_argsort):
         assert len(helper.signatures) == 1, helper.__name__
+
+
+def test_the_engines_bond_mask_is_the_kernels_bond_test():
+    """``Engine.bonds`` (Python, for the counts) and ``_is_bond`` (in the kernel) say the same
+    thing of every joint model: cohesion or tension > 0."""
+    from rockmass.solver import Coulomb, Settings, Stage
+    from rockmass.solver.engine import Engine
+
+    from ._models import hand_model, rect
+
+    joints = {"default": Coulomb(1e9, 1e9, 30.0), "glued": Coulomb(1e9, 1e9, 30.0, cohesion_pa=1e5),
+              "t": Coulomb(1e9, 1e9, 30.0, tension_pa=1e4),
+              "both": Coulomb(1e9, 1e9, 30.0, cohesion_pa=1e5, tension_pa=1e4)}
+    eng = Engine(hand_model([rect(0, 0, 1, 1), rect(0, 1, 1, 2)], pairs=[(0, 1)]),
+                 Settings(joints=joints, stages=(Stage("s"),)), None)
+    rows = np.arange(len(eng.props))
+    assert eng.bonds(rows).tolist() == [bool(K._is_bond(eng.props[r])) for r in rows]
+    assert eng.bonds(rows).sum() == 3
