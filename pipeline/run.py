@@ -133,7 +133,8 @@ def _check_file(config_path, key: str, path: Path | None) -> None:
 def _check_photo(path: Path) -> None:
     """The photo: within the pixel limit (from its header), an image Pillow can open, and its
     pixel data decodes to the end (a truncated JPEG passes ``verify``; JPEGs are decoded at 1/8
-    scale, which reads the whole stream at a fraction of the cost)."""
+    scale, which reads the whole stream at a fraction of the cost; a PNG or TIFF is decoded whole,
+    once more than extract will, within the pixel limit checked first)."""
     from PIL import Image, UnidentifiedImageError
 
     from .image_limits import check_image_pixels
