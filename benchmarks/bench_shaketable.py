@@ -230,11 +230,19 @@ def main(quick: bool = False, frequency_hz: float | None = None, tables=(1, 3, 4
 
 
 def _arguments(argv):
-    """--quick, --frequency F (skip Tables 1-2), --tables 3,4,5,6."""
-    frequency = float(argv[argv.index("--frequency") + 1]) if "--frequency" in argv else None
-    tables = ((1, 3, 4, 5, 6) if "--tables" not in argv
-              else tuple(int(t) for t in argv[argv.index("--tables") + 1].split(",")))
-    return {"quick": "--quick" in argv, "frequency_hz": frequency, "tables": tables}
+    """--quick, --frequency F (skip Tables 1-2), --tables 3,4,5,6 (argparse: --help answers and
+    an unknown option stops before anything runs)."""
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="bench_shaketable.py", description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="fewer cycles and settings")
+    parser.add_argument("--frequency", type=float, default=None, dest="frequency_hz",
+                        help="table frequency in Hz (skips Tables 1-2, which find it)")
+    parser.add_argument("--tables", default="1,3,4,5,6",
+                        help="comma-separated tables to run (default 1,3,4,5,6)")
+    args = parser.parse_args(argv)
+    return {"quick": args.quick, "frequency_hz": args.frequency_hz,
+            "tables": tuple(int(t) for t in args.tables.split(","))}
 
 
 if __name__ == "__main__":
