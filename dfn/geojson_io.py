@@ -146,9 +146,17 @@ def read_geojson(path: str | os.PathLike[str], *, frame: str | None = None) -> T
                 "(or a Polygon for the sampling window)"
             )
     _number_parts(records, split_any)
+    return _trace_map_of(polylines, records, window, crs, file_frame, frame, name,
+                         rfc7946_default="crs" not in doc and file_frame is None)
+
+
+def _trace_map_of(polylines, records, window, crs, file_frame, frame, name, **crs_rules) -> TraceMap:
+    """The map of the traces and window a reader collected (GeoJSON here, GeoPackage and Shapefile
+    in :mod:`~rockmass.dfn.gis_io`): the CRS checked against the coordinates
+    (:func:`~rockmass.dfn.frames.check_crs`, ``crs_rules`` its keywords), rockmass's own local CRS
+    of a face frame read back as no GIS CRS, the frame resolved; errors name the file."""
     every_xy = polylines + ([] if window is None else [window])
-    check_crs(crs, np.concatenate(every_xy) if every_xy else np.zeros((0, 2)), name,
-              rfc7946_default="crs" not in doc and file_frame is None)
+    check_crs(crs, np.concatenate(every_xy) if every_xy else np.zeros((0, 2)), name, **crs_rules)
     if is_rockmass_local_crs(crs):
         crs = None  # the face frame as rockmass writes it: no GIS CRS
     frame = _resolve_frame(file_frame, frame, name, default_frame(crs))

@@ -58,9 +58,9 @@ import numpy as np
 import shapely
 
 from .atomic import atomic_path
-from .frames import angle_convention, check_crs, default_frame, is_rockmass_local_crs, local_crs_wkt
-from .geojson_io import _add_multi_line, _columns, _number_parts, _trace_line
-from .tracemap import TraceMap, _as_window, _require_trace_map, _resolve_frame
+from .frames import angle_convention, local_crs_wkt
+from .geojson_io import _add_multi_line, _number_parts, _trace_line, _trace_map_of
+from .tracemap import TraceMap, _as_window, _require_trace_map
 
 __all__ = ["read_gis", "write_gis"]  # constants: import them by module
 
@@ -166,15 +166,7 @@ def read_gis(path: str | os.PathLike[str], *, frame: str | None = None, layer: s
             raise ValueError(f"{name}: layer {area_layer!r} is in crs {area_crs!r} but layer {trace_layer!r} is "
                              f"in {crs!r}; give both in one CRS")
         crs = area_crs if trace_layer is None else crs
-    every_xy = polylines + ([] if window is None else [window])
-    check_crs(crs, np.concatenate(every_xy) if every_xy else np.zeros((0, 2)), name)
-    if is_rockmass_local_crs(crs):
-        crs = None  # a face frame as write_gis names it: no GIS CRS
-    frame = _resolve_frame(file_frame, frame, name, default_frame(crs))
-    try:
-        return TraceMap.from_polylines(polylines, _columns(records), window=window, frame=frame, crs=crs)
-    except ValueError as exc:
-        raise ValueError(f"{name}: {exc}") from exc
+    return _trace_map_of(polylines, records, window, crs, file_frame, frame, name)
 
 
 def _describe_layers(layers: dict[str, str]) -> str:

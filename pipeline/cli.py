@@ -50,10 +50,12 @@ def _error(command: str, kind: str, exc: BaseException) -> None:
 
 def _plain_warning(message, category, filename, lineno, file=None, line=None) -> None:
     """A library warning (e.g. the solver's zones too coarse for a stage's waves) as one
-    ``rockmass: warning: ...`` line, without Python's file and source line."""
+    ``rockmass: warning: ...`` line, without Python's file and source line; a warning that is not
+    a plain ``UserWarning`` (numpy's ``RuntimeWarning``, ...) keeps its category's name."""
     from .inputs import warn
 
-    warn(str(message))
+    kind = "" if category is UserWarning else f"{category.__name__}: "
+    warn(f"{kind}{message}")
 
 
 def main(argv: list[str] | None = None) -> int:
