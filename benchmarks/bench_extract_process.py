@@ -16,16 +16,14 @@ Each run is the real command in a fresh process, ``rockmass extract PHOTO --out 
 (decode, grey, down-sampling to 4 MP, the chain, statistics, box counting, overlay, rose, manifest),
 with, per detector:
 
-- ``width 3 px``: the default ``--joint-width`` (3 *input* pixels, scaled to the working grid:
-  1.2 working px at 24 MP), what a user gets without thinking about it;
-- ``width 15 mm``: ``--joint-width 0.0147 / m_per_px`` (a joint width fixed in metres: 3 px of
-  the 4 MP working grid of this face, the width the defaults were tuned at), the scale-aware
-  setting the issue asks for, given by hand;
+- ``default``: no width given: 3 pixels of the working grid (docs/imaging.md §1), what a user gets
+  without thinking about it;
+- ``width 15 mm``: ``--joint-width-m 0.0147`` (3 px of the 4 MP working grid of this face);
+- ``width 3 input px``: ``--joint-width 3``, the default before issue 20 (1.2 working px at
+  24 MP), kept to show the drift it had;
 - ``full res``: ``[imaging.params] max_megapixels = 1000`` at 12 MP (ridge only; not with
-  ``--quick`` or ``--no-full-resolution``), where every pixel setting is in input pixels; and
-  ``full res, scaled``: the same with every pixel length of :class:`ExtractParams` multiplied by
-  k = sqrt(12 / 4) (areas by k**2) and the joint width of 15 mm: the 4 MP defaults carried to the
-  input grid, a prototype of settings fixed in metres or in a fraction of the face.
+  ``--quick`` or ``--no-full-resolution``), where the pixel settings are multiplied by
+  sqrt(12 / 4) (areas by its square; ``ExtractParams.on_grid``) and the default width follows.
 
 Per run: wall and CPU time of the child (``os.wait4`` rusage, user + system), MP/s = input pixels /
 wall, the child's peak RSS (``ru_maxrss`` of that child alone, forked from a small launcher
@@ -105,24 +103,6 @@ def render(sizes_mp, folder: Path) -> tuple[dict, object]:
             raise OSError(f"{path}: could not write the photo")
         photos[size] = (path, FACE_WIDTH_M / cols, (rows, cols))
     return photos, face.truth
-
-
-def scaled_config(megapixels: float, m_per_px: float) -> str:
-    """``[imaging]`` of a full-resolution run whose pixel settings are those of the default 4 MP
-    working grid carried to the input grid: lengths x k, areas x k**2 (k = sqrt(MP / 4)), and the
-    joint width fixed in metres (:data:`JOINT_WIDTH_M`)."""
-    from rockmass.imaging.extract import ExtractParams
-
-    base = ExtractParams(detector="ridge")
-    k = float(np.sqrt(megapixels / base.max_megapixels))
-    lengths = ("background_sigma_px", "spur_length_px", "crossing_link_px", "bridge_distance_px",
-               "tangent_skip_px", "tangent_reach_px", "link_gap_px", "link_offset_px", "link_skip_px",
-               "link_reach_px", "border_extend_px", "simplify_tolerance_px")
-    lines = ["[imaging]", f"joint_width_px = {JOINT_WIDTH_M / m_per_px:.4g}", "[imaging.params]",
-             "max_megapixels = 1000", f"min_object_px = {int(round(base.min_object_px * k * k))}",
-             f"min_trace_length_px = {base.trace_length_floor_px * k:.4g}"]
-    lines += [f"{name} = {getattr(base, name) * k:.4g}" for name in lengths]
-    return "\n".join(lines) + "\n"
 
 
 #: Runs the command from a small process of its own (fork + exec + wait4), so that the child's
@@ -215,14 +195,13 @@ def main(argv=None) -> int:
         cases = []
         for size in sizes:
             for detector in detectors:
-                cases.append((size, detector, "width 3 px", []))
-                cases.append((size, detector, "width 15 mm",
-                              ["--joint-width", f"{JOINT_WIDTH_M / photos[size][1]:.4g}"]))
+                cases.append((size, detector, "default", []))
+                cases.append((size, detector, "width 15 mm", ["--joint-width-m", f"{JOINT_WIDTH_M}"]))
+                cases.append((size, detector, "width 3 input px", ["--joint-width", "3"]))
         if not args.quick and not args.no_full_resolution and 12.0 in sizes and "ridge" in detectors:
-            cases.append((12.0, "ridge", "full res, width 3 px", ["--config", str(config)]))
-            scaled = folder / "full_resolution_scaled.toml"
-            scaled.write_text(scaled_config(12.0, photos[12.0][1]))
-            cases.append((12.0, "ridge", "full res, scaled", ["--config", str(scaled)]))
+            cases.append((12.0, "ridge", "full res, default", ["--config", str(config)]))
+            cases.append((12.0, "ridge", "full res, 15 mm",
+                          ["--config", str(config), "--joint-width-m", f"{JOINT_WIDTH_M}"]))
         for size, detector, setting, extra in cases:
             path, m_per_px, shape = photos[size]
             try:

@@ -26,8 +26,12 @@ vectorise            Douglas–Peucker, metres on the face frame;         :mod:`
 
 Pixel-valued parameters in :class:`ExtractParams` are in pixels of the *working* image (the image
 after down-sampling; the input itself when it is small enough), because that is the grid the chain
-runs on: so the defaults behave the same at any input size. ``joint_width_px`` is in input pixels
-and is scaled to the working grid.
+runs on: so the defaults behave the same at any input size. They were chosen for a working grid of
+at most :data:`REFERENCE_MEGAPIXELS`; when ``max_megapixels`` is raised and the working grid is
+larger, every pixel length is multiplied by :func:`grid_scale` (areas by its square), so that they
+keep their size on the face (docs/imaging.md §1). The expected joint width is 3 working pixels
+(times the same scale) unless given, in input pixels (``joint_width_px``) or in metres
+(``joint_width_m``).
 """
 
 from __future__ import annotations
@@ -35,7 +39,7 @@ from __future__ import annotations
 import time
 import warnings
 from collections.abc import Callable, Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
@@ -51,6 +55,20 @@ __all__ = ["ExtractParams", "ScaleInfo", "Extraction", "extract", "scale_from_co
 MIN_SIDE_PX = 16
 #: Line detectors in front of the threshold (``ExtractParams.detector``).
 DETECTORS = ("ridge", "learned")
+#: Size of the working grid, megapixels, that the pixel-valued defaults were chosen for (the
+#: default ``max_megapixels``). A larger working grid scales them by :func:`grid_scale`.
+REFERENCE_MEGAPIXELS = 4.0
+#: Expected joint width when none is given, pixels of a working grid of at most
+#: :data:`REFERENCE_MEGAPIXELS`.
+DEFAULT_JOINT_WIDTH_PX = 3.0
+#: Settings of :class:`ExtractParams` that are lengths on the working grid, pixels (scaled by
+#: :func:`grid_scale`). ``min_sigma_px`` is not: it is the finest scale the grid resolves.
+PIXEL_LENGTHS = ("background_sigma_px", "spur_length_px", "crossing_link_px", "bridge_distance_px",
+                 "tangent_skip_px", "tangent_reach_px", "link_gap_px", "link_offset_px",
+                 "link_skip_px", "link_reach_px", "border_extend_px", "min_trace_length_px",
+                 "simplify_tolerance_px")
+#: Settings that are areas on the working grid, pixels (scaled by the square of :func:`grid_scale`).
+PIXEL_AREAS = ("min_object_px", "fill_holes_px")
 
 
 #: Defaults of the settings that are None unless given, per detector (a None here: no filter). The
@@ -310,6 +328,84 @@ class ExtractParams:
         """``min_trace_length_px``, or the detector's default when it is None."""
         return float(self.resolved("min_trace_length_px"))
 
+    def on_grid(self, scale: float) -> ExtractParams:
+        """These settings for a working grid ``scale`` times finer per side than the reference one:
+        the lengths of :data:`PIXEL_LENGTHS` times ``scale``, the areas of :data:`PIXEL_AREAS` times
+        ``scale²`` (rounded), detector defaults resolved first. ``scale`` 1 returns ``self``.
+
+        Examples
+        --------
+        >>> p = ExtractParams(max_megapixels=16.0).on_grid(2.0)
+        >>> p.link_gap_px, p.min_object_px, p.min_trace_length_px, p.min_sigma_px
+        (100.0, 160, 40.0, 1.0)
+        """
+        if not (np.isfinite(scale) and scale > 0):
+            raise ValueError(f"grid scale must be a finite number > 0, got {scale!r}")
+        if scale == 1.0:
+            return self
+        changes: dict[str, Any] = {}
+        for name in PIXEL_LENGTHS:
+            value = self.resolved(name) if name in DETECTOR_DEFAULTS else getattr(self, name)
+            changes[name] = float(value) * scale
+        for name in PIXEL_AREAS:
+            value = self.resolved(name) if name in DETECTOR_DEFAULTS else getattr(self, name)
+            changes[name] = int(round(value * scale * scale))
+        return replace(self, **changes)
+
+
+def grid_scale(work_megapixels: float) -> float:
+    r"""How much finer than the reference grid a working grid is, per side:
+    :math:`s = \max(1, \sqrt{\text{MP}_{work} / \text{MP}_{ref}})` with
+    :data:`REFERENCE_MEGAPIXELS` as MP_ref. Pixel lengths on the working grid are multiplied by s
+    (:meth:`ExtractParams.on_grid`). Grids at or below the reference (every grid at the default
+    ``max_megapixels``) keep the settings as they are.
+
+    Examples
+    --------
+    >>> grid_scale(2.0), grid_scale(16.0)
+    (1.0, 2.0)
+    """
+    return max(1.0, float(np.sqrt(work_megapixels / REFERENCE_MEGAPIXELS)))
+
+
+def joint_width_on_grid(joint_width_px: float | None, joint_width_m: float | None, *,
+                        work_factor: float, m_per_px: float | None, scale: float) -> tuple[float, str]:
+    """Expected joint width on the working grid, pixels, and where it came from.
+
+    Parameters
+    ----------
+    joint_width_px, joint_width_m : float or None
+        The width in input pixels, or in metres on the face (needs ``m_per_px``); at most one.
+        Neither: :data:`DEFAULT_JOINT_WIDTH_PX` working pixels times ``scale``.
+    work_factor : float
+        Working grid / input grid, per side.
+    m_per_px : float or None
+        Metres per input pixel; None when the image has no scale.
+    scale : float
+        :func:`grid_scale` of the working grid.
+
+    Returns
+    -------
+    (float, str)
+        The width and its source: "joint_width_px", "joint_width_m" or "default".
+    """
+    if joint_width_px is not None and joint_width_m is not None:
+        raise ValueError("give either joint_width_px or joint_width_m, not both")
+    if joint_width_m is not None:
+        if m_per_px is None:
+            raise ValueError("joint_width_m needs a scale: give m_per_px or control_points too (or "
+                             "joint_width_px in pixels)")
+        return joint_width_m / m_per_px * work_factor, "joint_width_m"
+    if joint_width_px is not None:
+        return joint_width_px * work_factor, "joint_width_px"
+    return DEFAULT_JOINT_WIDTH_PX * scale, "default"
+
+
+def _check_width(value: float | None, name: str, unit: str) -> None:
+    """A given joint width must be a finite number > 0."""
+    if value is not None and not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
+        raise ValueError(f"{name} must be a finite width > 0 ({unit}), got {value!r}")
+
 
 @dataclass(frozen=True)
 class ScaleInfo:
@@ -329,6 +425,9 @@ class ScaleInfo:
         Shape of the grid the chain ran on.
     processing : str
         The processing mode in words ("full resolution" or "down-sampled ...").
+    grid_scale : float
+        :func:`grid_scale` of the working grid: the factor the pixel-valued settings were
+        multiplied by (1 at or below :data:`REFERENCE_MEGAPIXELS`).
     """
 
     m_per_px: float
@@ -337,6 +436,7 @@ class ScaleInfo:
     work_factor: float
     work_shape_px: tuple[int, int]
     processing: str
+    grid_scale: float = 1.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -356,9 +456,12 @@ class Extraction:
         or the ROI clipped to it).
     scale : ScaleInfo
     params : ExtractParams
-        The settings used.
+        The settings given (before :meth:`ExtractParams.on_grid`; ``scale.grid_scale`` says by how
+        much the pixel lengths were multiplied).
     joint_width_px : float
-        Expected joint width, input pixels.
+        Expected joint width used, input pixels.
+    joint_width_source : {"default", "joint_width_px", "joint_width_m"}
+        Where it came from.
     face_orientation : (dip_deg, dip_direction_deg) or None
         The face plane, for placing the traces in 3D later.
     timings_s : mapping of str to float
@@ -384,12 +487,15 @@ class Extraction:
     warnings: tuple[str, ...]
     debug: Mapping[str, np.ndarray] = field(default_factory=dict)
     face_mask: Mapping[str, Any] = field(default_factory=dict)
+    joint_width_source: str = "joint_width_px"
 
     def summary(self) -> dict:
         """A JSON-ready dict of the scale, parameters, timings and warnings (no arrays)."""
         return {"n_traces": self.traces.n_traces, "units": self.scale.units,
                 "scale": asdict(self.scale), "params": asdict(self.params),
-                "joint_width_px": self.joint_width_px, "face_orientation": self.face_orientation,
+                "joint_width_px": self.joint_width_px,
+                "joint_width_source": self.joint_width_source,
+                "face_orientation": self.face_orientation,
                 "face_mask": dict(self.face_mask), "timings_s": dict(self.timings_s),
                 "warnings": list(self.warnings)}
 
@@ -506,8 +612,9 @@ def _render(graph, shape) -> np.ndarray:
 
 
 def extract(image_or_path, *, m_per_px: float | None = None, control_points=None,
-            joint_width_px: float = 3.0, roi=None, face_dip_deg: float | None = None,
-            face_dip_direction_deg: float | None = None, params: ExtractParams | None = None,
+            joint_width_px: float | None = None, joint_width_m: float | None = None, roi=None,
+            face_dip_deg: float | None = None, face_dip_direction_deg: float | None = None,
+            params: ExtractParams | None = None,
             debug: bool = False, progress: Callable[[str], None] | None = None) -> Extraction:
     """Joint traces from a face photograph.
 
@@ -521,8 +628,13 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     control_points : mapping or sequence, optional
         Instead of ``m_per_px``: two pixel positions and their distance in metres (see
         :func:`scale_from_control_points`). With neither, the result is in pixels, with a warning.
-    joint_width_px : float, default 3.0
+    joint_width_px : float, optional
         Expected joint width in input pixels, > 0; sets the ridge filter scales (σ ≈ w / 2).
+    joint_width_m : float, optional
+        Instead of ``joint_width_px``: the width in metres on the face (needs a scale). With
+        neither, :data:`DEFAULT_JOINT_WIDTH_PX` pixels of the working grid (times
+        :func:`grid_scale` when ``max_megapixels`` is raised above :data:`REFERENCE_MEGAPIXELS`),
+        which keeps the chain's view of a joint the same at any photo size.
     roi : (k, 2) array_like or mapping, optional
         Region of interest polygon (see :func:`rockmass.imaging.segment.roi_mask`): a bare array or
         ``{"rc_px": ...}`` in input pixels (row, col), ``{"uv_m": ...}`` in metres on the face frame.
@@ -568,8 +680,8 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     params = ExtractParams() if params is None else params
     if not isinstance(params, ExtractParams):
         raise TypeError(f"params must be an ExtractParams, got {type(params).__name__}")
-    if not (np.isfinite(joint_width_px) and joint_width_px > 0):
-        raise ValueError(f"joint_width_px must be a finite width > 0 (pixels), got {joint_width_px!r}")
+    _check_width(joint_width_px, "joint_width_px", "pixels")
+    _check_width(joint_width_m, "joint_width_m", "metres")
     orientation = _check_orientation(face_dip_deg, face_dip_direction_deg)
     notes: list[str] = []
     if m_per_px is not None and control_points is not None:
@@ -598,9 +710,6 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
                          "needed to find joints")
     if control_points is not None:  # the points must lie on this photo
         scale_from_control_points(control_points, shape_px=(h, w))
-    if joint_width_px >= min(h, w):  # else OpenCV's kernels get sizes it cannot parse (TypeError)
-        raise ValueError(f"joint_width_px = {joint_width_px:g} px is not narrower than the {h} x "
-                         f"{w} pixel image; give the width of one joint in pixels (default 3)")
     lo, hi = float(grey.min()), float(grey.max())
     if hi - lo < 0.5 / 255:
         raise ValueError(f"{name} is blank: every pixel has grey level {lo:.3f} (all black or all "
@@ -620,7 +729,20 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         work_shape, processing = (h, w), "full resolution"
     row_factor, col_factor = work_shape[0] / h, work_shape[1] / w
     factor = float(np.sqrt(row_factor * col_factor))
-    width_work = joint_width_px * factor
+    given_params, scale_of_grid = params, grid_scale(work_shape[0] * work_shape[1] / 1e6)
+    params = params.on_grid(scale_of_grid)
+    width_work, width_source = joint_width_on_grid(
+        joint_width_px, joint_width_m, work_factor=factor, m_per_px=scale if units == "m" else None,
+        scale=scale_of_grid)
+    if width_work / factor >= min(h, w):  # else OpenCV's kernels cannot be sized (TypeError)
+        given = (f"joint_width_px = {joint_width_px:g} px" if joint_width_m is None
+                 else f"joint_width_m = {joint_width_m:g} m ({width_work / factor:.4g} px)")
+        raise ValueError(f"{given} is not narrower than the {h} x {w} pixel image; give the "
+                         "width of one joint (default 3 px of the working grid)")
+    if scale_of_grid > 1.0:
+        notes.append(f"working grid {work_shape[0] * work_shape[1] / 1e6:.1f} MP, above the "
+                     f"{REFERENCE_MEGAPIXELS:g} MP the pixel settings are given for: pixel lengths "
+                     f"x {scale_of_grid:.3f}")
     clock.lap("downsample")
 
     mask = None
@@ -740,7 +862,9 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     return Extraction(
         traces=traces,
         scale=ScaleInfo(m_per_px=scale, units=units, source=source, work_factor=factor,
-                        work_shape_px=tuple(int(v) for v in work_shape), processing=processing),
-        params=params, joint_width_px=float(joint_width_px), face_orientation=orientation,
+                        work_shape_px=tuple(int(v) for v in work_shape), processing=processing,
+                        grid_scale=scale_of_grid),
+        params=given_params, joint_width_px=float(width_work / factor),
+        joint_width_source=width_source, face_orientation=orientation,
         timings_s=MappingProxyType(dict(clock.timings)), warnings=tuple(notes),
         debug=MappingProxyType(debug_images), face_mask=MappingProxyType(face_info))

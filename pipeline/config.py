@@ -140,8 +140,13 @@ class ImagingConfig(StrictModel):
     m_per_px : float, optional
         Scale, metres per input pixel, > 0. Without it (and without control points on the command
         line) the traces are in pixels and every output says so.
-    joint_width_px : float, default 3.0
-        Expected joint width in input pixels, > 0; sets the ridge filter scales.
+    joint_width_px : float, optional
+        Expected joint width in input pixels, > 0; sets the ridge filter scales. Default: 3 pixels
+        of the working grid (the photo down-sampled to ``params.max_megapixels``), the same view of
+        a joint at any photo size.
+    joint_width_m : float, optional
+        Instead of ``joint_width_px``: the expected joint width in metres on the face, > 0 (needs a
+        scale: ``m_per_px`` or control points).
     face_dip_deg, face_dip_direction_deg : float, optional
         Orientation of the face plane (0-90°, 0-360°), recorded for placing traces in 3D.
     params : table, optional
@@ -150,7 +155,8 @@ class ImagingConfig(StrictModel):
     """
 
     m_per_px: float | None = Field(None, gt=0)
-    joint_width_px: float = Field(3.0, gt=0)
+    joint_width_px: float | None = Field(None, gt=0)
+    joint_width_m: float | None = Field(None, gt=0)
     face_dip_deg: float | None = Field(None, ge=0, le=90)
     face_dip_direction_deg: float | None = Field(None, ge=0, lt=360)
     params: dict[str, bool | int | float | str] = Field(default_factory=dict)
@@ -168,6 +174,13 @@ class ImagingConfig(StrictModel):
             raise ValueError(f"unknown key(s) {', '.join(unknown)} (allowed: {', '.join(allowed)})")
         ExtractParams(**value)  # its own range checks; the message names the key
         return value
+
+    @model_validator(mode="after")
+    def _one_joint_width(self) -> ImagingConfig:
+        if self.joint_width_px is not None and self.joint_width_m is not None:
+            raise field_problem(self, "joint_width_m", "give either joint_width_px or joint_width_m, "
+                                "not both", self.joint_width_m)
+        return self
 
 
 class _LazySection:

@@ -38,8 +38,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     scale.add_argument("--control-points", nargs=5, type=float, dest="control_points",
                        metavar=("ROW1", "COL1", "ROW2", "COL2", "DISTANCE_M"),
                        help="two pixel positions and the distance between them on the face, metres")
-    p.add_argument("--joint-width", type=float, dest="joint_width_px",
-                   help="expected joint width in pixels (default 3)")
+    width = p.add_mutually_exclusive_group()
+    width.add_argument("--joint-width", type=float, dest="joint_width_px", metavar="PX",
+                       help="expected joint width in pixels of the photo (default: 3 pixels of the "
+                            "working grid, the photo down-sampled to max_megapixels)")
+    width.add_argument("--joint-width-m", type=float, dest="joint_width_m", metavar="M",
+                       help="expected joint width in metres on the face (needs a scale)")
     p.add_argument("--face-dip", type=float, dest="face_dip_deg", help="dip of the face plane, deg")
     p.add_argument("--face-dip-direction", type=float, dest="face_dip_direction_deg",
                    help="dip direction of the face plane, deg")

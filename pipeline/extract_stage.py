@@ -40,9 +40,12 @@ def _settings(args, document=None):
     if document is not None:
         section = document.imaging or section
     values = section.model_dump()
-    for key in ("m_per_px", "joint_width_px", "face_dip_deg", "face_dip_direction_deg"):
+    for key in ("m_per_px", "face_dip_deg", "face_dip_direction_deg"):
         if getattr(args, key) is not None:
             values[key] = getattr(args, key)
+    for key, other in (("joint_width_px", "joint_width_m"), ("joint_width_m", "joint_width_px")):
+        if getattr(args, key, None) is not None:  # a width on the command line replaces the file's
+            values[key], values[other] = getattr(args, key), None
     if args.bright_lines:
         values["params"] = {**values["params"], "line_polarity": "bright"}
     if getattr(args, "detector", None) is not None:  # ``rockmass run`` plans args without it
@@ -95,7 +98,8 @@ def compute(args, document=None):
         warnings.simplefilter("ignore", UserWarning)  # recorded in the result's warnings instead
         try:
             result = extract(image, m_per_px=settings["m_per_px"], control_points=control,
-                             joint_width_px=settings["joint_width_px"], roi=roi,
+                             joint_width_px=settings["joint_width_px"],
+                             joint_width_m=settings["joint_width_m"], roi=roi,
                              face_dip_deg=settings["face_dip_deg"],
                              face_dip_direction_deg=settings["face_dip_direction_deg"],
                              params=ExtractParams(**settings["params"]), debug=args.debug_images,

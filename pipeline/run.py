@@ -527,8 +527,8 @@ def _run_stage_from(plan: RunPlan, stage: StagePlan, folder: Path, argv) -> dict
         from .extract_stage import produce
 
         produce(_ns(plan, argv, photo=str(run.path("photo", plan.config_path)), out=str(folder),
-                    m_per_px=None, control_points=None, joint_width_px=None, face_dip_deg=None,
-                    face_dip_direction_deg=None, roi=None, roi_px=None, bright_lines=False,
+                    m_per_px=None, control_points=None, joint_width_px=None, joint_width_m=None,
+                    face_dip_deg=None, face_dip_direction_deg=None, roi=None, roi_px=None, bright_lines=False,
                     n_sets=run.trace_sets, debug_images=False), folder, document=doc)
     elif stage.name == "traces":
         from .traces_stage import produce
