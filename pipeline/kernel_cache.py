@@ -23,7 +23,7 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["KERNEL_PACKAGES", "ensure_writable_cache", "fallback_cache_dir"]
+__all__ = ["KERNEL_PACKAGES", "cache_location", "ensure_writable_cache", "fallback_cache_dir"]
 
 #: The subpackages that hold numba kernels (their ``_*kernels.py`` modules).
 KERNEL_PACKAGES = ("solver", "dfn", "fractal", "imaging", "blockgen")
@@ -74,6 +74,34 @@ def fallback_cache_dir() -> Path:
     return folder if private else Path(tempfile.mkdtemp(prefix="rockmass-numba-"))
 
 
+def _kernel_pycache_folders() -> list[Path]:
+    """The ``__pycache__`` folders beside the kernel modules (numba's choice 2)."""
+    from importlib.util import find_spec
+
+    package = Path(__file__).resolve().parent
+    folders = []
+    for name in KERNEL_PACKAGES:
+        try:
+            spec = find_spec(f"{__package__}.{name}")
+        except (ImportError, ValueError):
+            spec = None
+        locations = list(spec.submodule_search_locations or []) if spec else [package / name]
+        folders += [Path(loc) / "__pycache__" for loc in locations]
+    return folders
+
+
+def cache_location() -> str:
+    """Where numba writes the kernels now, in words (``rockmass warmup`` prints it): the folder
+    ``NUMBA_CACHE_DIR`` names, the kernels' ``__pycache__`` folders, or numba's user cache folder.
+    Call it after :func:`ensure_writable_cache`."""
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return f"{os.environ['NUMBA_CACHE_DIR']} (NUMBA_CACHE_DIR)"
+    folders = _kernel_pycache_folders()
+    if all(_writable(f) for f in folders):
+        return f"__pycache__ beside the kernel modules in {folders[0].parent.parent}"
+    return f"{_user_cache_dir()} (numba's user cache folder)"
+
+
 def ensure_writable_cache() -> str | None:
     """Make sure numba can write its cache; returns the ``NUMBA_CACHE_DIR`` set, else None.
 
@@ -83,18 +111,7 @@ def ensure_writable_cache() -> str | None:
     """
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None
-    package = Path(__file__).resolve().parent
-    folders = []
-    for name in KERNEL_PACKAGES:
-        try:
-            from importlib.util import find_spec
-
-            spec = find_spec(f"{__package__}.{name}")
-        except (ImportError, ValueError):
-            spec = None
-        locations = list(spec.submodule_search_locations or []) if spec else [package / name]
-        folders += [Path(loc) / "__pycache__" for loc in locations]
-    if all(_writable(f) for f in folders):
+    if all(_writable(f) for f in _kernel_pycache_folders()):
         return None
     if _writable(_user_cache_dir()):
         return None
