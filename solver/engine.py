@@ -69,13 +69,16 @@ def ring_neighbours(offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return nxt, prv
 
 
-def strip_collinear(xy: np.ndarray, offsets: np.ndarray, rel_tol: float = 1e-9):
-    """Drop vertices where a block's boundary runs straight on (|sin of the turn| < ``rel_tol``).
+def strip_collinear(xy: np.ndarray, offsets: np.ndarray, tol_m: float):
+    """Drop vertices where a block's boundary runs straight on: the vertex lies less than ``tol_m``
+    from the chord between its two neighbours, h = |e₀ × e₁| / |e₀ + e₁| (e₀, e₁ the edges into
+    and out of it).
 
     blockgen keeps such vertices where a neighbour's corner meets an edge (T-junctions), so that
     contacts match edge by edge; for the rigid-block narrow phase they would split one face into
     collinear pieces, and the separating-axis test could pick a piece that does not face the
-    neighbour. The shape (area, centroid, inertia) is unchanged.
+    neighbour (the two blocks then touch at a point). Area, centroid and inertia are taken from
+    the block model, unchanged. A block that would keep fewer than 3 vertices is kept as given.
     """
     n = len(offsets) - 1
     block = np.repeat(np.arange(n), np.diff(offsets))
@@ -83,7 +86,8 @@ def strip_collinear(xy: np.ndarray, offsets: np.ndarray, rel_tol: float = 1e-9):
     e0 = xy - xy[prv]
     e1 = xy[nxt] - xy
     cross = e0[:, 0] * e1[:, 1] - e0[:, 1] * e1[:, 0]
-    keep = np.abs(cross) > rel_tol * np.hypot(*e0.T) * np.hypot(*e1.T)
+    chord = np.hypot(*(e0 + e1).T)
+    keep = np.abs(cross) >= tol_m * chord
     counts = np.bincount(block[keep], minlength=n)
     if (counts < 3).any():  # degenerate block: keep it as given
         bad = counts < 3
@@ -106,6 +110,12 @@ def rounded_corners(loc: np.ndarray, off: np.ndarray, normal: np.ndarray, roundi
     r_b is the rounding d, reduced on a block whose corners would eat more than half of an edge
     (sharp sliver corners): r_b = min(d, min over edges ½ L / (tan(θ₀/2) + tan(θ₁/2))), so every
     edge keeps at least half of its length flat.
+
+    A vertex where the boundary runs straight on (a T-junction's vertex in the through-going
+    block; exactly collinear or reflex by round-off) has no arc (tangent length 0) but its centre
+    is still inset, C = v − r_b n (the same formula at n₁ = n₂): the inner polygon is then the
+    block inset by r_b everywhere. Left on the boundary, such a centre met the neighbour's inner
+    polygon where both share that vertex and made a false overlap of r_a + r_b at rest.
 
     Parameters
     ----------
@@ -138,7 +148,8 @@ def rounded_corners(loc: np.ndarray, off: np.ndarray, normal: np.ndarray, roundi
     np.minimum.at(radius, block, fit)
     r = radius[block]
     inward = (n1 + n2) / np.maximum(1.0 + cos_turn, 1e-12)[:, None]
-    centre = loc - np.where(sin_turn > 0, r, 0.0)[:, None] * inward
+    inset = (sin_turn > 0) | (cos_turn > 0)  # convex corners and straight-on vertices
+    centre = loc - np.where(inset, r, 0.0)[:, None] * inward
     return np.ascontiguousarray(centre), r * unit_tan, radius
 
 
@@ -155,7 +166,15 @@ class Engine(DeformableBlocks):
         self.settings = settings
         nb = model.n_blocks
         self.nb = nb
-        xy, self.off = strip_collinear(model.xy_m, np.asarray(model.offsets, np.int64))
+        # the block model's own edges, with its own offsets
+        edge = model.xy_m[ring_neighbours(np.asarray(model.offsets))[0]] - model.xy_m
+        self.median_edge_m = float(np.median(np.hypot(edge[:, 0], edge[:, 1])))
+        # the d the model was built for (blockgen keeps every edge >= 2d with it), else 1 % of the
+        # median edge (hand-made models)
+        built_for = None if model.quality is None else model.quality.tolerances.rounding_m
+        self.rounding_m = settings.rounding_m or built_for or ROUNDING_FRACTION * self.median_edge_m
+        xy, self.off = strip_collinear(model.xy_m, np.asarray(model.offsets, np.int64),
+                                       T.COLLINEAR_ROUNDINGS * self.rounding_m)
         block_of_vertex = np.repeat(np.arange(nb), np.diff(self.off))
         self.loc = np.ascontiguousarray(xy - model.centroid_xy_m[block_of_vertex])
         self.pos = np.ascontiguousarray(model.centroid_xy_m.copy())
@@ -172,14 +191,6 @@ class Engine(DeformableBlocks):
         self.radius = np.sqrt(np.maximum.reduceat((self.loc ** 2).sum(1), self.off[:-1]))
         edge = self.loc[ring_neighbours(self.off)[0]] - self.loc
         normal = np.column_stack([edge[:, 1], -edge[:, 0]]) / np.hypot(edge[:, 0], edge[:, 1])[:, None]
-
-        # the block model's own edges (before strip_collinear), with its own offsets
-        edge = model.xy_m[ring_neighbours(np.asarray(model.offsets))[0]] - model.xy_m
-        self.median_edge_m = float(np.median(np.hypot(edge[:, 0], edge[:, 1])))
-        # the d the model was built for (blockgen keeps every edge >= 2d with it), else 1 % of the
-        # median edge (hand-made models)
-        built_for = None if model.quality is None else model.quality.tolerances.rounding_m
-        self.rounding_m = settings.rounding_m or built_for or ROUNDING_FRACTION * self.median_edge_m
         centre, tangent, radius = rounded_corners(self.loc, self.off, normal, self.rounding_m)
         self.lgeo = np.ascontiguousarray(np.column_stack([normal, centre, tangent,
                                                           radius[block_of_vertex]]))

@@ -13,7 +13,7 @@ This module imports nothing heavy: it is safe to read at CLI start-up.
 from __future__ import annotations
 
 __all__ = [
-    "BOND_GAP_ROUNDINGS", "CHECK_EVERY", "CY_PROBE_FLOOR_PA", "CY_PROBE_STRESS_FACTOR",
+    "BOND_GAP_ROUNDINGS", "CHECK_EVERY", "COLLINEAR_ROUNDINGS", "CY_PROBE_FLOOR_PA", "CY_PROBE_STRESS_FACTOR",
     "CY_REVERSAL_CLAMP", "CY_SLIPPING_F", "DEGENERATE_DISTANCE", "DOMAIN_EDGE_FRACTION",
     "DYNAMIC_RECORDS", "DYNAMIC_STEP_SAFETY", "FACE_MIN_FRACTION", "FACING_COS",
     "FAILURE_ROUNDINGS", "FAIL_KEEP_GOING", "FAIL_MIN_RECENT", "FAIL_ROTATION_ARC", "FALL_SUPPORT",
@@ -35,6 +35,14 @@ OVERLAP_LIMIT_ROUNDINGS = 0.5
 #: the normal every step. Far above round-off of the separations (~1e-16 of the model size), far
 #: below any real rotation of a contact.
 HYSTERESIS_ROUNDINGS = 0.01
+
+#: A block vertex less than this many d off the straight line through its two neighbours is a
+#: straight-on vertex (a T-junction kept by blockgen, or one snapped to within round-off) and is
+#: dropped from the contact geometry (:func:`rockmass.solver.engine.strip_collinear`): the contact
+#: model resolves nothing finer than d, and such a vertex splits one face into collinear pieces.
+#: The 1e-9 relative turn used before missed the round-off of snapped vertices 100 m from the
+#: origin (turns of 4e-7 on a 10⁴-block trace map), whose pieces then touched at a point.
+COLLINEAR_ROUNDINGS = 0.01
 
 #: Cosine below which two edge normals count as facing each other (anti-parallel within about 8°).
 #: Only such edges compete to be the incident edge by their overlap with the reference edge; it
