@@ -177,29 +177,41 @@ def pixel_features(flat) -> np.ndarray:
     image = np.array(flat, dtype=np.float32, copy=True)
     if image.ndim != 2:
         raise ValueError(f"flat must be a 2-D grey image, got shape {image.shape}")
+    # each map is written into its row as it is made: stacking a list of 27 maps at the end
+    # copied 430 MB at 4 MP (0.5 s) and doubled the peak memory
+    out = np.empty((len(FEATURE_NAMES),) + image.shape, np.float32)
+    rows = iter(out)
+
+    def put(value):
+        next(rows)[...] = value
+        return value
+
     half = _coarse(image)
-    out = [image]
-    out += [image - _blur(image, s) for s in _CONTRAST_SIGMAS]
-    dark = [_ridge(image, half, s) for s in _RIDGE_SIGMAS]
-    out += dark
-    out += [_ridge(image, half, s, black=False) for s in _BRIGHT_SIGMAS]
-    edges = [_edge(image, half, s) for s in _EDGE_SIGMAS]
-    out += edges
+    put(image)
+    for s in _CONTRAST_SIGMAS:
+        put(image - _blur(image, s))
+    dark = [put(_ridge(image, half, s)) for s in _RIDGE_SIGMAS]
+    for s in _BRIGHT_SIGMAS:
+        put(_ridge(image, half, s, black=False))
+    edges = [put(_edge(image, half, s)) for s in _EDGE_SIGMAS]
     g_r, g_c = _gradient(image, 1.0)
     for s in _COHERENCE_SIGMAS:  # (λ1 - λ2) / (λ1 + λ2) of the structure tensor
         j_rr, j_cc, j_rc = _blur(g_r * g_r, s), _blur(g_c * g_c, s), _blur(g_r * g_c, s)
         root = np.sqrt((j_rr - j_cc) ** 2 + 4 * j_rc * j_rc)
-        out.append(root / (j_rr + j_cc + np.float32(1e-6)))
+        put(root / (j_rr + j_cc + np.float32(1e-6)))
     for s in _STD_SIGMAS:
         mean = _blur(image, s)
-        out.append(np.sqrt(np.maximum(_blur(image * image, s) - mean * mean, 0.0)))
+        put(np.sqrt(np.maximum(_blur(image * image, s) - mean * mean, 0.0)))
     ridge = np.max(dark[1:4], axis=0)  # σ 2-8: the joints' widths
     edge = np.max(edges[1:3], axis=0)
     for source in (ridge, edge):  # on the coarse grid, segments of half the length
         coarse = _coarse(source)
         for n in _SUPPORT_LENGTHS:
-            out += [_fine(v, image.shape) for v in line_support(coarse, n // 2)]
-    return np.stack(out).astype(np.float32, copy=False)
+            for v in line_support(coarse, n // 2):
+                put(_fine(v, image.shape))
+    if next(rows, None) is not None:  # every row written, in FEATURE_NAMES order
+        raise AssertionError("pixel_features wrote fewer maps than FEATURE_NAMES lists")
+    return out
 
 
 def context_features(probability) -> np.ndarray:
