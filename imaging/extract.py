@@ -611,6 +611,172 @@ def _render(graph, shape) -> np.ndarray:
     return out
 
 
+def _read_grey(image_or_path, control_points, clock: _Clock):
+    """The photo (file or array) and its grey image, checked: at least :data:`MIN_SIDE_PX` a
+    side, not blank, control points on it. Returns (raw, grey, name for messages)."""
+    from . import enhance
+
+    if isinstance(image_or_path, (str, Path)):
+        raw = enhance.read_photo(image_or_path)
+        name = str(image_or_path)
+    else:
+        raw = image_or_path
+        name = "image"
+    clock.lap("read")
+    grey = enhance.to_grey(raw, name=name)
+    h, w = grey.shape
+    if h < MIN_SIDE_PX or w < MIN_SIDE_PX:
+        raise ValueError(f"{name} is {h} x {w} pixels; at least {MIN_SIDE_PX} x {MIN_SIDE_PX} are "
+                         "needed to find joints")
+    if control_points is not None:  # the points must lie on this photo
+        scale_from_control_points(control_points, shape_px=(h, w))
+    lo, hi = float(grey.min()), float(grey.max())
+    if hi - lo < 0.5 / 255:
+        raise ValueError(f"{name} is blank: every pixel has grey level {lo:.3f} (all black or all "
+                         "white?); there are no joints to find")
+    clock.lap("grey")
+    return raw, grey, name
+
+
+def _working_grid(grey, max_megapixels: float, notes: list) -> tuple:
+    """The grey image area-averaged down to at most ``max_megapixels`` (the working grid; a note
+    says so), or as it is. Returns (grey on the working grid, its shape, the mode in words)."""
+    import cv2
+
+    h, w = grey.shape
+    megapixels = h * w / 1e6
+    if megapixels <= max_megapixels:
+        return grey, (h, w), "full resolution"
+    factor = float(np.sqrt(max_megapixels / megapixels))
+    work_shape = (max(int(round(h * factor)), MIN_SIDE_PX), max(int(round(w * factor)), MIN_SIDE_PX))
+    grey = cv2.resize(grey, (work_shape[1], work_shape[0]), interpolation=cv2.INTER_AREA)
+    processing = (f"down-sampled from {h} x {w} ({megapixels:.1f} MP) to {work_shape[0]} x "
+                  f"{work_shape[1]} ({work_shape[0] * work_shape[1] / 1e6:.1f} MP, factor "
+                  f"{factor:.3f}; max_megapixels = {max_megapixels:g})")
+    notes.append(processing)
+    return grey, work_shape, processing
+
+
+def _largest_polygon(area):
+    """The largest polygon of a shapely (Multi)Polygon."""
+    import shapely
+
+    return area if area.geom_type == "Polygon" else max(shapely.get_parts(area), key=lambda g: g.area)
+
+
+def _candidate_area(raw, roi, face_mask: str, shape_px, work_shape, scale: float, units: str,
+                    name: str, clock: _Clock) -> tuple:
+    """Where joint pixels may lie on the working grid, and the sampling window on the face.
+
+    A ROI (input pixels or metres) gives both; else the automatic face mask of mode ``face_mask``
+    (:mod:`.face_mask`), whose outline becomes the window when its cues leave out more than the
+    border band; "off" gives neither. Returns (mask or None, window (k, 2) in face units, the
+    ``Extraction.face_mask`` record, the mask's border band on the working grid in pixels)."""
+    import shapely
+
+    from . import segment
+
+    h, _w = shape_px
+    row_factor, col_factor = work_shape[0] / shape_px[0], work_shape[1] / shape_px[1]
+    mask = None
+    window = image_window_uv_m(shape_px, scale)
+    if roi is not None:
+        rc_in = segment.roi_vertices_rc(roi, shape_px, m_per_px=scale if units == "m" else None)
+        rc_work = np.column_stack([(rc_in[:, 0] + 0.5) * row_factor - 0.5,
+                                   (rc_in[:, 1] + 0.5) * col_factor - 0.5])
+        mask = segment.roi_mask({"rc_px": rc_work}, work_shape)
+        area = shapely.Polygon(rc_to_uv(rc_in, h, scale)).intersection(shapely.Polygon(window))
+        window = np.asarray(_largest_polygon(area).exterior.coords)
+    clock.lap("roi")
+    face_info: dict[str, Any] = {"used": False, "source": "none", "mode": face_mask,
+                                 "masked_fraction": 0.0, "window": "image"}
+    band_px = 0.0  # width of the face mask's border band on the working grid
+    if mask is not None:
+        face_info.update(used=True, source="roi", masked_fraction=float(1.0 - mask.mean()),
+                         window="roi")
+    elif face_mask != "off":
+        from .face_mask import face_mask_cues, face_outline_rc
+
+        cues = face_mask_cues(raw, shape_px=work_shape, mode=face_mask, name=name)
+        mask = cues.mask
+        band_px = cues.border_px * work_shape[0] / cues.cues["border"].shape[0]
+        face_info.update(used=True, source="face mask", masked_fraction=float(1.0 - mask.mean()),
+                         excluded_fraction=dict(cues.summary()["excluded_fraction"]))
+        outline = face_outline_rc(cues, shape_px)
+        if outline is not None:
+            area = _largest_polygon(shapely.Polygon(rc_to_uv(outline, h, scale)).buffer(0)
+                                    .intersection(shapely.Polygon(window)))
+            if not area.is_empty and area.area > 0:
+                window = np.asarray(area.exterior.coords)
+                face_info["window"] = "face outline"
+    clock.lap("face_mask")
+    return mask, window, face_info, band_px
+
+
+def _joint_pixels(grey, params: ExtractParams, width_work: float, mask, clock: _Clock) -> tuple:
+    """Flatten the working grey image, find the joint response (ridge filter or learned
+    probability) and threshold it (hysteresis, inside ``mask``; holes filled). Returns (flattened
+    image, response, binary mask of joint pixels)."""
+    from . import enhance, learned, ridges, segment
+
+    if params.detector == "learned":
+        flat = learned.model_input(grey, background_sigma_px=params.background_sigma_px)
+    else:
+        flat = enhance.flatten_illumination(
+            grey, line_width_px=max(2.0 * width_work, 2.0), sigma_px=params.background_sigma_px,
+            method=params.flatten_method, clahe=params.clahe, clahe_clip_limit=params.clahe_clip_limit)
+    clock.lap("flatten")
+    if params.detector == "learned":
+        response = learned.joint_probability(flat)
+        clock.lap("ridges")
+        binary = segment.hysteresis_mask(response, low=params.prob_low, high=params.prob_high,
+                                         min_size_px=params.min_object_px, mask=mask)
+    else:
+        sigmas = ridges.ridge_sigmas(width_work, params.n_scales, spread=params.scale_spread,
+                                     min_sigma_px=params.min_sigma_px)
+        response = ridges.ridge_response(flat, sigmas, black_ridges=params.line_polarity == "dark")
+        clock.lap("ridges")
+        binary = segment.segment_ridges(response, low_k=params.low_k, high_k=params.high_k,
+                                        min_size_px=params.min_object_px, mask=mask)
+    binary = segment.fill_holes(binary, params.resolved("fill_holes_px"))
+    clock.lap("segment")
+    return flat, response, binary
+
+
+def _trace_chains(binary, params: ExtractParams, work_shape, width_work: float, band_px: float,
+                  clock: _Clock) -> tuple:
+    """Joint pixels -> traces as pixel polylines on the working grid: skeleton, graph, spur
+    pruning, X crossings, gap bridging, chaining, linking, ends carried to the border, the length
+    floor. Returns (chains, skeleton image, pruned graph)."""
+    from . import link, skeleton_graph
+
+    skeleton = skeleton_graph.skeletonize(binary)
+    clock.lap("skeleton")
+    graph = skeleton_graph.build_graph(skeleton)
+    clock.lap("graph")
+    tangent = dict(skip_px=params.tangent_skip_px, reach_px=params.tangent_reach_px)
+    pruned = skeleton_graph.prune_spurs(graph, params.spur_length_px)
+    clock.lap("prune")
+    repaired = skeleton_graph.repair_crossings(pruned, max_link_px=params.crossing_link_px,
+                                               max_turn_deg=params.max_turn_deg, **tangent)
+    clock.lap("crossings")
+    bridged = skeleton_graph.bridge_gaps(repaired, max_distance_px=params.bridge_distance_px,
+                                         max_angle_deg=params.bridge_angle_deg, **tangent)
+    clock.lap("bridge")
+    chains = skeleton_graph.chain_traces(bridged, max_turn_deg=params.max_turn_deg, **tangent)
+    clock.lap("chain")
+    chains = link.link_traces(chains, max_gap_px=params.link_gap_px,
+                              max_turn_deg=params.link_turn_deg, max_offset_px=params.link_offset_px,
+                              max_overlap_px=max(width_work, 1.0), skip_px=params.link_skip_px,
+                              reach_px=params.link_reach_px)
+    if params.border_extend_px > 0:  # across the face mask's border band too: it hid that stretch
+        chains = link.extend_to_border(chains, work_shape,
+                                       max_distance_px=params.border_extend_px + band_px,
+                                       skip_px=params.link_skip_px, reach_px=params.link_reach_px)
+    chains = [c for c in chains if link.polyline_length_px(c) >= params.trace_length_floor_px]
+    return chains, skeleton, pruned
+
+
 def extract(image_or_path, *, m_per_px: float | None = None, control_points=None,
             joint_width_px: float | None = None, joint_width_m: float | None = None, roi=None,
             face_dip_deg: float | None = None, face_dip_direction_deg: float | None = None,
@@ -673,9 +839,7 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     >>> result.scale.units, result.traces.n_traces > 0
     ('m', True)
     """
-    import cv2
-
-    from . import enhance, learned, link, ridges, segment, skeleton_graph, vectorize
+    from . import vectorize
 
     params = ExtractParams() if params is None else params
     if not isinstance(params, ExtractParams):
@@ -696,37 +860,9 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
                      "pixels, labelled 'px'; set m_per_px or give two control points for metres")
 
     clock = _Clock(progress)
-    if isinstance(image_or_path, (str, Path)):
-        raw = enhance.read_photo(image_or_path)
-        name = str(image_or_path)
-    else:
-        raw = image_or_path
-        name = "image"
-    clock.lap("read")
-    grey = enhance.to_grey(raw, name=name)
+    raw, grey, name = _read_grey(image_or_path, control_points, clock)
     h, w = grey.shape
-    if h < MIN_SIDE_PX or w < MIN_SIDE_PX:
-        raise ValueError(f"{name} is {h} x {w} pixels; at least {MIN_SIDE_PX} x {MIN_SIDE_PX} are "
-                         "needed to find joints")
-    if control_points is not None:  # the points must lie on this photo
-        scale_from_control_points(control_points, shape_px=(h, w))
-    lo, hi = float(grey.min()), float(grey.max())
-    if hi - lo < 0.5 / 255:
-        raise ValueError(f"{name} is blank: every pixel has grey level {lo:.3f} (all black or all "
-                         "white?); there are no joints to find")
-    clock.lap("grey")
-
-    megapixels = h * w / 1e6
-    if megapixels > params.max_megapixels:
-        factor = float(np.sqrt(params.max_megapixels / megapixels))
-        work_shape = (max(int(round(h * factor)), MIN_SIDE_PX), max(int(round(w * factor)), MIN_SIDE_PX))
-        grey = cv2.resize(grey, (work_shape[1], work_shape[0]), interpolation=cv2.INTER_AREA)
-        processing = (f"down-sampled from {h} x {w} ({megapixels:.1f} MP) to {work_shape[0]} x "
-                      f"{work_shape[1]} ({work_shape[0] * work_shape[1] / 1e6:.1f} MP, factor "
-                      f"{factor:.3f}; max_megapixels = {params.max_megapixels:g})")
-        notes.append(processing)
-    else:
-        work_shape, processing = (h, w), "full resolution"
+    grey, work_shape, processing = _working_grid(grey, params.max_megapixels, notes)
     row_factor, col_factor = work_shape[0] / h, work_shape[1] / w
     factor = float(np.sqrt(row_factor * col_factor))
     given_params, scale_of_grid = params, grid_scale(work_shape[0] * work_shape[1] / 1e6)
@@ -745,93 +881,11 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
                      f"x {scale_of_grid:.3f}")
     clock.lap("downsample")
 
-    mask = None
-    window = image_window_uv_m((h, w), scale)
-    if roi is not None:
-        import shapely
-
-        rc_in = segment.roi_vertices_rc(roi, (h, w), m_per_px=scale if units == "m" else None)
-        rc_work = np.column_stack([(rc_in[:, 0] + 0.5) * row_factor - 0.5,
-                                   (rc_in[:, 1] + 0.5) * col_factor - 0.5])
-        mask = segment.roi_mask({"rc_px": rc_work}, work_shape)
-        area = shapely.Polygon(rc_to_uv(rc_in, h, scale)).intersection(shapely.Polygon(window))
-        if area.geom_type != "Polygon":
-            area = max(shapely.get_parts(area), key=lambda g: g.area)
-        window = np.asarray(area.exterior.coords)
-    clock.lap("roi")
-    face_info: dict[str, Any] = {"used": False, "source": "none", "mode": params.face_mask,
-                                 "masked_fraction": 0.0, "window": "image"}
-    band_px = 0.0  # width of the face mask's border band on the working grid
-    if mask is not None:
-        face_info.update(used=True, source="roi", masked_fraction=float(1.0 - mask.mean()),
-                         window="roi")
-    elif params.face_mask != "off":
-        from .face_mask import face_mask_cues, face_outline_rc
-
-        cues = face_mask_cues(raw, shape_px=work_shape, mode=params.face_mask, name=name)
-        mask = cues.mask
-        band_px = cues.border_px * work_shape[0] / cues.cues["border"].shape[0]
-        face_info.update(used=True, source="face mask", masked_fraction=float(1.0 - mask.mean()),
-                         excluded_fraction=dict(cues.summary()["excluded_fraction"]))
-        outline = face_outline_rc(cues, (h, w))
-        if outline is not None:
-            import shapely
-
-            area = shapely.Polygon(rc_to_uv(outline, h, scale)).buffer(0).intersection(
-                shapely.Polygon(window))
-            if area.geom_type != "Polygon":
-                area = max(shapely.get_parts(area), key=lambda g: g.area)
-            if not area.is_empty and area.area > 0:
-                window = np.asarray(area.exterior.coords)
-                face_info["window"] = "face outline"
-    clock.lap("face_mask")
-
-    if params.detector == "learned":
-        flat = learned.model_input(grey, background_sigma_px=params.background_sigma_px)
-    else:
-        flat = enhance.flatten_illumination(
-            grey, line_width_px=max(2.0 * width_work, 2.0), sigma_px=params.background_sigma_px,
-            method=params.flatten_method, clahe=params.clahe, clahe_clip_limit=params.clahe_clip_limit)
+    mask, window, face_info, band_px = _candidate_area(
+        raw, roi, params.face_mask, (h, w), work_shape, scale, units, name, clock)
+    flat, response, binary = _joint_pixels(grey, params, width_work, mask, clock)
     del grey
-    clock.lap("flatten")
-    if params.detector == "learned":
-        response = learned.joint_probability(flat)
-        clock.lap("ridges")
-        binary = segment.hysteresis_mask(response, low=params.prob_low, high=params.prob_high,
-                                         min_size_px=params.min_object_px, mask=mask)
-    else:
-        sigmas = ridges.ridge_sigmas(width_work, params.n_scales, spread=params.scale_spread,
-                                     min_sigma_px=params.min_sigma_px)
-        response = ridges.ridge_response(flat, sigmas, black_ridges=params.line_polarity == "dark")
-        clock.lap("ridges")
-        binary = segment.segment_ridges(response, low_k=params.low_k, high_k=params.high_k,
-                                        min_size_px=params.min_object_px, mask=mask)
-    binary = segment.fill_holes(binary, params.resolved("fill_holes_px"))
-    clock.lap("segment")
-    skeleton = skeleton_graph.skeletonize(binary)
-    clock.lap("skeleton")
-    graph = skeleton_graph.build_graph(skeleton)
-    clock.lap("graph")
-    tangent = dict(skip_px=params.tangent_skip_px, reach_px=params.tangent_reach_px)
-    pruned = skeleton_graph.prune_spurs(graph, params.spur_length_px)
-    clock.lap("prune")
-    repaired = skeleton_graph.repair_crossings(pruned, max_link_px=params.crossing_link_px,
-                                               max_turn_deg=params.max_turn_deg, **tangent)
-    clock.lap("crossings")
-    bridged = skeleton_graph.bridge_gaps(repaired, max_distance_px=params.bridge_distance_px,
-                                         max_angle_deg=params.bridge_angle_deg, **tangent)
-    clock.lap("bridge")
-    chains = skeleton_graph.chain_traces(bridged, max_turn_deg=params.max_turn_deg, **tangent)
-    clock.lap("chain")
-    chains = link.link_traces(chains, max_gap_px=params.link_gap_px,
-                              max_turn_deg=params.link_turn_deg, max_offset_px=params.link_offset_px,
-                              max_overlap_px=max(width_work, 1.0), skip_px=params.link_skip_px,
-                              reach_px=params.link_reach_px)
-    if params.border_extend_px > 0:  # across the face mask's border band too: it hid that stretch
-        chains = link.extend_to_border(chains, work_shape,
-                                       max_distance_px=params.border_extend_px + band_px,
-                                       skip_px=params.link_skip_px, reach_px=params.link_reach_px)
-    chains = [c for c in chains if link.polyline_length_px(c) >= params.trace_length_floor_px]
+    chains, skeleton, pruned = _trace_chains(binary, params, work_shape, width_work, band_px, clock)
     contrast = vectorize.trace_contrast(chains, flat, mask=mask)
     keep = np.ones(len(chains), dtype=bool)
     if params.resolved("min_trace_contrast") is not None:
