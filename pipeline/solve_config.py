@@ -262,8 +262,7 @@ def _check_model_references(cfg, model, build) -> None:
     """The selectors of ``fixes`` / ``velocity_inputs`` and the monitors checked against ``model``
     before the solver starts, so that a problem names its key path (the solver itself finds them
     too, but names only the monitor or the selector)."""
-    from .solver.runner import _require_in_domain
-    from .solver.selectors import SIDES, select_blocks
+    from .solver.selectors import SIDES, require_point_in_domain, select_blocks
 
     for table in ("fixes", "velocity_inputs"):
         for i, item in enumerate(getattr(cfg, table)):
@@ -274,7 +273,7 @@ def _check_model_references(cfg, model, build) -> None:
             build(f"monitors[{i}].block", lambda m=m: _raise(
                 f"must be a block index in [0, {model.n_blocks}), got {m.block}"))
         elif m.block is None:
-            build(f"monitors[{i}].point_xy_m", lambda m=m: _require_in_domain(
+            build(f"monitors[{i}].point_xy_m", lambda m=m: require_point_in_domain(
                 model, m.name, m.point_xy_m))
 
 

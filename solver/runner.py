@@ -36,7 +36,7 @@ from .loading import apply_boundary_stress, apply_insitu, quiet_edge_table
 from .monitoring import boundary_points, point_displacement_from
 from .result import (FAILED_STATUSES, STATUS_FAILED_BLOCKS, STATUS_OK, EnergyLedger, Frame, Result,
                      StageResult)
-from .selectors import block_at_point
+from .selectors import block_at_point, require_point_in_domain
 from .settings import Settings, Stage
 from .wavelength import warn_coarse_zones, wave_checks
 
@@ -95,20 +95,6 @@ def _overlap_diagnostic(eng: Engine, pair: int, overlap: float, dt: float) -> st
             + "; ".join(causes))
 
 
-def _require_in_domain(model, name: str, xy) -> None:
-    """A monitor point must lie in the model's domain (a point far outside would silently follow the
-    nearest block)."""
-    import shapely
-
-    domain = shapely.Polygon(model.domain_xy_m)
-    point = shapely.Point(float(xy[0]), float(xy[1]))
-    if not domain.covers(point):
-        lo, hi = model.domain_xy_m.min(axis=0), model.domain_xy_m.max(axis=0)
-        raise ValueError(f"monitor {name!r}: point_xy_m ({xy[0]:g}, {xy[1]:g}) lies "
-                         f"{domain.exterior.distance(point):.3g} m outside the model domain "
-                         f"(x {lo[0]:g}..{hi[0]:g}, y {lo[1]:g}..{hi[1]:g} m)")
-
-
 class _Recorder:
     """Histories of monitored blocks, frames and peak block velocities."""
 
@@ -117,7 +103,7 @@ class _Recorder:
         self.monitors = []
         for m in settings.monitors:
             if m.block is None:
-                _require_in_domain(eng.model, m.name, m.point_xy_m)
+                require_point_in_domain(eng.model, m.name, m.point_xy_m)
             if m.block is not None and eng.zoned is not None:  # a zoned block: its middle piece
                 block = piece_near_centre(eng.zoned, eng.model, m.block)
             else:

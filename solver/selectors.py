@@ -13,7 +13,8 @@ import numpy as np
 
 from .settings import SIDES
 
-__all__ = ["DomainEdges", "domain_edges", "select_blocks", "block_at_point"]
+__all__ = ["DomainEdges", "domain_edges", "select_blocks", "block_at_point",
+           "require_point_in_domain"]
 
 _SIDE_COS = np.cos(np.pi / 4)
 
@@ -105,3 +106,18 @@ def block_at_point(model, xy) -> int:
     if len(inside):
         return int(inside[0])
     return int(np.argmin(shapely.distance(polys, point)))
+
+
+def require_point_in_domain(model, name: str, xy) -> None:
+    """A monitor's point must lie in the model's domain: a point far outside would silently
+    follow the nearest block (:func:`block_at_point`). Raises ValueError naming the monitor, the
+    distance outside and the domain's extent."""
+    import shapely
+
+    domain = shapely.Polygon(model.domain_xy_m)
+    point = shapely.Point(float(xy[0]), float(xy[1]))
+    if not domain.covers(point):
+        lo, hi = model.domain_xy_m.min(axis=0), model.domain_xy_m.max(axis=0)
+        raise ValueError(f"monitor {name!r}: point_xy_m ({xy[0]:g}, {xy[1]:g}) lies "
+                         f"{domain.exterior.distance(point):.3g} m outside the model domain "
+                         f"(x {lo[0]:g}..{hi[0]:g}, y {lo[1]:g}..{hi[1]:g} m)")
