@@ -270,7 +270,6 @@ def _terminate_as_interrupt() -> Iterator[None]:
 def run(args) -> int:
     """Handler of ``rockmass study``."""
     from .atomic import atomic_write_json, atomic_write_text
-    from .manifest import build_manifest
     from .outputs import output_folder, print_json, refuse_links
     from .solver.result import FAILED_STATUSES
     from .study import (CASE_FILE, RESULTS_FILE, RETRIED, case_cost, csv_text,
@@ -341,20 +340,9 @@ def run(args) -> int:
                 failed.pop(case.case_id, None)
             write_results()
             counter["done"] += 1
-            d = result.get("d_box")
-            disp = displacement_m(result, study.displacement)
-            what = (f"D_box {d:.4f}" if d is not None else "D_box -") + \
-                   (f", max displacement {disp * 1e3:.3g} mm" if disp is not None else "")
-            status = result["status"]
-            if status == "failed_blocks":
-                what += (f" (blocks in equilibrium); blocks failed: {result.get('failed_blocks')} "
-                         f"({result.get('failed_mechanisms')})")
-            elif status == "not_converged":
-                what = f"{what}; NOT CONVERGED: {result['error']}"
-            elif status != "ok":
-                what = f"FAILED: {result['error']}"
             _log(f"[{counter['done']}/{len(pending)}] case {case.index} ({case.short_id}) "
-                 f"{params_text(case.params)} r={case.realization}: {what} "
+                 f"{params_text(case.params)} r={case.realization}: "
+                 f"{_case_outcome_text(result, displacement_m(result, study.displacement))} "
                  f"({result.get('wall_time_s') or 0.0:.1f} s)")
 
         for case in cases:  # folders of an older rockmass, or copied without it
@@ -391,19 +379,13 @@ def run(args) -> int:
                              args.config)
             except Exception as exc:  # noqa: BLE001 - a report problem must not hide the results
                 _log(f"rockmass study: report.html not written: {type(exc).__name__}: {exc}")
-            manifest = build_manifest(
-                command=args.argv, config=document, inputs=[args.config],
-                seeds={"root": study.seed, "realizations": study.realizations,
-                       "rule": "realization r: 63 bits of SeedSequence(root, spawn_key=(r,)), "
-                               "written into " + ", ".join(study.seed_fields or ["blocks.seed"]),
-                       "by_realization": sorted({(c.realization, c.seed) for c in cases})},
-                timings_s={"cases_s": t_cases - t_start, "run_s": t_end - t_run,
-                           "total_s": t_end - t_start,
-                           "case_wall_time_sum_s": sum(r.get("wall_time_s", 0.0)
-                                                       for r in finished.values())},
-                extra={**summary, "workers": workers if scheduler is None else None,
-                       "scheduler": scheduler,
-                       "case_ids": {c.short_id: c.index for c in cases}})
+            timings = {"cases_s": t_cases - t_start, "run_s": t_end - t_run,
+                       "total_s": t_end - t_start,
+                       "case_wall_time_sum_s": sum(r.get("wall_time_s", 0.0)
+                                                   for r in finished.values())}
+            manifest = _study_manifest(args, document, cases, timings,
+                                       {**summary, "workers": workers if scheduler is None else None,
+                                        "scheduler": scheduler})
             manifest["inputs"] += input_records(digests)  # hashed once, by expand_cases
             atomic_write_json(out / "manifest.json", manifest)
     if interrupted:
@@ -418,17 +400,58 @@ def run(args) -> int:
               f"{summary['ran']} run, {len(failed)} failed) with {executor} in "
               f"{t_end - t_run:.1f} s; {out_path / RESULTS_FILE}, {out_path / 'report.html'}")
         print(summary["outcome_summary"])
-    problems = []
-    if failed:
-        problems.append(f"{len(failed)} of {len(cases)} cases failed (their error is in "
-                        "results.csv and cases/<id>/case.json); re-run the same command to retry "
-                        "them")
-    if stopped:
-        kinds = ", ".join(f"{summary['outcomes'][k]} {k}" for k in FAILED_STATUSES
-                          if summary["outcomes"].get(k))
-        problems.append(f"{len(stopped)} of {len(cases)} cases were stopped by the solver "
-                        f"({kinds}; the diagnostic is in results.csv); a re-run keeps them (the "
-                        "solver is deterministic): change their config")
+    problems = _problems(len(failed), len(stopped), len(cases), summary["outcomes"])
     if problems:
         raise RunError("; ".join(problems))
     return 0
+
+
+def _case_outcome_text(result: dict, displacement: float | None) -> str:
+    """One case's outcome for the progress log: D_box and the displacement, and why it stopped
+    when it did not end ``ok``."""
+    d = result.get("d_box")
+    what = (f"D_box {d:.4f}" if d is not None else "D_box -") + \
+           (f", max displacement {displacement * 1e3:.3g} mm" if displacement is not None else "")
+    status = result["status"]
+    if status == "failed_blocks":
+        return (f"{what} (blocks in equilibrium); blocks failed: {result.get('failed_blocks')} "
+                f"({result.get('failed_mechanisms')})")
+    if status == "not_converged":
+        return f"{what}; NOT CONVERGED: {result['error']}"
+    if status != "ok":
+        return f"FAILED: {result['error']}"
+    return what
+
+
+def _study_manifest(args, document, cases, timings: dict, extra: dict) -> dict:
+    """manifest.json of a study: the command, config, seeds (root, rule, per realization),
+    timings and the run's summary with the case ids (the inputs' digests are added by the
+    caller)."""
+    from .manifest import build_manifest
+
+    study = document.study
+    return build_manifest(
+        command=args.argv, config=document, inputs=[args.config],
+        seeds={"root": study.seed, "realizations": study.realizations,
+               "rule": "realization r: 63 bits of SeedSequence(root, spawn_key=(r,)), "
+                       "written into " + ", ".join(study.seed_fields or ["blocks.seed"]),
+               "by_realization": sorted({(c.realization, c.seed) for c in cases})},
+        timings_s=timings, extra={**extra, "case_ids": {c.short_id: c.index for c in cases}})
+
+
+def _problems(n_failed: int, n_stopped: int, n_cases: int, outcomes: dict) -> list[str]:
+    """What makes a finished study exit non-zero: cases that failed (retried on a re-run) and
+    cases the solver stopped (kept on a re-run: the solver is deterministic)."""
+    from .solver.result import FAILED_STATUSES
+
+    problems = []
+    if n_failed:
+        problems.append(f"{n_failed} of {n_cases} cases failed (their error is in "
+                        "results.csv and cases/<id>/case.json); re-run the same command to retry "
+                        "them")
+    if n_stopped:
+        kinds = ", ".join(f"{outcomes[k]} {k}" for k in FAILED_STATUSES if outcomes.get(k))
+        problems.append(f"{n_stopped} of {n_cases} cases were stopped by the solver "
+                        f"({kinds}; the diagnostic is in results.csv); a re-run keeps them (the "
+                        "solver is deterministic): change their config")
+    return problems
