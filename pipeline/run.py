@@ -251,7 +251,49 @@ def plan_run(config_path, out_dir, document=None) -> RunPlan:
     as_written = {**document.model_dump(mode="json"), "run": run.model_dump(mode="json")}
     document = _resolve_refs(config_path, document, trace_map, scanline)
 
-    # what each stage needs, and which stages it reads
+    why_not = _unavailable_stages(config_path, document, photo, trace_map, scanline)
+    upstream = _upstream_stages(config_path, document, photo, trace_map)
+    needed = _needed_stages(config_path, run, why_not, upstream)
+    stage_files, blocks_file = _stage_input_files(config_path, document, needed, contents,
+                                                   photo, traces_file, scanline, trace_map)
+
+    from .traces_stage import AREA_CHOICES
+
+    area = run.area_value(config_path)
+    if "traces" in needed and area is not None and area not in AREA_CHOICES:  # a file
+        _check_file(config_path, "run.area", Path(area))
+        stage_files["traces"].append(Path(area))
+    read = {p for name in needed for p in stage_files[name]}  # files only unneeded stages read
+    _check_contents(config_path, [c for c in contents if c[1] in read])  # are not read
+    if blocks_file is not None:  # the model solved, and the excavations [solve] names in it
+        from .solve_stage import read_blocks_file
+
+        with reading(blocks_file, "solve.blocks_file", config=config_path):
+            region_names = read_blocks_file(blocks_file).region_names
+        _check_excavation_names(config_path, document.solve, region_names)
+    if "traces" in needed:
+        _check_area(config_path, traces_file if photo is None else None, area)
+
+    sections = _stage_sections(document, run)
+    plans: list[StagePlan] = []
+    hashes: dict[str, str] = {}
+    digests: dict = {}
+    with digest_cache(digests):
+        for name in STAGES:
+            if name not in needed:
+                continue
+            sp = StagePlan(name, sections[name], stage_files[name], upstream[name])
+            sp.hash = stage_hash(sp, {u: hashes[u] for u in sp.upstream}, __version__, config_path,
+                                 out_dir)
+            hashes[name] = sp.hash
+            plans.append(sp)
+    return RunPlan(config_path=config_path, document=document, stages=plans, trace_map=trace_map,
+                   scanline=scanline, out_dir=out_dir, config=as_written, digests=digests)
+
+
+def _unavailable_stages(config_path, document, photo, trace_map, scanline) -> dict[str, str]:
+    """Stages the config cannot run, each with what it lacks (a photo, a trace map, a scanline, a
+    section, blocks); both ``solve.blocks_file`` and a ``[blocks]`` section is an error."""
     why_not: dict[str, str] = {}
     if photo is None:
         why_not["extract"] = "needs [run] photo"
@@ -270,6 +312,12 @@ def plan_run(config_path, out_dir, document=None) -> RunPlan:
     elif document.blocks is not None and document.solve.blocks_file is not None:
         raise _problem(config_path, "solve.blocks_file", "give either blocks_file or a [blocks] "
                        "section, not both")
+    return why_not
+
+
+def _upstream_stages(config_path, document, photo, trace_map) -> dict[str, list[str]]:
+    """For each stage, the stages whose outputs it reads (the extracted traces, the DFN section,
+    the blocks)."""
     via_extract = ["extract"] if photo is not None else []
     upstream: dict[str, list[str]] = {s: [] for s in STAGES}
     upstream["traces"] = upstream["boxcount"] = list(via_extract)
@@ -284,7 +332,12 @@ def plan_run(config_path, out_dir, document=None) -> RunPlan:
             _check_dfn_section(config_path, document)
     if document.solve is not None and document.solve.blocks_file is None:
         upstream["solve"].append("blocks")
+    return upstream
 
+
+def _needed_stages(config_path, run, why_not: dict, upstream: dict) -> set[str]:
+    """The stages to run: those asked for (``[run] stages``, else every stage the config can
+    run) and, recursively, the stages they read; asking for one that cannot run names why."""
     requested = list(run.stages) if run.stages else [s for s in STAGES if s not in why_not]
     if not requested:
         raise _problem(config_path, "run", "nothing to run: give [run] photo, traces or scanline, or "
@@ -302,8 +355,13 @@ def plan_run(config_path, out_dir, document=None) -> RunPlan:
 
     for name in requested:
         need(name, None)
+    return needed
 
-    # input files of every needed stage exist
+
+def _stage_input_files(config_path, document, needed: set, contents: list, photo, traces_file,
+                       scanline, trace_map) -> tuple[dict, Path | None]:
+    """The input files of every needed stage (each checked to exist; those to read before the
+    run appended to ``contents``), and the blocks file the solve stage reads, if any."""
     stage_files: dict[str, list[Path]] = {s: [] for s in STAGES}
     if photo is not None:
         stage_files["extract"].append(photo)
@@ -353,30 +411,17 @@ def plan_run(config_path, out_dir, document=None) -> RunPlan:
         base = config_path.parent
         for i, v in enumerate(cfg.velocity_inputs):
             if v.history.type == "csv":
-                field = f"solve.velocity_inputs[{i}].history.file"
+                key = f"solve.velocity_inputs[{i}].history.file"
                 hp = v.history.path(base)
-                _check_file(config_path, field, hp)
-                contents.append((field, hp, _history_reader(v.history)))
+                _check_file(config_path, key, hp)
+                contents.append((key, hp, _history_reader(v.history)))
                 stage_files["solve"].append(hp)
+    return stage_files, blocks_file
 
-    from .traces_stage import AREA_CHOICES
 
-    area = run.area_value(config_path)
-    if "traces" in needed and area is not None and area not in AREA_CHOICES:  # a file
-        _check_file(config_path, "run.area", Path(area))
-        stage_files["traces"].append(Path(area))
-    read = {p for name in needed for p in stage_files[name]}  # files only unneeded stages read
-    _check_contents(config_path, [c for c in contents if c[1] in read])  # are not read
-    if blocks_file is not None:  # the model solved, and the excavations [solve] names in it
-        from .solve_stage import read_blocks_file
-
-        with reading(blocks_file, "solve.blocks_file", config=config_path):
-            region_names = read_blocks_file(blocks_file).region_names
-        _check_excavation_names(config_path, document.solve, region_names)
-    if "traces" in needed:
-        _check_area(config_path, traces_file if photo is None else None, area)
-
-    sections = {
+def _stage_sections(document, run) -> dict[str, dict]:
+    """The config sections each stage's hash covers."""
+    return {
         "extract": {"imaging": _dump(document.imaging), "run.trace_sets": run.trace_sets},
         # run.area only when given: the hash of a run without it is what it was before issue 19
         "traces": {"run.trace_sets": run.trace_sets, **({"run.area": run.area} if run.area else {})},
@@ -389,20 +434,6 @@ def plan_run(config_path, out_dir, document=None) -> RunPlan:
                                     is not None else None)},
         "solve": {"solve": _dump(document.solve)},
     }
-    plans: list[StagePlan] = []
-    hashes: dict[str, str] = {}
-    digests: dict = {}
-    with digest_cache(digests):
-        for name in STAGES:
-            if name not in needed:
-                continue
-            sp = StagePlan(name, sections[name], stage_files[name], upstream[name])
-            sp.hash = stage_hash(sp, {u: hashes[u] for u in sp.upstream}, __version__, config_path,
-                                 out_dir)
-            hashes[name] = sp.hash
-            plans.append(sp)
-    return RunPlan(config_path=config_path, document=document, stages=plans, trace_map=trace_map,
-                   scanline=scanline, out_dir=out_dir, config=as_written, digests=digests)
 
 
 def _check_area(config_path, traces_file: Path | None, area: str | None) -> None:
