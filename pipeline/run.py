@@ -184,8 +184,8 @@ def _check_contents(config_path, files: list[tuple[str, Path, Callable[[Path], A
     """Read what the stages will read before any runs (issue 18): each ``(field, path, reader)``;
     a problem is bad input naming the config, the field and the file (by its name only, nothing
     quoted from it). Returns nothing: the stages read the files again, whole."""
-    for field, path, read in files:
-        with reading(path, field, config=config_path):
+    for key, path, read in files:
+        with reading(path, key, config=config_path):
             read(path)
 
 
