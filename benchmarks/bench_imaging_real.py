@@ -212,13 +212,16 @@ def main(argv=None) -> int:
 
     if not args.no_synthetic:
         from rockmass.imaging.synthetic import synthetic_face
-        from rockmass.imaging.synthetic_field import field_face
+        from rockmass.imaging.synthetic_field import TUNNEL_STYLE, field_face
 
         seeds = [1] if args.quick else [1, 2, 3]
         makers = {"moderate (synthetic_face)":
                   lambda s: synthetic_face("moderate", seed=s, shape_px=(1000, 1500), m_per_px=0.008),
                   "field-like (field_face)":
-                  lambda s: field_face(seed=s, shape_px=(1000, 1500), m_per_px=0.008)}
+                  lambda s: field_face(seed=s, shape_px=(1000, 1500), m_per_px=0.008),
+                  "tunnel (field_face, TUNNEL_STYLE: half-casts, shotcrete)":
+                  lambda s: field_face(seed=s, shape_px=(1000, 1500), m_per_px=0.008,
+                                       style=TUNNEL_STYLE)}
         rows = []
         for name, make in makers.items():
             for detector in detectors:

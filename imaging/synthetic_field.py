@@ -13,11 +13,16 @@ failures measured on real faces name what is missing, and :func:`field_face` dra
   bright blobs with sharp rims), **bright plates and highlights** (polygons with sharp edges, soft
   specular spots), thin bright veins, dark blotches (lichen, wet patches);
 - **oriented texture** (bedding streaks: noise smoothed along one direction), rock grain, uneven
-  light with soft shadows, defocus blur, sensor noise and JPEG compression.
+  light with soft shadows, defocus blur, sensor noise and JPEG compression;
+- **blast half-casts**, not labelled: the straight, parallel half-barrels of drill holes left on a
+  drill-and-blast face, grooves shaded by the rock's light (a dark-bright line pair);
+- **shotcrete** over parts of the face: smooth, uniformly grey, lobed edge; the joints under it are
+  hidden, so the truth is cut there.
 
 Everything is drawn from one seed (:class:`numpy.random.SeedSequence`), so the same seed gives the
-same image and truth on any machine. The result is a :class:`~rockmass.imaging.synthetic.SyntheticFace`
-with ``difficulty = "field"``.
+same image and truth on any machine. Half-casts and shotcrete have streams of their own, so turning
+them off gives the faces drawn before they were added. The result is a
+:class:`~rockmass.imaging.synthetic.SyntheticFace` with ``difficulty = "field"``.
 """
 
 from __future__ import annotations
@@ -29,7 +34,8 @@ import numpy as np
 from .frame import check_scale, rc_to_uv
 from .synthetic import SyntheticFace, _lighting, _rock_texture, _smooth_noise
 
-__all__ = ["FieldStyle", "field_face", "centre_line_mask"]
+__all__ = ["FieldStyle", "TUNNEL_STYLE", "field_face", "centre_line_mask", "half_cast_axes",
+           "shotcrete_mask", "shotcrete_area"]
 
 
 @dataclass(frozen=True)
@@ -37,7 +43,8 @@ class FieldStyle:
     """Ranges the field-like faces are drawn from (grey levels 0–255, lengths in pixels).
 
     Each ``(lo, hi)`` is a uniform range a face (or a joint) draws its value from; counts are per
-    400 x 400 px and scale with the image area.
+    400 x 400 px and scale with the image area, except the half-cast families (per face). The
+    half-casts and shotcrete are sized in metres and drawn at the face's ``m_per_px``.
     """
 
     major_joints: tuple[int, int] = (1, 5)
@@ -61,6 +68,24 @@ class FieldStyle:
     noise: tuple[float, float] = (1.5, 6.0)
     blur_px: tuple[float, float] = (0.4, 2.0)
     jpeg_quality: tuple[int, int] = (55, 95)
+    # blast half-casts (not labelled): families per face (not scaled with the area), holes per
+    # family. Off by default, as shotcrete: the default faces (and the shipped model trained on
+    # them, and the benchmarks' figures) stay those drawn before; TUNNEL_STYLE turns both on
+    half_cast_families: tuple[int, int] = (0, 0)
+    half_casts_per_family: tuple[int, int] = (3, 8)
+    half_cast_diameter_m: tuple[float, float] = (0.045, 0.051)
+    half_cast_spacing_m: tuple[float, float] = (0.3, 0.8)
+    half_cast_length_m: tuple[float, float] = (0.8, 4.0)
+    half_cast_fan_share: float = 0.3  # share of families drilled as a fan, not parallel
+    half_cast_crack_share: float = 0.3  # share of half-casts with a thin crack along the axis
+    # shotcrete: share of faces with any, and the covered fraction of the image
+    shotcrete_share: float = 0.0
+    shotcrete_cover: tuple[float, float] = (0.0, 0.35)
+
+
+#: A drill-and-blast tunnel face: the field-like faces with blast half-casts (0-2 families) and
+#: shotcrete on 40 % of the faces (up to 35 % of the image).
+TUNNEL_STYLE = FieldStyle(half_cast_families=(0, 2), shotcrete_share=0.4)
 
 
 def _rough_path(rng, start, angle, length_px, step_px=6.0, roughness=0.35):
@@ -127,6 +152,19 @@ def _oriented_texture(rng, shape, amplitude):
     return amplitude * out / max(float(out.std()), 1e-12)
 
 
+def _light_direction(rng):
+    """A unit light vector (row, col, toward-camera components), 30-70° from the viewing
+    direction at a random azimuth: a headlamp or flash held beside the camera."""
+    azimuth, tilt = rng.uniform(0, 2 * np.pi), np.radians(rng.uniform(30, 70))
+    return np.array([np.sin(tilt) * np.sin(azimuth), np.sin(tilt) * np.cos(azimuth), np.cos(tilt)])
+
+
+def _lambert(g_r, g_c, light):
+    """Lambert shading of a surface of slopes (g_r, g_c) lit by ``light``, 1 where it is flat."""
+    shade = (-g_r * light[0] - g_c * light[1] + light[2]) / np.sqrt(1 + g_r * g_r + g_c * g_c)
+    return (np.maximum(shade, 0.05) / light[2]).astype(np.float32)
+
+
 def _shaded_relief(rng, shape, relief):
     r"""Lambert shading of a rough surface: lumps, ledges and crevices lit from one side.
 
@@ -134,18 +172,17 @@ def _shaded_relief(rng, shape, relief):
     decreasing weights, n unit-variance smoothed noise), so slopes are of order r at every scale;
     the shading is :math:`\max(\hat n \cdot \hat l, 0) / \hat l_z` for the surface normal
     :math:`\hat n \propto (-\partial_c z, -\partial_r z, 1)` and a light 30-70° from the viewing
-    direction, so a flat patch keeps its brightness.
+    direction, so a flat patch keeps its brightness. Returns the shading and the light (None when
+    ``relief`` is 0: a flat face, nothing drawn).
     """
     if relief <= 0:
-        return np.ones(shape, dtype=np.float32)
+        return np.ones(shape, dtype=np.float32), None
     height = np.zeros(shape, dtype=np.float32)
     for sigma, weight in ((1.5, 0.25), (4.0, 0.5), (12.0, 0.8), (36.0, 1.0)):
         height += relief * sigma * weight * _smooth_noise(rng, shape, sigma)
     g_r, g_c = np.gradient(height)
-    azimuth, tilt = rng.uniform(0, 2 * np.pi), np.radians(rng.uniform(30, 70))
-    light = np.array([np.sin(tilt) * np.sin(azimuth), np.sin(tilt) * np.cos(azimuth), np.cos(tilt)])
-    shade = (-g_r * light[0] - g_c * light[1] + light[2]) / np.sqrt(1 + g_r * g_r + g_c * g_c)
-    return (np.maximum(shade, 0.05) / light[2]).astype(np.float32)
+    light = _light_direction(rng)
+    return _lambert(g_r, g_c, light), light
 
 
 def _count(rng, bounds, area_factor):
@@ -171,12 +208,15 @@ def _major_joints(rng, shape, style, area_factor):
     return paths
 
 
-def _clip_to_image(paths_rc, shape):
-    """Pieces of the polylines inside the image rectangle (pixel-centre extent), as rc arrays."""
+def _clip_to_image(paths_rc, shape, hidden=None):
+    """Pieces of the polylines inside the image rectangle (pixel-centre extent) and outside the
+    ``hidden`` area (a shapely geometry in rc pixels, e.g. shotcrete), as rc arrays."""
     import shapely
 
     h, w = shape
     frame = shapely.box(-0.5, -0.5, h - 0.5, w - 0.5)
+    if hidden is not None and not hidden.is_empty:
+        frame = frame.difference(hidden)
     pieces = []
     for rc in paths_rc:
         clipped = shapely.LineString(rc).intersection(frame)
@@ -184,6 +224,153 @@ def _clip_to_image(paths_rc, shape):
             if part.geom_type == "LineString" and part.length >= 10.0:
                 pieces.append(np.asarray(part.coords))
     return pieces
+
+
+def _half_cast_layout(rng, shape, style, m_per_px):
+    """Axes of the blast half-casts: a list of families, each a list of holes ``(p0, p1, radius_px,
+    crack)`` with ends p0, p1 in rc pixels and ``crack`` the darkening of an axial crack (0: none).
+
+    Drill-and-blast rounds are drilled with parallel holes (a fan on some contours); what survives
+    the blast on the rock is the half of each hole's barrel. Face-drilling bits are 45-51 mm across;
+    contour holes are spaced about 10-15 diameters apart in smooth blasting (0.5-0.8 m) and closer in
+    presplitting (0.3-0.5 m), as tunnelling drill-and-blast handbooks give them; a visible
+    half-cast is at most the round length (3-5 m), usually less where the barrel broke away.
+    All sizes are drawn in metres and converted with ``m_per_px``.
+    """
+    h, w = shape
+    families = []
+    for _ in range(int(rng.integers(style.half_cast_families[0], style.half_cast_families[1] + 1))):
+        n = max(int(rng.integers(style.half_casts_per_family[0], style.half_casts_per_family[1] + 1)), 1)
+        angle = rng.uniform(0, np.pi)
+        fan = np.radians(rng.uniform(1.0, 4.0)) if rng.random() < style.half_cast_fan_share else 0.0
+        spacing = rng.uniform(*style.half_cast_spacing_m) / m_per_px
+        length = rng.uniform(*style.half_cast_length_m) / m_per_px
+        radius = rng.uniform(*style.half_cast_diameter_m) / 2 / m_per_px
+        centre = rng.uniform(0, 1, 2) * (h, w)
+        axis = np.array([np.sin(angle), np.cos(angle)])
+        normal = np.array([-axis[1], axis[0]])
+        holes = []
+        for k in range(n):
+            offset = k - (n - 1) / 2
+            mid = (centre + offset * spacing * rng.uniform(0.9, 1.1) * normal
+                   + rng.uniform(-0.15, 0.15) * length * axis)
+            a = angle + offset * fan
+            direction = np.array([np.sin(a), np.cos(a)])
+            half = 0.5 * length * rng.uniform(0.6, 1.0)
+            crack = rng.uniform(0.2, 0.5) if rng.random() < style.half_cast_crack_share else 0.0
+            holes.append((mid - half * direction, mid + half * direction, radius, crack))
+        families.append(holes)
+    return families
+
+
+def _half_cast_shade(shape, families, light):
+    """Multiplicative shading (1 off the grooves) of half-cylindrical grooves along the given axes.
+
+    Across a groove of radius R the surface is :math:`z = -\\sqrt{R^2 - d^2}` (d the distance from the
+    axis), Lambert-shaded with the face's light: the wall facing the light is bright, the other
+    dark, and the part of the groove the rim hides from the light (the ray leaves through the wall,
+    not the opening) is in shadow at an ambient 0.45 — the dark-bright line pair of a half-cast.
+    The shading's departure from 1 is doubled (fresh blasted rock in a groove glints, and its
+    walls are steeper than a flat face ever is), and the bottom is slightly darker (less sky seen).
+    An axial crack is a thin dark line along the groove's bottom.
+    """
+    h, w = shape
+    shade = np.ones(shape, dtype=np.float32)
+    for p0, p1, radius, crack in (hole for family in families for hole in family):
+        lo = np.floor(np.minimum(p0, p1) - radius - 2).astype(int)
+        hi = np.ceil(np.maximum(p0, p1) + radius + 2).astype(int)
+        r0, c0, r1, c1 = max(lo[0], 0), max(lo[1], 0), min(hi[0], h), min(hi[1], w)
+        if r0 >= r1 or c0 >= c1:
+            continue
+        rr, cc = np.mgrid[r0:r1, c0:c1].astype(np.float64)
+        length = float(np.hypot(*(p1 - p0)))
+        axis = (p1 - p0) / max(length, 1e-9)
+        normal = np.array([-axis[1], axis[0]])
+        t = (rr - p0[0]) * axis[0] + (cc - p0[1]) * axis[1]
+        d = (rr - p0[0]) * normal[0] + (cc - p0[1]) * normal[1]
+        inside = (np.abs(d) < radius) & (t >= 0) & (t <= length)
+        if not inside.any():
+            continue
+        d = np.clip(d[inside], -0.97 * radius, 0.97 * radius)
+        depth = np.sqrt(radius * radius - d * d)
+        slope = d / depth  # dz/dd, across the groove
+        l_n = light[0] * normal[0] + light[1] * normal[1]
+        lit = np.abs(d + l_n * depth / light[2]) <= radius  # the light ray leaves by the opening
+        local = _lambert(slope * normal[0], slope * normal[1], light)
+        local = np.where(lit, np.clip(1.0 + 2.0 * (local - 1.0), 0.45, 2.2), 0.45)
+        local *= 1.0 - 0.1 * depth / radius
+        window = shade[r0:r1, c0:c1]
+        window[inside] *= local.astype(np.float32)
+        if crack > 0:
+            line = np.zeros(shape, dtype=np.float32)
+            _draw(line, np.array([p0, p1]), 1.0, 1)
+            shade *= 1.0 - crack * line
+    return shade
+
+
+def _shotcrete_cover(rng, shape, style, m_per_px):
+    """Where shotcrete covers the face: ``(score, level)`` with the cover ``score > level``, or None.
+
+    Sprayed concrete in a heading is applied to the crown and walls right behind the face and
+    overspray reaches the face's rim, or it seals loose patches of the face as blobs; either way
+    the edge is lobed, following how the nozzle was swept. Drawn here as a closeness to one image
+    edge (the top most often, as the crown) or to 1-3 blob centres, plus smooth noise of a 0.15-0.5 m
+    scale for the lobes, thresholded at the quantile that covers the drawn fraction exactly.
+    """
+    if rng.random() >= style.shotcrete_share:
+        return None
+    fraction = rng.uniform(*style.shotcrete_cover)
+    if fraction < 0.005:
+        return None
+    h, w = shape
+    diag = float(np.hypot(h, w))
+    rr, cc = np.mgrid[0:h, 0:w].astype(np.float32)
+    if rng.random() < 0.6:  # along the face's rim: top (crown) twice as likely as another edge
+        edge = int(rng.choice(4, p=[0.4, 0.2, 0.2, 0.2]))
+        bias = -(rr, h - 1 - rr, cc, w - 1 - cc)[edge] / diag
+    else:
+        centres = rng.uniform(0, 1, (int(rng.integers(1, 4)), 2)) * (h, w)
+        bias = -np.min([np.hypot(rr - r, cc - c) for r, c in centres], axis=0) / diag
+    sigma = float(np.clip(rng.uniform(0.15, 0.5) / m_per_px, 3.0, 0.3 * max(h, w)))
+    score = bias + rng.uniform(0.05, 0.15) * _smooth_noise(rng, shape, sigma)
+    return score, float(np.quantile(score, 1.0 - fraction))
+
+
+def _cover_polygon(score, level):
+    """The area ``score > level`` as a shapely geometry in rc pixels (sub-pixel iso-line)."""
+    import shapely
+    from skimage.measure import find_contours
+
+    padded = np.pad(score, 1, constant_values=float(score.min()) - 1.0)
+    area = shapely.Polygon()
+    for ring in find_contours(padded, level):
+        if len(ring) >= 4:
+            area = area.symmetric_difference(shapely.make_valid(shapely.Polygon(ring - 1.0)))
+    return area
+
+
+def _shotcrete_surface(rng, shape, m_per_px, light):
+    """Grey levels of a shotcrete skin: one uniform tone (lighter than most rock), gentle bumps of
+    2-15 cm Lambert-shaded with the face's light, and a faint fine grain — sprayed concrete
+    smooths the rock's roughness out and shows neither joints nor grain."""
+    tone = rng.uniform(140.0, 200.0)
+    slope = rng.uniform(0.03, 0.12)
+    height = np.zeros(shape, dtype=np.float32)
+    for sigma_m, weight in ((0.02, 0.4), (0.06, 0.7), (0.15, 1.0)):
+        sigma = max(sigma_m / m_per_px, 1.0)
+        height += slope * sigma * weight * _smooth_noise(rng, shape, sigma)
+    g_r, g_c = np.gradient(height)
+    grain = rng.uniform(1.0, 3.0) * _smooth_noise(rng, shape, 0.8)
+    return tone * _lambert(g_r, g_c, light) + grain
+
+
+def _streams(seed):
+    """The face's random streams: network, rock, joints, clutter, camera, half-casts, shotcrete.
+
+    Children of one :class:`numpy.random.SeedSequence`; spawning more children leaves the first
+    ones unchanged, so the elements added later (half-casts, shotcrete) do not alter the others.
+    """
+    return [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(7)]
 
 
 def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
@@ -205,8 +392,9 @@ def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
     -------
     SyntheticFace
         ``image`` (H, W) uint8 grey, JPEG-spoiled; ``truth`` the major joints' centre lines (a
-        TraceMap in metres on the face frame, attribute ``width_px`` = core width rounded);
-        ``difficulty = "field"``.
+        TraceMap in metres on the face frame, attribute ``width_px`` = core width rounded), cut
+        where shotcrete hides them (:func:`shotcrete_area`); ``difficulty = "field"``. The window
+        stays the image rectangle.
 
     Examples
     --------
@@ -224,12 +412,12 @@ def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
     if h < 32 or w < 32:
         raise ValueError(f"shape_px must be at least 32 x 32 pixels, got {shape_px}")
     area = h * w / 160_000.0
-    net_rng, rock_rng, joint_rng, clutter_rng, camera_rng = (
-        np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(5))
+    net_rng, rock_rng, joint_rng, clutter_rng, camera_rng, cast_rng, spray_rng = _streams(seed)
 
     # rock: grain and blotches, bedding streaks, dark patches (lichen, wet rock)
     image = _rock_texture(rock_rng, (h, w), rock_rng.uniform(*style.texture))
-    image *= _shaded_relief(rock_rng, (h, w), rock_rng.uniform(*style.relief))
+    relief, light = _shaded_relief(rock_rng, (h, w), rock_rng.uniform(*style.relief))
+    image *= relief
     image += _oriented_texture(rock_rng, (h, w), rock_rng.uniform(*style.oriented_texture))
     blotch = np.clip(_smooth_noise(rock_rng, (h, w), rock_rng.uniform(6, 20)) - 1.2, 0, None)
     image -= rock_rng.uniform(0, 40) * np.clip(blotch, 0, 1)
@@ -242,6 +430,12 @@ def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
         loops = np.exp(-0.5 * (level / (grad * rock_rng.uniform(0.6, 1.6))) ** 2)
         patchy = np.clip(_smooth_noise(rock_rng, (h, w), 20.0) + 0.5, 0, 1)  # only in places
         image *= 1.0 - rock_rng.uniform(0.1, 0.45) * loops * patchy
+
+    # blast half-casts: straight grooves of the drill holes, shaded with the rock's light
+    light = light if light is not None else np.array([0.5, 0.5, np.sqrt(0.5)])
+    casts = _half_cast_layout(cast_rng, (h, w), style, m_per_px)
+    if casts:
+        image *= _half_cast_shade((h, w), casts, light)
 
     paths = _major_joints(net_rng, (h, w), style, area)
     darkness = np.zeros((h, w), dtype=np.float32)
@@ -312,6 +506,15 @@ def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
                                 roughness=0.2), 1.0, clutter_rng.uniform(1, 4))
         image += clutter_rng.uniform(15, 50) * cv2.GaussianBlur(vein, (0, 0), 0.8)
 
+    # shotcrete: a smooth grey skin over parts of the face, hiding everything under it
+    cover = _shotcrete_cover(spray_rng, (h, w), style, m_per_px)
+    hidden = None
+    if cover is not None:
+        alpha = cv2.GaussianBlur((cover[0] > cover[1]).astype(np.float32), (0, 0), 1.0)
+        image = image * (1.0 - alpha) + _shotcrete_surface(spray_rng, (h, w), m_per_px, light) * alpha
+        darkness *= 1.0 - alpha
+        hidden = _cover_polygon(*cover)
+
     # camera: uneven light, darkening by joints, defocus, noise, JPEG
     image *= _lighting(camera_rng, (h, w), camera_rng.uniform(*style.lighting),
                        int(camera_rng.integers(style.shadows[0], style.shadows[1] + 1)))
@@ -325,7 +528,7 @@ def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
 
     pieces, piece_widths = [], []
     for rc, width in zip(paths, widths):
-        for part in _clip_to_image([rc], (h, w)):
+        for part in _clip_to_image([rc], (h, w), hidden):
             pieces.append(rc_to_uv(part, h, m_per_px))
             piece_widths.append(int(round(width)))
     window = np.array([[0.0, 0.0], [w * m_per_px, 0.0], [w * m_per_px, h * m_per_px],
@@ -342,3 +545,30 @@ def centre_line_mask(face: SyntheticFace) -> np.ndarray:
     from .metrics import render_traces
 
     return render_traces(face.truth, face.image.shape, face.m_per_px)
+
+
+def half_cast_axes(face: SyntheticFace) -> list[np.ndarray]:
+    """The axes of a field face's blast half-casts, one ``(n_holes, 2, 2)`` array of rc-pixel ends
+    per family (redrawn from the face's seed and style: the half-casts have their own stream)."""
+    rng = _streams(face.seed)[5]
+    families = _half_cast_layout(rng, face.image.shape, face.style, face.m_per_px)
+    return [np.array([[p0, p1] for p0, p1, _, _ in holes]) for holes in families]
+
+
+def shotcrete_mask(face: SyntheticFace) -> np.ndarray:
+    """Pixels of a field face under shotcrete (bool; all False when it has none), redrawn from the
+    face's seed and style."""
+    cover = _shotcrete_cover(_streams(face.seed)[6], face.image.shape, face.style, face.m_per_px)
+    return np.zeros(face.image.shape, bool) if cover is None else cover[0] > cover[1]
+
+
+def shotcrete_area(face: SyntheticFace):
+    """The area of a field face under shotcrete as a shapely geometry in face-frame metres (the
+    truth's frame; empty when it has none). No truth trace runs inside it."""
+    import shapely
+
+    h = face.image.shape[0]
+    cover = _shotcrete_cover(_streams(face.seed)[6], face.image.shape, face.style, face.m_per_px)
+    if cover is None:
+        return shapely.Polygon()
+    return shapely.transform(_cover_polygon(*cover), lambda rc: rc_to_uv(rc, h, face.m_per_px))

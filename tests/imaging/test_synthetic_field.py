@@ -1,9 +1,13 @@
-"""Field-like synthetic faces: reproducible, truth on the dark joint cores, truth inside the image."""
+"""Field-like synthetic faces: reproducible, truth on the dark joint cores, truth inside the image,
+half-casts straight and unlabelled, no truth under shotcrete."""
+
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
-from rockmass.imaging.synthetic_field import FieldStyle, centre_line_mask, field_face
+from rockmass.imaging.synthetic_field import (TUNNEL_STYLE, FieldStyle, centre_line_mask, field_face,
+                                              half_cast_axes, shotcrete_area, shotcrete_mask)
 
 SMALL = dict(shape_px=(160, 200), m_per_px=0.01)
 
@@ -41,3 +45,88 @@ def test_truth_lies_inside_the_image_window():
 def test_tiny_field_face_is_refused():
     with pytest.raises(ValueError, match="shape_px"):
         field_face(seed=0, shape_px=(20, 200))
+
+
+# quiet faces: one joint, no clutter, light noise, little blur, JPEG at 95 - the new elements stand out
+QUIET = dict(minor_cracks=(0, 0), rubble=(0, 0), plates=(0, 0), veins=(0, 0), crevice_fields=(0, 0),
+             major_joints=(1, 1), blur_px=(0.5, 0.5), noise=(1.5, 1.5), jpeg_quality=(95, 95))
+NO_EXTRAS = dict(half_cast_families=(0, 0), shotcrete_share=0.0)
+
+
+def test_half_casts_change_the_image_but_not_the_truth():
+    # half-casts and shotcrete have their own random streams: switching them on leaves every other
+    # element (and the truth) as it was
+    with_casts = FieldStyle(half_cast_families=(2, 2), half_casts_per_family=(4, 4), shotcrete_share=0.0)
+    a = field_face(seed=11, style=with_casts, **SMALL)
+    b = field_face(seed=11, style=FieldStyle(**NO_EXTRAS), **SMALL)
+    assert np.array_equal(a.truth.xy_m, b.truth.xy_m)
+    assert not np.array_equal(a.image, b.image)
+    assert len(half_cast_axes(a)) == 2 and half_cast_axes(b) == []
+
+
+def test_half_cast_grooves_are_straight_and_parallel():
+    import cv2
+
+    style = FieldStyle(half_cast_families=(1, 1), half_casts_per_family=(5, 5), half_cast_fan_share=0.0,
+                       half_cast_crack_share=0.0, half_cast_spacing_m=(0.3, 0.4), shotcrete_share=0.0,
+                       **QUIET)
+    face = field_face(seed=3, style=style, shape_px=(200, 300), m_per_px=0.005)
+    plain = field_face(seed=3, style=replace(style, half_cast_families=(0, 0)), shape_px=(200, 300),
+                       m_per_px=0.005)
+    dark = (face.image.astype(int) - plain.image.astype(int)) < -20  # the grooves' shaded sides
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(dark.astype(np.uint8), connectivity=8)
+    angles = []
+    for k in range(1, n):
+        if stats[k, cv2.CC_STAT_AREA] < 80:
+            continue
+        rc = np.argwhere(labels == k).astype(float)
+        rc -= rc.mean(axis=0)
+        _, _, vt = np.linalg.svd(rc, full_matrices=False)
+        t, s = rc @ vt[0], rc @ vt[1]  # along and across the fitted line, px
+        bins = np.round(t / 5).astype(int)  # the band's middle every 5 px along it
+        middle = np.array([s[bins == b].mean() for b in np.unique(bins) if (bins == b).sum() >= 5])
+        assert len(middle) >= 8 and np.sqrt(np.mean(middle ** 2)) < 0.5  # straight to half a pixel
+        angles.append(np.degrees(np.arctan2(vt[0, 0], vt[0, 1])) % 180)
+    assert len(angles) >= 2
+    spread = np.ptp(np.unwrap(np.radians(angles) * 2) / 2)
+    assert np.degrees(spread) < 2.0
+    # and where the axes say they are
+    axes = half_cast_axes(face)[0]
+    direction = np.degrees(np.arctan2(*(axes[0, 1] - axes[0, 0]))) % 180
+    assert abs((angles[0] - direction + 90) % 180 - 90) < 2.0
+
+
+def test_shotcrete_hides_the_joints_under_it():
+    import cv2
+    import shapely
+
+    style = FieldStyle(shotcrete_share=1.0, shotcrete_cover=(0.3, 0.3), half_cast_families=(0, 0))
+    hidden_length = 0.0
+    for seed in (1, 2, 3):
+        face = field_face(seed=seed, style=style, **SMALL)
+        bare = field_face(seed=seed, style=FieldStyle(**NO_EXTRAS), **SMALL)
+        mask, area = shotcrete_mask(face), shotcrete_area(face)
+        assert abs(mask.mean() - 0.3) < 0.01
+        assert abs(area.area / (face.image.size * 0.01 ** 2) - 0.3) < 0.02
+        lines = shapely.union_all(face.truth.to_shapely())
+        assert lines.intersection(area).length < 1e-6  # no truth under the shotcrete
+        hidden_length += bare.truth.total_length_m() - face.truth.total_length_m()
+        # shotcrete is smoother than rock: local (7 x 7) standard deviation, away from its rim
+        img = face.image.astype(np.float64)
+        mean = cv2.blur(img, (7, 7))
+        local_std = np.sqrt(np.maximum(cv2.blur(img * img, (7, 7)) - mean * mean, 0))
+        kernel = np.ones((9, 9), np.uint8)
+        inside = cv2.erode(mask.astype(np.uint8), kernel).astype(bool)
+        outside = cv2.erode((~mask).astype(np.uint8), kernel).astype(bool)
+        assert np.median(local_std[inside]) < 0.7 * np.median(local_std[outside])
+    assert hidden_length > 0.1  # some joints did run where the shotcrete is
+
+
+def test_the_tunnel_style_draws_some_faces_without_the_new_elements_and_the_default_none():
+    style = TUNNEL_STYLE
+    assert style.half_cast_families[0] == 0 and style.shotcrete_cover[0] == 0.0
+    bare = sum(not half_cast_axes(f) and not shotcrete_mask(f).any()
+               for f in (field_face(seed=s, shape_px=(40, 40), style=style) for s in range(12)))
+    assert 0 < bare < 12
+    assert all(not half_cast_axes(f) and not shotcrete_mask(f).any()
+               for f in (field_face(seed=s, shape_px=(40, 40)) for s in range(12)))
