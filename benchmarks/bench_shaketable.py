@@ -34,7 +34,19 @@ at 100 Hz damps the blocks' contact vibrations).
 Table 6 — the same 15 cycles with the mass part of the damping on absolute velocity
 (``rayleigh_reference = "absolute"``, the default of a Stage): how much of the table's work it takes.
 
-``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–6.
+Table 7 — does slip accumulate? Eight cycles at peak table accelerations of 1.14 (15.5 mm), 1.2, 1.3
+and 1.6 times a_c: the top-left block's slip after each cycle against a rigid block sliding one way
+whenever the table's acceleration exceeds a constant a_c (Newmark 1965), under the same table
+motion. Newmark's block slips the same amount in every full-amplitude cycle; the experiment's
+ingot kept slipping for 15 cycles. A model whose slip per cycle dies away shakes down: its
+critical acceleration rises as it slips, which is a property of the model, not of the input.
+The Newmark column is a mechanism bound (one sliding direction, constant a_c, displacement along
+the inertial force), printed with a self-check against the closed form of a rectangular pulse.
+
+Table 8 — the rounding. Six cycles at 15.5 mm without damping, with the corner rounding d of the
+sample (2 mm) and 1 and 0.5 mm: does the shakedown come from the rounded corners?
+
+``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–8.
 """
 
 from __future__ import annotations
@@ -178,7 +190,55 @@ def fifteen_cycles(model, settings, label: str, frequency_hz: float, cycles: int
     return {"frequency_hz": frequency_hz, "wall_s": wall, **out}
 
 
-def main(quick: bool = False, frequency_hz: float | None = None, tables=(1, 3, 4, 5, 6)) -> None:
+def newmark_slip(acceleration, dt: float, a_c: float) -> np.ndarray:
+    """Cumulative one-way slip of a rigid block with yield acceleration ``a_c`` (m/s²) under the
+    ground acceleration samples ``acceleration`` (m/s², step ``dt``): it slides while the
+    acceleration exceeds a_c or it still moves, decelerated by a_c (Newmark 1965); explicit
+    integration of the relative velocity, never below 0."""
+    slip = np.empty(len(acceleration))
+    v = d = 0.0
+    for i, a in enumerate(acceleration):
+        if v > 0.0 or a > a_c:
+            v = max(v + (a - a_c) * dt, 0.0)
+        d += v * dt
+        slip[i] = d
+    return slip
+
+
+def newmark_check() -> float:
+    """Relative error of :func:`newmark_slip` on a rectangular pulse of 2 a_c for 0.1 s against
+    the closed form (A − a_c) A t₀² / (2 a_c)."""
+    a_c, amp, t0, dt = 4.0, 8.0, 0.1, 1e-6
+    acc = np.where(np.arange(int(0.5 / dt)) * dt < t0, amp, 0.0)
+    exact = (amp - a_c) * amp * t0 ** 2 / (2 * a_c)
+    return float(newmark_slip(acc, dt, a_c)[-1] / exact - 1)
+
+
+def accumulation(model, settings, frequency_hz: float, a_c: float, ratios, cycles: int) -> list:
+    """Table 7: slip per cycle of the model and of Newmark's block at a_max = ratio · a_c."""
+    omega = 2 * math.pi * frequency_hz
+    rows = []
+    for ratio in ratios:
+        d = ratio * a_c / omega ** 2
+        out, wall = shaking(model, settings, (d,), frequency_hz, cycles)
+        dt = 1e-5
+        t = np.arange(0.0, cycles / frequency_hz + dt, dt)
+        acceleration = np.gradient(TableSine(d, frequency_hz, cycles=cycles)(t), dt)
+        slip = newmark_slip(acceleration, dt, a_c)
+        previous = 0.0
+        for row in out["rows"]:
+            i = min(int(round(row["cycle"] / frequency_hz / dt)), len(slip) - 1)
+            rows.append({"a_max_over_a_c": ratio, "D_mm": d * 1e3, "cycle": row["cycle"],
+                         "slip_mm": row["slip_mm"],
+                         "increment_mm": None if row["slip_mm"] is None
+                         else row["slip_mm"] - previous,
+                         "newmark_mm": 1e3 * slip[i], "status": out["status"], "wall_s": wall})
+            previous = row["slip_mm"] if row["slip_mm"] is not None else previous
+    return rows
+
+
+def main(quick: bool = False, frequency_hz: float | None = None,
+         tables=(1, 3, 4, 5, 6, 7, 8)) -> None:
     print(header("bench_shaketable: Ahola et al. (1996) shake table, Varma et al. (2019) §3"))
     model, settings = load()
     results = {}
@@ -224,7 +284,30 @@ def main(quick: bool = False, frequency_hz: float | None = None, tables=(1, 3, 4
         results["absolute_damping"] = fifteen_cycles(
             model, settings, "Table 6 (mass damping on absolute velocity)", frequency_hz, cycles,
             rayleigh_reference="absolute")
-    partial = "" if tables == (1, 3, 4, 5, 6) and band is not None else "_tables" + "".join(
+    if 7 in tables:
+        a_c = (2 * math.pi * frequency_hz) ** 2 * 0.5 * (NO_SLIP_D_M + SLIP_D_M)  # Table 2's rule
+        rows = accumulation(model, settings, frequency_hz, a_c, (SLIP_D_M * (2 * math.pi *
+                            frequency_hz) ** 2 / a_c, 1.2, 1.3, 1.6), 4 if quick else 8)
+        print(f"\nTable 7 — slip per cycle against Newmark's rigid block, a_c = {a_c / G:.3f} g at "
+              f"{frequency_hz:.2f} Hz (cycles 1 and last ramp up and down); Newmark self-check "
+              f"on a rectangular pulse: {newmark_check():+.1e}")
+        print(table(rows, [("a_max_over_a_c", ".2f"), ("D_mm", ".1f"), ("cycle", "d"),
+                           ("slip_mm", ".3f"), ("increment_mm", "+.3f"), ("newmark_mm", ".3f"),
+                           ("status", "s"), ("wall_s", ".0f")]))
+        results["accumulation"] = rows
+    if 8 in tables:
+        rows = []
+        for rounding in (0.002, 0.001, 0.0005):
+            out, wall = shaking(model, dataclasses.replace(settings, rounding_m=rounding),
+                                (SLIP_D_M,), frequency_hz, 3 if quick else 6, rayleigh_ratio=0.0)
+            rows += [{"rounding_mm": rounding * 1e3, **r, "status": out["status"], "wall_s": wall}
+                     for r in out["rows"]]
+        print(f"\nTable 8 — corner rounding: {3 if quick else 6} cycles at 15.5 mm, "
+              f"{frequency_hz:.2f} Hz, no damping")
+        print(table(rows, [("rounding_mm", ".1f"), ("cycle", "d"), ("slip_mm", ".3f"),
+                           ("status", "s"), ("wall_s", ".0f")]))
+        results["rounding"] = rows
+    partial = "" if tables == (1, 3, 4, 5, 6, 7, 8) and band is not None else "_tables" + "".join(
         map(str, tables))
     save("bench_shaketable" + ("_quick" if quick else "") + partial, results)
 
@@ -238,8 +321,8 @@ def _arguments(argv):
     parser.add_argument("--quick", action="store_true", help="fewer cycles and settings")
     parser.add_argument("--frequency", type=float, default=None, dest="frequency_hz",
                         help="table frequency in Hz (skips Tables 1-2, which find it)")
-    parser.add_argument("--tables", default="1,3,4,5,6",
-                        help="comma-separated tables to run (default 1,3,4,5,6)")
+    parser.add_argument("--tables", default="1,3,4,5,6,7,8",
+                        help="comma-separated tables to run (default 1,3,4,5,6,7,8)")
     args = parser.parse_args(argv)
     return {"quick": args.quick, "frequency_hz": args.frequency_hz,
             "tables": tuple(int(t) for t in args.tables.split(","))}
