@@ -18,7 +18,7 @@ balance and invariants; up to 2·10⁴ blocks it also builds the model with one 
 (the algorithm before issue 20) in the same run and reports its time and whether the two models are
 identical, array for array.
 
-    python benchmarks/bench_blockgen.py [--quick]
+    python benchmarks/bench_blockgen.py [--quick]   (--help lists the options)
 """
 
 from __future__ import annotations
@@ -259,4 +259,9 @@ def main(quick: bool = False) -> None:
 
 
 if __name__ == "__main__":
-    main(quick="--quick" in sys.argv)
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true",
+                        help="sizes 1e3 and 1e4 only, one warm run (a few seconds)")
+    main(quick=parser.parse_args().quick)

@@ -45,9 +45,9 @@ from .excavations import Excavation, _as_ring
 from .joints import JointSet, joint_set_segments, seed_sequence
 from .model import (CONTACT_KINDS, KIND_DOMAIN, KIND_EXCAVATION, KIND_GLUED, KIND_JOINT, KIND_TRACE,
                     SOURCE_CONVEX_CUT, SOURCE_CRACK, BlockModel)
-from .network import (LabelPriority, Sources, collapse_short, dangling_extensions, label_priority,
-                      label_segments, node, polygonize_segments, ring_segments, segment_keys,
-                      snap_to_grid, unique_rows)
+from .network import (LabelPriority, Sources, collapse_short, dangling_extensions, exterior_coords,
+                      label_priority, label_segments, node, polygonize_segments, ring_segments,
+                      segment_keys, snap_to_grid, unique_rows)
 from .quality import BlockQuality
 from .snapping import snap_short_edges
 from .tolerances import CRACK_EDGE_FRACTION, model_tolerances
@@ -96,18 +96,20 @@ def _clip_segments(segs: np.ndarray, source: np.ndarray, domain):
 
 def _ring_edges(faces):
     """Edges of polygons shells and holes (exact: ring by ring)."""
-    rings = shapely.get_exterior_ring(faces)
+    coords, index = exterior_coords(faces)
     n_int = shapely.get_num_interior_rings(faces)
     ring_face = [np.arange(len(faces))]
-    all_rings = [rings]
     if n_int.sum():
+        all_coords, all_index = [coords], [index]
         for k in range(int(n_int.max())):
             has = np.flatnonzero(n_int > k)
-            all_rings.append(shapely.get_interior_ring(faces[has], k))
+            c, i = shapely.get_coordinates(shapely.get_interior_ring(faces[has], k),
+                                           return_index=True)
+            all_coords.append(c)
+            all_index.append(i + sum(len(f) for f in ring_face))
             ring_face.append(has)
-    all_rings = np.concatenate(all_rings)
+        coords, index = np.concatenate(all_coords), np.concatenate(all_index)
     ring_face = np.concatenate(ring_face)
-    coords, index = shapely.get_coordinates(all_rings, return_index=True)
     same = index[1:] == index[:-1]
     seg = np.stack([coords[:-1][same], coords[1:][same]], axis=1)
     return seg, ring_face[index[:-1][same]]
@@ -144,7 +146,7 @@ def _is_convex(poly, reflex_sin, reflex_m):
 def _concave_mask(faces, reflex_sin, reflex_m):
     """Faces that have a hole or a reflex vertex (vectorised over all faces; the rule of
     :func:`rockmass.blockgen.convex.reflex_vertices`)."""
-    coords, index = shapely.get_coordinates(shapely.get_exterior_ring(faces), return_index=True)
+    coords, index = exterior_coords(faces)
     counts = np.bincount(index, minlength=len(faces))
     start = np.concatenate([[0], np.cumsum(counts)[:-1]])
     last = start + counts - 1  # closing point (equal to the first)
@@ -287,8 +289,8 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
         report["nodes_merged"]["count"] += n
         return out
 
-    def renode(segments):
-        return collapse(node(segments, grid))
+    def renode(segments, chain=False):
+        return collapse(node(segments, grid, chain))
 
     noded = renode(snap_to_grid(np.concatenate(all_segs), grid))
     # 3. dangling ends
@@ -304,7 +306,7 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
             sources.add(ext[sel], int(k), src[sel], priority=LabelPriority.EXTENSION)
         report["dangling"]["n_extended"] = int(len(ext))
         report["dangling"]["extended_length_m"] = float(np.hypot(*(ext[:, 1] - ext[:, 0]).T).sum())
-        noded = renode(np.concatenate([noded, ext]))
+        noded = renode(np.concatenate([noded, ext]), chain=True)  # a noded network: chains pay
     faces = polygonize_segments(noded)
     if dangling == "drop" and n_dangling:
         kept = _ring_edges(faces)[0]
@@ -358,8 +360,9 @@ def build(domain_xy_m, joint_sets=(), traces=None, excavations=(), *, dangling="
         noded, kind, src, faces, region, moved, changes, left = snap_short_edges(
             noded, kind, src, faces, region, tol.min_edge_m, tol.grid_m, tol.reflex_sin,
             tol.reflex_m)
+        moved_segs = noded[moved]
         for (k, s_), idx in _groups(kind[moved], src[moved]):
-            sources.add(noded[moved][idx], k, s_, priority=label_priority(k, s_))
+            sources.add(moved_segs[idx], k, s_, priority=label_priority(k, s_))
         report["edges_snapped"] = {
             "rule": "block edges shorter than min_edge_m collapse onto one node in every block "
                     "that uses it, when all those blocks stay convex and the area of each region "
@@ -381,9 +384,9 @@ def _groups(kind, src):
     table = np.column_stack([kind, src])
     if not len(table):
         return []
-    labels, inv, _ = unique_rows(table)
-    inv = inv.ravel()
-    return [((int(k), int(s)), np.flatnonzero(inv == i)) for i, (k, s) in enumerate(labels)]
+    labels, inv, counts = unique_rows(table)
+    members = np.split(np.argsort(inv.ravel(), kind="stable"), np.cumsum(counts)[:-1])
+    return [((int(k), int(s)), idx) for (k, s), idx in zip(labels.tolist(), members)]
 
 
 def _add_cracks(noded, faces, region, cracks, seq, tol, report, sources, excavations, collapse):
@@ -553,11 +556,10 @@ def _make_convex(noded, faces, region, concave, tol, report, sources, excavation
 def _assemble(faces, region, noded, kind, src, tol, report, domain_xy, excavations, set_names,
               domain, n_traces_in):
     # block order: rows bottom to top, then left to right (stable ids for a given input)
-    order = np.lexsort((shapely.get_coordinates(shapely.centroid(faces))[:, 0],
-                        np.round(shapely.get_coordinates(shapely.centroid(faces))[:, 1]
-                                 / tol.snap_m / 1e3)))
+    centre = shapely.get_coordinates(shapely.centroid(faces))
+    order = np.lexsort((centre[:, 0], np.round(centre[:, 1] / tol.snap_m / 1e3)))
     faces, region = faces[order], region[order]
-    coords, index = shapely.get_coordinates(shapely.get_exterior_ring(faces), return_index=True)
+    coords, index = exterior_coords(faces)
     counts = np.bincount(index, minlength=len(faces)) - 1  # open rings
     keep = np.ones(len(coords), bool)
     ends = np.cumsum(counts + 1) - 1

@@ -36,7 +36,7 @@ import numpy as np
 from ..dfn.polygon import signed_area
 from .convex import reflex_vertices
 from .model import KIND_DOMAIN, KIND_EXCAVATION
-from .network import unique_rows
+from .network import exterior_coords, unique_rows
 
 __all__ = ["snap_short_edges", "AREA_RTOL"]
 
@@ -100,7 +100,7 @@ def _one_pass(noded, kind, src, moved, faces, region, min_edge_m, grid_m, reflex
               changes):
     import shapely
 
-    coords, index = shapely.get_coordinates(shapely.get_exterior_ring(faces), return_index=True)
+    coords, index = exterior_coords(faces)
     counts = np.bincount(index, minlength=len(faces))
     start = np.concatenate([[0], np.cumsum(counts)[:-1]])
     is_last = np.zeros(len(coords), bool)
