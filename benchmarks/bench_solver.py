@@ -3,7 +3,8 @@ accuracy, and the work skipped by sleeping blocks and the static-only path — r
 
     python benchmarks/bench_solver.py [--quick] [--scaling-only]
 
-``--scaling-only``: Table 1 alone (results in bench_solver_scaling.json).
+``--scaling-only``: Table 1 alone (results in bench_solver_scaling.json); ``--shapes-only``: Table 1b
+alone (bench_solver_shapes.json).
 
 Table 1 — scaling. Square domains cut by two joint sets into 10³, 10⁴ and 5·10⁴ blocks, in-situ
 stress with a gravity gradient written into the contacts and applied on the sides (the model starts
@@ -138,6 +139,18 @@ def block_shapes(sizes, steps, rounds: int = 2):
             for (name, n), row in best.items()]
 
 
+def _print_block_shapes(quick: bool, steps: int) -> list:
+    """Table 1b, run and printed."""
+    t1b = block_shapes((1000, 3000) if quick else (1000, 10000), steps)
+    print("\nTable 1b — slot updates per second by block shape (regular sets against blocks cut "
+          f"from traces; {steps} static steps in in-situ equilibrium, interleaved, best of 2 rounds)")
+    print(table(t1b, [("model", ""), ("target_blocks", "d"), ("blocks", "d"),
+                      ("vertices_per_block", ".2f"), ("slots", "d"), ("status", ""),
+                      ("slot_updates_per_s", ".3g"), ("ns_per_slot", ".0f"),
+                      ("cost_vs_regular", ".2f"), ("unbalanced_ratio", ".1e")]))
+    return t1b
+
+
 def incline(psi_deg=30.0, b=1.0, h=0.5):
     c, s = math.cos(math.radians(psi_deg)), math.sin(math.radians(psi_deg))
     rot = np.array([[c, -s], [s, c]])
@@ -223,6 +236,10 @@ def main(argv):
     print(header("DEM solver benchmark"))
     sizes = (1000, 5000) if quick else (1000, 10000, 50000)
     steps = 100 if quick else 200
+    if "--shapes-only" in argv:
+        t1b = _print_block_shapes(quick, steps)
+        save("bench_solver_shapes", {"block_shapes": t1b})
+        return
     t1 = scaling(sizes, steps)
     print("\nTable 1 — contact updates per second and growth with size "
           f"({steps} static steps, in-situ equilibrium)")
@@ -233,13 +250,7 @@ def main(argv):
     if "--scaling-only" in argv:
         save("bench_solver_scaling", {"scaling": t1})
         return
-    t1b = block_shapes((1000, 3000) if quick else (1000, 10000), steps)
-    print("\nTable 1b — slot updates per second by block shape (regular sets against blocks cut "
-          f"from traces; {steps} static steps in in-situ equilibrium, interleaved, best of 2 rounds)")
-    print(table(t1b, [("model", ""), ("target_blocks", "d"), ("blocks", "d"),
-                      ("vertices_per_block", ".2f"), ("slots", "d"), ("status", ""),
-                      ("slot_updates_per_s", ".3g"), ("ns_per_slot", ".0f"),
-                      ("cost_vs_regular", ".2f"), ("unbalanced_ratio", ".1e")]))
+    t1b = _print_block_shapes(quick, steps)
     t2 = time_step_accuracy((0.1, 0.25, 0.5, 0.9))
     print("\nTable 2 — time step against accuracy (incline 30°, φ = 20°, 0.2 s)")
     print(table(t2, [("safety", ".2f"), ("dt_s", ".3g"), ("steps", "d"), ("wall_s", ".3f"),
