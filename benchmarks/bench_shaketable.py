@@ -46,7 +46,11 @@ the inertial force), printed with a self-check against the closed form of a rect
 Table 8 — the rounding. Six cycles at 15.5 mm without damping, with the corner rounding d of the
 sample (2 mm) and 1 and 0.5 mm: does the shakedown come from the rounded corners?
 
-``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–8.
+Table 9 — what moves. Four cycles at 1.14 and 1.2 a_c: how many blocks end displaced against the
+table by more than 0.1 and 0.5 mm, how many of them lie within two tunnel radii, and the extent of
+the moving mass (a single keyblock, as the experiment's ingot, or a large part of the model).
+
+``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–9.
 """
 
 from __future__ import annotations
@@ -237,8 +241,38 @@ def accumulation(model, settings, frequency_hz: float, a_c: float, ratios, cycle
     return rows
 
 
+def moving_mass(model, settings, frequency_hz: float, a_c: float, ratios, cycles: int) -> list:
+    """Table 9: blocks displaced against the table (the base block under the tunnel) after
+    ``cycles`` cycles at a_max = ratio · a_c."""
+    omega = 2 * math.pi * frequency_hz
+    centre, radius = np.array([0.61, 0.305]), 0.076  # the sample's tunnel
+    c = model.centroid_xy_m
+    base = int(np.argmin(np.hypot(c[:, 0] - centre[0], c[:, 1] - 0.01)))
+    near = np.hypot(*(c - centre).T) < 2 * radius
+    rows = []
+    for ratio in ratios:
+        motion = TableSine(ratio * a_c / omega ** 2, frequency_hz, cycles=cycles)
+        dynamic = next(s for s in settings.stages if s.kind == "dynamic")
+        stage = dataclasses.replace(dynamic, duration_s=cycles / frequency_hz + 0.05, frames=0)
+        inputs = tuple(VelocityInput(v.where, v.component, motion) for v in settings.velocity_inputs)
+        t0 = time.perf_counter()
+        result = run(model, dataclasses.replace(settings, stages=static_stages(settings) + (stage,),
+                                                velocity_inputs=inputs))
+        rel = result.displacement_m - result.displacement_m[base]
+        moved = np.hypot(rel[:, 0], rel[:, 1])
+        some = moved > 0.1e-3
+        rows.append({"a_max_over_a_c": ratio, "blocks": model.n_blocks,
+                     "moved_0p1mm": int(some.sum()), "moved_0p5mm": int((moved > 0.5e-3).sum()),
+                     "near_tunnel_0p1mm": int((some & near).sum()),
+                     "x_m": f"{c[some, 0].min():.2f}-{c[some, 0].max():.2f}" if some.any() else "-",
+                     "y_m": f"{c[some, 1].min():.2f}-{c[some, 1].max():.2f}" if some.any() else "-",
+                     "max_mm": 1e3 * float(moved.max()), "status": result.status,
+                     "wall_s": time.perf_counter() - t0})
+    return rows
+
+
 def main(quick: bool = False, frequency_hz: float | None = None,
-         tables=(1, 3, 4, 5, 6, 7, 8)) -> None:
+         tables=(1, 3, 4, 5, 6, 7, 8, 9)) -> None:
     print(header("bench_shaketable: Ahola et al. (1996) shake table, Varma et al. (2019) §3"))
     model, settings = load()
     results = {}
@@ -307,7 +341,17 @@ def main(quick: bool = False, frequency_hz: float | None = None,
         print(table(rows, [("rounding_mm", ".1f"), ("cycle", "d"), ("slip_mm", ".3f"),
                            ("status", "s"), ("wall_s", ".0f")]))
         results["rounding"] = rows
-    partial = "" if tables == (1, 3, 4, 5, 6, 7, 8) and band is not None else "_tables" + "".join(
+    if 9 in tables:
+        a_c = (2 * math.pi * frequency_hz) ** 2 * 0.5 * (NO_SLIP_D_M + SLIP_D_M)  # Table 2's rule
+        rows = moving_mass(model, settings, frequency_hz, a_c, (SLIP_D_M * (2 * math.pi *
+                           frequency_hz) ** 2 / a_c, 1.2), 2 if quick else 4)
+        print(f"\nTable 9 — what moves: blocks displaced against the table after "
+              f"{2 if quick else 4} cycles (model top at y = 0.61 m, tunnel centre at y = 0.305 m)")
+        print(table(rows, [("a_max_over_a_c", ".2f"), ("blocks", "d"), ("moved_0p1mm", "d"),
+                           ("moved_0p5mm", "d"), ("near_tunnel_0p1mm", "d"), ("x_m", "s"),
+                           ("y_m", "s"), ("max_mm", ".3f"), ("status", "s"), ("wall_s", ".0f")]))
+        results["moving_mass"] = rows
+    partial = "" if tables == (1, 3, 4, 5, 6, 7, 8, 9) and band is not None else "_tables" + "".join(
         map(str, tables))
     save("bench_shaketable" + ("_quick" if quick else "") + partial, results)
 
@@ -321,8 +365,8 @@ def _arguments(argv):
     parser.add_argument("--quick", action="store_true", help="fewer cycles and settings")
     parser.add_argument("--frequency", type=float, default=None, dest="frequency_hz",
                         help="table frequency in Hz (skips Tables 1-2, which find it)")
-    parser.add_argument("--tables", default="1,3,4,5,6,7,8",
-                        help="comma-separated tables to run (default 1,3,4,5,6,7,8)")
+    parser.add_argument("--tables", default="1,3,4,5,6,7,8,9",
+                        help="comma-separated tables to run (default 1,3,4,5,6,7,8,9)")
     args = parser.parse_args(argv)
     return {"quick": args.quick, "frequency_hz": args.frequency_hz,
             "tables": tuple(int(t) for t in args.tables.split(","))}
