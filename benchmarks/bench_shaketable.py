@@ -129,6 +129,24 @@ class Sequence:
         return sum(h(t - k * self.period_s) for k, h in enumerate(self.histories))
 
 
+def shaken_settings(settings, motion, duration_s: float, **damping):
+    """The sample's static stages, then its dynamic stage (its damping, or the Stage fields in
+    ``damping``) for ``duration_s`` and 0.05 s at rest, every velocity input driven by ``motion``."""
+    sample_stage = next(s for s in settings.stages if s.kind == "dynamic")  # its damping
+    stage = dataclasses.replace(sample_stage, duration_s=duration_s + 0.05, frames=0)
+    if damping:
+        stage = dataclasses.replace(stage, **damping)
+    inputs = tuple(VelocityInput(v.where, v.component, motion) for v in settings.velocity_inputs)
+    return dataclasses.replace(settings, stages=static_stages(settings) + (stage,),
+                               velocity_inputs=inputs)
+
+
+def threshold_a_c(frequency_hz: float) -> float:
+    """Table 2's rule read backwards: the critical acceleration that puts the threshold at the
+    middle of 11.7 and 15.5 mm for a table swinging at ``frequency_hz``, (2πf)² D*."""
+    return (2 * math.pi * frequency_hz) ** 2 * 0.5 * (NO_SLIP_D_M + SLIP_D_M)
+
+
 def shaking(model, settings, levels, frequency_hz: float, cycles: int,
             **damping) -> tuple[dict, float]:
     """Static stages, then the sample's dynamic stage (its damping, or the Stage fields in
@@ -139,15 +157,8 @@ def shaking(model, settings, levels, frequency_hz: float, cycles: int,
     time."""
     period = cycles / frequency_hz
     motion = Sequence([TableSine(d, frequency_hz, cycles=cycles) for d in levels], period)
-    sample_stage = next(s for s in settings.stages if s.kind == "dynamic")  # its damping
-    stage = dataclasses.replace(sample_stage, duration_s=len(levels) * period + 0.05, frames=0)
-    if damping:
-        stage = dataclasses.replace(stage, **damping)
-    inputs = tuple(VelocityInput(v.where, v.component, motion) for v in settings.velocity_inputs)
-    shaken = dataclasses.replace(settings, stages=static_stages(settings) + (stage,),
-                                 velocity_inputs=inputs)
     t0 = time.perf_counter()
-    result = run(model, shaken)
+    result = run(model, shaken_settings(settings, motion, len(levels) * period, **damping))
     wall = time.perf_counter() - t0
     h = result.history
     mask = np.asarray(h["stage"]) == "shaking"
@@ -252,12 +263,8 @@ def moving_mass(model, settings, frequency_hz: float, a_c: float, ratios, cycles
     rows = []
     for ratio in ratios:
         motion = TableSine(ratio * a_c / omega ** 2, frequency_hz, cycles=cycles)
-        dynamic = next(s for s in settings.stages if s.kind == "dynamic")
-        stage = dataclasses.replace(dynamic, duration_s=cycles / frequency_hz + 0.05, frames=0)
-        inputs = tuple(VelocityInput(v.where, v.component, motion) for v in settings.velocity_inputs)
         t0 = time.perf_counter()
-        result = run(model, dataclasses.replace(settings, stages=static_stages(settings) + (stage,),
-                                                velocity_inputs=inputs))
+        result = run(model, shaken_settings(settings, motion, cycles / frequency_hz))
         rel = result.displacement_m - result.displacement_m[base]
         moved = np.hypot(rel[:, 0], rel[:, 1])
         some = moved > 0.1e-3
@@ -319,9 +326,10 @@ def main(quick: bool = False, frequency_hz: float | None = None,
             model, settings, "Table 6 (mass damping on absolute velocity)", frequency_hz, cycles,
             rayleigh_reference="absolute")
     if 7 in tables:
-        a_c = (2 * math.pi * frequency_hz) ** 2 * 0.5 * (NO_SLIP_D_M + SLIP_D_M)  # Table 2's rule
-        rows = accumulation(model, settings, frequency_hz, a_c, (SLIP_D_M * (2 * math.pi *
-                            frequency_hz) ** 2 / a_c, 1.2, 1.3, 1.6), 4 if quick else 8)
+        a_c = threshold_a_c(frequency_hz)
+        ratio = SLIP_D_M * (2 * math.pi * frequency_hz) ** 2 / a_c  # 15.5 mm
+        rows = accumulation(model, settings, frequency_hz, a_c, (ratio, 1.2, 1.3, 1.6),
+                            4 if quick else 8)
         print(f"\nTable 7 — slip per cycle against Newmark's rigid block, a_c = {a_c / G:.3f} g at "
               f"{frequency_hz:.2f} Hz (cycles 1 and last ramp up and down); Newmark self-check "
               f"on a rectangular pulse: {newmark_check():+.1e}")
@@ -342,9 +350,9 @@ def main(quick: bool = False, frequency_hz: float | None = None,
                            ("status", "s"), ("wall_s", ".0f")]))
         results["rounding"] = rows
     if 9 in tables:
-        a_c = (2 * math.pi * frequency_hz) ** 2 * 0.5 * (NO_SLIP_D_M + SLIP_D_M)  # Table 2's rule
-        rows = moving_mass(model, settings, frequency_hz, a_c, (SLIP_D_M * (2 * math.pi *
-                           frequency_hz) ** 2 / a_c, 1.2), 2 if quick else 4)
+        a_c = threshold_a_c(frequency_hz)
+        ratio = SLIP_D_M * (2 * math.pi * frequency_hz) ** 2 / a_c  # 15.5 mm
+        rows = moving_mass(model, settings, frequency_hz, a_c, (ratio, 1.2), 2 if quick else 4)
         print(f"\nTable 9 — what moves: blocks displaced against the table after "
               f"{2 if quick else 4} cycles (model top at y = 0.61 m, tunnel centre at y = 0.305 m)")
         print(table(rows, [("a_max_over_a_c", ".2f"), ("blocks", "d"), ("moved_0p1mm", "d"),

@@ -34,6 +34,7 @@ is about that of the solver's part; ``--workers 1`` runs them in this process.
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import time
 from collections.abc import Callable
@@ -86,6 +87,7 @@ def _face():
     return synthetic_face("easy", seed=0, shape_px=(240, 360), m_per_px=0.02, sets=sets)
 
 
+@functools.cache
 def _network():
     """A two-set disk network (Fisher orientations, power-law radii, P32 0.5 each) in a 10 m cube."""
     from .dfn.generation import FisherOrientation, FractureSetSpec, IntensityP32, generate
@@ -99,11 +101,13 @@ def _network():
     return generate(sets, [[0.0, 0.0, 0.0], [10.0, 10.0, 10.0]], seed=0)
 
 
-def _section(network):
-    """The traces of ``network`` on the vertical plane y = 5 m, window [0, 8]² (u, v)."""
+@functools.cache
+def _section():
+    """The traces of :func:`_network` on the vertical plane y = 5 m, window [0, 8]² (u, v). Both
+    are made once per process: the dfn, boxcount and blocks parts share them."""
     from .dfn.sampling import sample_plane
 
-    return sample_plane(network, (9.0, 5.0, 1.0), (0.0, 1.0, 0.0), _square())
+    return sample_plane(_network(), (9.0, 5.0, 1.0), (0.0, 1.0, 0.0), _square())
 
 
 def _blocks(traces=None):
@@ -166,7 +170,7 @@ def _part_dfn() -> str:
 
     network = _network()
     clip_disk_polygons(network)
-    section = _section(network)
+    section = _section()
     return f"{network.n_fractures} disks, {section.n_traces} section traces"
 
 
@@ -176,7 +180,7 @@ def _part_boxcount() -> str:
 
     from .fractal import box_count
 
-    traces = _section(_network())
+    traces = _section()
     box_count(traces)
     box_count(traces, method="vector")
     image = np.zeros((128, 128), dtype=np.uint8)
@@ -189,7 +193,7 @@ def _part_boxcount() -> str:
 def _part_blocks() -> str:
     """Block models from joint sets and from a DFN section's traces."""
     sets = _blocks()
-    traces = _blocks(_section(_network()))
+    traces = _blocks(_section())
     return f"{sets.n_blocks} blocks from sets, {traces.n_blocks} from traces"
 
 

@@ -70,3 +70,20 @@ def test_the_inner_polygon_is_inset_at_a_straight_on_vertex():
     np.testing.assert_allclose(centre[2], loc[2] - 0.01 * np.array([1.0, 0.0]), atol=1e-15)
     assert tangent[2] == 0.0 and radius[0] == 0.01
     np.testing.assert_allclose(centre[1], loc[1] + 0.01 * np.array([-1.0, 1.0]), atol=1e-15)
+
+
+def test_the_pairs_straight_on_vertices_escaped_the_old_turn_rule_but_not_the_chord_rule():
+    # the shared vertices turn by just over 1e-9 (the rule before: kept as corners) while lying
+    # 1e-11 m off the chord between their neighbours (the rule now, 0.01 d: dropped)
+    shared = [(LOWER, 1), (LOWER, 2), (UPPER, 3)]
+    for poly, i in shared:
+        p = np.array(poly)
+        e0, e1 = p[i] - p[i - 1], p[(i + 1) % len(p)] - p[i]
+        cross = abs(e0[0] * e1[1] - e0[1] * e1[0])
+        assert cross / (np.hypot(*e0) * np.hypot(*e1)) > 1e-9
+        assert cross / np.hypot(*(e0 + e1)) < 1e-10
+    xy, off = strip_collinear(np.array(LOWER + UPPER), np.array([0, len(LOWER), len(LOWER) + len(UPPER)]),
+                              tol_m=0.01 * 0.005)
+    kept = {id(LOWER): {tuple(v) for v in xy[off[0]:off[1]]},
+            id(UPPER): {tuple(v) for v in xy[off[1]:off[2]]}}
+    assert not any(poly[i] in kept[id(poly)] for poly, i in shared)
