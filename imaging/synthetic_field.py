@@ -35,7 +35,7 @@ from .frame import check_scale, rc_to_uv
 from .synthetic import SyntheticFace, _lighting, _rock_texture, _smooth_noise
 
 __all__ = ["FieldStyle", "TUNNEL_STYLE", "field_face", "centre_line_mask", "half_cast_axes",
-           "shotcrete_mask", "shotcrete_area"]
+           "minor_crack_mask", "shotcrete_mask", "shotcrete_area"]
 
 
 @dataclass(frozen=True)
@@ -188,6 +188,20 @@ def _shaded_relief(rng, shape, relief):
 def _count(rng, bounds, area_factor):
     """A count drawn from ``bounds`` (per 400 x 400 px), scaled to the image area."""
     return int(round(rng.integers(bounds[0], bounds[1] + 1) * area_factor))
+
+
+def _minor_cracks(rng, shape, style, area_factor):
+    """The unlabelled minor cracks: (rc path, width px, relative darkening) each, short (8-90 px),
+    rough, 1-3 px wide and faint (0.08-0.5). The first draws of the clutter stream."""
+    h, w = shape
+    cracks = []
+    for _ in range(_count(rng, style.minor_cracks, area_factor)):
+        start = rng.uniform(0, 1, 2) * (h, w)
+        path = _rough_path(rng, start, rng.uniform(0, 2 * np.pi), rng.uniform(8, 90), step_px=3.0,
+                           roughness=0.6)
+        width = rng.choice([1, 1, 2, 3])
+        cracks.append((path, width, rng.uniform(0.08, 0.5)))
+    return cracks
 
 
 def _major_joints(rng, shape, style, area_factor):
@@ -470,14 +484,11 @@ def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
         darkness = np.maximum(darkness, depth * np.clip(core, 0, 1))
 
     # clutter, not labelled: minor cracks, rubble, bright plates, highlights, veins
-    for _ in range(_count(clutter_rng, style.minor_cracks, area)):
-        start = clutter_rng.uniform(0, 1, 2) * (h, w)
-        crack = _rough_path(clutter_rng, start, clutter_rng.uniform(0, 2 * np.pi),
-                            clutter_rng.uniform(8, 90), step_px=3.0, roughness=0.6)
+    for crack, width, depth in _minor_cracks(clutter_rng, (h, w), style, area):
         mark = np.zeros((h, w), dtype=np.float32)
-        _draw(mark, crack, 1.0, clutter_rng.choice([1, 1, 2, 3]))
+        _draw(mark, crack, 1.0, width)
         mark = cv2.GaussianBlur(mark, (0, 0), 0.7)
-        darkness = np.maximum(darkness, clutter_rng.uniform(0.08, 0.5) * mark)
+        darkness = np.maximum(darkness, depth * mark)
     for _ in range(_count(clutter_rng, style.rubble, area)):
         centre = (int(clutter_rng.uniform(0, w)), int(clutter_rng.uniform(0, h)))
         axes = (int(clutter_rng.uniform(2, 14)), int(clutter_rng.uniform(2, 10)))
@@ -553,6 +564,24 @@ def half_cast_axes(face: SyntheticFace) -> list[np.ndarray]:
     rng = _streams(face.seed)[5]
     families = _half_cast_layout(rng, face.image.shape, face.style, face.m_per_px)
     return [np.array([[p0, p1] for p0, p1, _, _ in holes]) for holes in families]
+
+
+def minor_crack_mask(face: SyntheticFace, *, margin_px: float = 2.0) -> np.ndarray:
+    """Pixels of a field face within ``margin_px`` of a minor crack's drawn stroke (bool), redrawn
+    from the face's seed and style. Minor cracks are not labelled; training can leave these pixels
+    out of its negatives, so that a thin dark line is not taught to be "not a joint" (its length,
+    which tells a minor crack from a joint, is judged per trace, not per pixel)."""
+    import cv2
+
+    h, w = face.image.shape
+    area = h * w / 160_000.0
+    mark = np.zeros((h, w), dtype=np.float32)
+    for crack, width, _ in _minor_cracks(_streams(face.seed)[3], (h, w), face.style, area):
+        _draw(mark, crack, 1.0, width)
+    if margin_px > 0:
+        mark = cv2.dilate(mark, cv2.getStructuringElement(
+            cv2.MORPH_ELLIPSE, (2 * int(margin_px) + 1, 2 * int(margin_px) + 1)))
+    return mark > 0
 
 
 def shotcrete_mask(face: SyntheticFace) -> np.ndarray:

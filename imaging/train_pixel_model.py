@@ -16,6 +16,14 @@ and the log loss of each stage on it reported. ``--stages 1`` (the default: stag
 synthetic faces' context too well and doubled the false traces on real photographs) fits stage 1
 only.
 
+Two options change the faces, not the default recipe: ``--tunnel-style`` draws the field faces in
+:data:`rockmass.imaging.synthetic_field.TUNNEL_STYLE` (blast half-casts, shotcrete), and
+``--ignore-minor-cracks`` leaves the field faces' unlabelled minor cracks
+(:func:`rockmass.imaging.synthetic_field.minor_crack_mask`, 2 px margin) out of the negatives, so
+that a thin dark line is not taught to be "no joint" when the plain faces teach that it is one.
+``benchmarks/bench_pixel_training.py`` compares them; neither lifts the plain faces' F1 at the
+detector's defaults, whose loss lies in the trace filters (docs/imaging.md §3.1).
+
 Each perceptron (eq. (3.2)) is fitted by minimising the class-balanced binary cross-entropy with Adam
 (Kingma & Ba 2015) on mini-batches, from a fixed seed. The default ``--seed`` (10 000) keeps the
 training faces apart from the seeds tests and benchmarks use (0-999).
@@ -33,6 +41,7 @@ import numpy as np
 
 from .features import CONTEXT_NAMES, FEATURE_NAMES, context_features, pixel_features
 from .learned import MODEL_FILE, PixelModel, Stage, model_input
+from .synthetic_field import TUNNEL_STYLE
 
 __all__ = ["face_samples", "training_faces", "fit_mlp", "main"]
 
@@ -40,14 +49,16 @@ POSITIVE_PX = 1.0
 NEGATIVE_PX = 3.0
 
 
-def face_samples(features, centre_lines, rng, *, n_positive=2500, n_negative=5000):
-    """Indices and labels of pixels sampled from one face's (F, H, W) features (module notes)."""
+def face_samples(features, centre_lines, rng, *, ignore=None, n_positive=2500, n_negative=5000):
+    """Indices and labels of pixels sampled from one face's (F, H, W) features (module notes);
+    pixels of the bool mask ``ignore`` are never negatives."""
     import cv2
 
     distance = cv2.distanceTransform(np.where(centre_lines, 0, 255).astype(np.uint8), cv2.DIST_L2,
                                      cv2.DIST_MASK_PRECISE).ravel()
     positive = np.flatnonzero(distance <= POSITIVE_PX)
-    negative = np.flatnonzero(distance > NEGATIVE_PX)
+    far = distance > NEGATIVE_PX
+    negative = np.flatnonzero(far if ignore is None else far & ~np.asarray(ignore, bool).ravel())
     ridge = features[FEATURE_NAMES.index("ridge_dark_2")].ravel()[negative]
     hard = negative[ridge >= np.quantile(ridge, 0.9)] if negative.size else negative
     pick = [rng.choice(positive, min(n_positive, positive.size), replace=False),
@@ -57,23 +68,27 @@ def face_samples(features, centre_lines, rng, *, n_positive=2500, n_negative=500
     return np.concatenate(pick), labels.astype(np.float32)
 
 
-def training_faces(first_seed: int, n_field: int, n_plain: int):
-    """(seed, grey image, centre-line mask) of ``n_field`` field-like and ``n_plain`` plain
-    synthetic faces, seeds from ``first_seed`` on."""
+def training_faces(first_seed: int, n_field: int, n_plain: int, *, style=None,
+                   ignore_minor_cracks: bool = False):
+    """(seed, grey image, centre-line mask, ignore mask or None) of ``n_field`` field-like faces
+    (of ``style``) and ``n_plain`` plain synthetic faces, seeds from ``first_seed`` on; with
+    ``ignore_minor_cracks`` the field faces' minor cracks are to be left out of the negatives."""
     from .metrics import render_traces
     from .synthetic import synthetic_face
-    from .synthetic_field import centre_line_mask, field_face
+    from .synthetic_field import centre_line_mask, field_face, minor_crack_mask
 
     for i in range(n_field + n_plain):
         seed = first_seed + i
+        ignore = None
         if i < n_field:
-            face = field_face(seed=seed)
+            face = field_face(seed=seed, style=style)
             lines = centre_line_mask(face)
+            ignore = minor_crack_mask(face) if ignore_minor_cracks else None
         else:
             face = synthetic_face(("moderate", "hard")[i % 2], seed=seed, shape_px=(500, 750),
                                   m_per_px=0.016)
             lines = render_traces(face.truth, face.image.shape, face.m_per_px)
-        yield seed, face.image, lines
+        yield seed, face.image, lines, ignore
 
 
 def fit_mlp(x, y, *, hidden=(32, 16), epochs=12, batch=1024, learning_rate=3e-3, seed=0):
@@ -146,6 +161,10 @@ def main(argv=None) -> int:
                         help="1: pixel features only (default); 2: add an auto-context stage")
     parser.add_argument("--plain-faces", type=int, dest="plain_faces",
                         help="plain synthetic faces per stage (default a quarter of --faces)")
+    parser.add_argument("--tunnel-style", action="store_true",
+                        help="field faces of TUNNEL_STYLE (half-casts, shotcrete)")
+    parser.add_argument("--ignore-minor-cracks", action="store_true",
+                        help="leave the field faces' minor cracks out of the negatives")
     args = parser.parse_args(argv)
     n_plain = max(args.faces // 4, 1) if args.plain_faces is None else args.plain_faces
     fit = dict(hidden=tuple(args.hidden), epochs=args.epochs, seed=args.seed)
@@ -153,9 +172,11 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     rng = np.random.default_rng(args.seed)
     xs, ys = [], []
-    for seed, image, lines in training_faces(args.seed, args.faces, n_plain):
+    faces = dict(style=TUNNEL_STYLE if args.tunnel_style else None,
+                 ignore_minor_cracks=args.ignore_minor_cracks)
+    for seed, image, lines, ignore in training_faces(args.seed, args.faces, n_plain, **faces):
         features = pixel_features(model_input(image.astype(np.float32) / 255.0))
-        index, labels = face_samples(features, lines, rng)
+        index, labels = face_samples(features, lines, rng, ignore=ignore)
         xs.append(features.reshape(features.shape[0], -1)[:, index].T)
         ys.append(labels)
     stage1 = _stage(np.concatenate(xs), np.concatenate(ys), **fit)
@@ -164,7 +185,8 @@ def main(argv=None) -> int:
 
     xs, ys, held = [], [], []
     second = args.seed + args.faces + n_plain
-    for k, (seed, image, lines) in enumerate(training_faces(second, args.faces, n_plain)):
+    for k, (seed, image, lines, ignore) in enumerate(training_faces(second, args.faces, n_plain,
+                                                                    **faces)):
         if args.stages == 1 and k % 10 != 9:
             continue  # stage 1 alone: the second lot only provides the held-out faces
         features = pixel_features(model_input(image.astype(np.float32) / 255.0))
@@ -172,7 +194,7 @@ def main(argv=None) -> int:
         if args.stages == 2:
             p1 = stage1.predict(features.reshape(features.shape[0], -1)).reshape(features.shape[1:])
             both = np.concatenate([features, context_features(p1)])
-        index, labels = face_samples(features, lines, rng)
+        index, labels = face_samples(features, lines, rng, ignore=ignore)
         xs.append(both.reshape(both.shape[0], -1)[:, index].T)
         ys.append(labels)
         held.append(np.full(len(labels), k % 10 == 9))

@@ -10,7 +10,6 @@ import json
 from dataclasses import replace
 
 import cv2
-import numpy as np
 import pytest
 
 from rockmass.accuracy import trace_accuracy

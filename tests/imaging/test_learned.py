@@ -9,7 +9,7 @@ import pytest
 from rockmass.imaging.extract import ExtractParams, extract
 from rockmass.imaging.features import CONTEXT_NAMES, FEATURE_NAMES, line_support
 from rockmass.imaging.learned import PixelModel, Stage, joint_probability, load_model, model_input
-from rockmass.imaging.train_pixel_model import fit_mlp
+from rockmass.imaging.train_pixel_model import face_samples, fit_mlp
 from rockmass.imaging.vectorize import mean_along
 
 
@@ -129,6 +129,24 @@ def test_fit_mlp_separates_two_linearly_separable_classes():
     mean, std, weights, biases = fit_mlp(x, y, hidden=(8,), epochs=40, batch=256, seed=4)
     stage = Stage(mean=mean, std=std, weights=weights, biases=biases)
     assert np.mean((stage.predict(x.T) > 0.5) == (y > 0.5)) > 0.97
+
+
+def test_training_samples_keep_ignored_pixels_out_of_the_negatives():
+    # a centre line on row 20, an ignored band (a minor crack) on rows 40-44: positives within 1 px
+    # of the line, negatives beyond 3 px of it and never in the band; without the band some are
+    rng = np.random.default_rng(0)
+    features = rng.normal(size=(len(FEATURE_NAMES), 64, 64)).astype(np.float32)
+    lines = np.zeros((64, 64), bool)
+    lines[20] = True
+    ignore = np.zeros((64, 64), bool)
+    ignore[40:45] = True
+    index, labels = face_samples(features, lines, rng, ignore=ignore, n_positive=50, n_negative=400)
+    rows = index // 64
+    assert np.all(np.abs(rows[labels == 1] - 20) <= 1)
+    assert np.all(np.abs(rows[labels == 0] - 20) > 3)
+    assert not np.any((rows[labels == 0] >= 40) & (rows[labels == 0] < 45))
+    index, labels = face_samples(features, lines, rng, n_positive=50, n_negative=400)
+    assert np.any(((index // 64)[labels == 0] >= 40) & ((index // 64)[labels == 0] < 45))
 
 
 def test_trace_filters_default_per_detector_and_are_checked():

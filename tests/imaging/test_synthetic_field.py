@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from rockmass.imaging.synthetic_field import (TUNNEL_STYLE, FieldStyle, centre_line_mask, field_face,
-                                              half_cast_axes, shotcrete_area, shotcrete_mask)
+                                              half_cast_axes, minor_crack_mask, shotcrete_area,
+                                              shotcrete_mask)
 
 SMALL = dict(shape_px=(160, 200), m_per_px=0.01)
 
@@ -31,6 +32,24 @@ def test_truth_centre_lines_lie_on_dark_joint_cores(seed):
     near = cv2.dilate(lines.astype(np.uint8), np.ones((17, 17), np.uint8)).astype(bool)
     beside = near & ~cv2.dilate(lines.astype(np.uint8), np.ones((11, 11), np.uint8)).astype(bool)
     assert face.image[lines].mean() < 0.85 * face.image[beside].mean()
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_minor_crack_mask_marks_the_drawn_cracks(seed):
+    # the same quiet face drawn with and without minor cracks: the pixels the cracks darkened must
+    # be those the mask redraws (a mask redrawn from a wrong stream would miss them)
+    quiet = FieldStyle(major_joints=(0, 0), rubble=(0, 0), plates=(0, 0), veins=(0, 0),
+                       crevice_fields=(0, 0), relief=(0.0, 0.0), oriented_texture=(0.0, 0.0),
+                       minor_cracks=(40, 40))
+    face = field_face(seed=seed, style=quiet, **SMALL)
+    bare = field_face(seed=seed, style=replace(quiet, minor_cracks=(0, 0)), **SMALL)
+    darkened = bare.image.astype(float) - face.image
+    strokes = minor_crack_mask(face, margin_px=0)
+    assert 0.005 < strokes.mean() < 0.2
+    assert darkened[strokes].mean() > darkened[~strokes].mean() + 5.0
+    assert (darkened > 8).sum() > 100
+    assert minor_crack_mask(face)[darkened > 8].mean() > 0.95  # within the 2 px margin
+    assert not minor_crack_mask(bare).any()
 
 
 def test_truth_lies_inside_the_image_window():

@@ -1,0 +1,151 @@
+"""Where the learned detector loses the thin joints: the pixel model's training against the trace filters.
+
+    python benchmarks/bench_pixel_training.py [--variants default,ignore-minor,...] [--faces N]
+
+The learned detector (docs/imaging.md §3.1) finds 0.85 of the plain synthetic faces' trace length
+and misses their thin, faint joints. Two things could be the cause: the pixel model (trained on
+field-like faces whose thin, faint minor cracks are negatives, so it may have learned that a thin
+dark line is not a joint), or what comes after it (the hysteresis levels and the trace filters
+chosen on real photographs, whose labels mark the major discontinuities only). This benchmark
+separates the two.
+
+1. The shipped model at its defaults, without the trace filters (contrast, band width, the 70 px
+   floor, 20 px kept), and at lower hysteresis levels without them, on the plain "moderate" faces
+   and on the real training photographs: how much each step costs on each.
+2. Pixel models retrained (:mod:`rockmass.imaging.train_pixel_model`, ``--faces`` field-like faces,
+   default 80) with the variants of its options, each scored at the detector's defaults: the
+   default recipe (the shipped model, retrained here), ``--ignore-minor-cracks`` (the field faces'
+   minor cracks left out of the negatives, :func:`rockmass.imaging.synthetic_field.minor_crack_mask`),
+   that with as many plain faces as half the field faces, and that with ``--tunnel-style`` field
+   faces (half-casts, shotcrete). Columns: training time, model size, then F1 and dP21 on each set.
+
+Sets (1000 x 1500 px synthetic faces at 0.008 m/px, buffered F1 at 3 px; the real photographs as in
+bench_imaging_real.py, F1 at 5 px, means over images): plain "moderate" faces and TUNNEL_STYLE
+field faces, seeds 100-102 (the chain's tuning seeds, not the benchmark seeds 1-3 of
+bench_imaging_real.py nor the training seeds 10 000+), and ``rock-face-fractures/train`` (skipped
+when absent; ``val/`` is not read here: nothing measured here may be chosen on it). One core
+(OMP_NUM_THREADS=1 is set for the training runs). Rows also go to
+benchmarks/results/bench_pixel_training.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from _common import header, save, table
+from bench_imaging_real import DATA, real_pairs, score_real, score_synthetic
+
+SEEDS = (100, 101, 102)
+VARIANTS = {
+    "default": [],
+    "ignore-minor": ["--ignore-minor-cracks"],
+    "ignore-minor+plain40": ["--ignore-minor-cracks", "--plain-faces", "40"],
+    "ignore-minor+tunnel": ["--ignore-minor-cracks", "--tunnel-style"],
+}
+INF = float("-inf")
+#: Step 1: the shipped model's defaults, then without the trace filters, then lower levels.
+FILTER_STEPS = (
+    ("defaults (0.8/0.97, filters, 70 px)", {}),
+    ("no contrast filter", dict(min_trace_contrast=INF)),
+    ("no contrast or width filter", dict(min_trace_contrast=INF, min_trace_width=0.0)),
+    ("no filters, 20 px", dict(min_trace_contrast=INF, min_trace_width=0.0, min_trace_length_px=20.0)),
+    ("0.5/0.9, no filters, 20 px", dict(prob_low=0.5, prob_high=0.9, min_trace_contrast=INF,
+                                        min_trace_width=0.0, min_trace_length_px=20.0)),
+)
+
+
+def faces():
+    from rockmass.imaging.synthetic import synthetic_face
+    from rockmass.imaging.synthetic_field import TUNNEL_STYLE, field_face
+
+    return {"moderate": lambda s: synthetic_face("moderate", seed=s, shape_px=(1000, 1500),
+                                                 m_per_px=0.008),
+            "tunnel": lambda s: field_face(seed=s, shape_px=(1000, 1500), m_per_px=0.008,
+                                           style=TUNNEL_STYLE)}
+
+
+def score_all(params, pairs) -> dict:
+    """F1 and dP21 of one setting on the plain faces, the tunnel faces and the real photographs."""
+    row = {}
+    for name, make in faces().items():
+        s = score_synthetic(make, SEEDS, params)
+        row[f"{name}_F1"], row[f"{name}_dP21"] = s["F1"], s["dP21_%"]
+    if pairs:
+        r = score_real(pairs, params, 3.0)
+        row["real_F1"], row["real_dP21"] = r["F1"], r["dP21_pct"]
+    return row
+
+
+def use_model(path: Path) -> None:
+    """Point the learned detector at another model file (this process only)."""
+    import rockmass.imaging.learned as learned
+
+    learned.MODEL_FILE = Path(path)
+
+
+SCORE_COLUMNS = [("moderate_F1", ".3f"), ("moderate_dP21", "+.1f"), ("tunnel_F1", ".3f"),
+                 ("tunnel_dP21", "+.1f"), ("real_F1", ".3f"), ("real_dP21", "+.1f")]
+
+
+def main(argv=None) -> int:
+    import cv2
+
+    from rockmass.imaging.extract import ExtractParams
+    from rockmass.imaging.learned import MODEL_FILE
+
+    cv2.setNumThreads(1)
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--variants", default=",".join(VARIANTS),
+                        help=f"comma-separated training variants (default all: {', '.join(VARIANTS)})")
+    parser.add_argument("--faces", type=int, default=80, help="field-like faces per training run")
+    parser.add_argument("--no-filters-table", action="store_true", help="skip step 1")
+    args = parser.parse_args(argv)
+    variants = [v.strip() for v in args.variants.split(",") if v.strip()]
+    unknown = [v for v in variants if v not in VARIANTS]
+    if unknown:
+        parser.error(f"--variants: unknown {unknown}; choose from {list(VARIANTS)}")
+
+    print(header("learned detector: pixel model training against the trace filters"))
+    pairs = real_pairs("train") if (DATA / "train" / "images").is_dir() else []
+    if not pairs:
+        print("real training photographs absent: the real columns are skipped")
+    payload: dict = {"seeds": list(SEEDS), "steps": [], "variants": []}
+
+    if not args.no_filters_table:
+        rows = [{"setting": label, **score_all(ExtractParams(detector="learned", **extra), pairs)}
+                for label, extra in FILTER_STEPS]
+        print(f"\n1. shipped model ({MODEL_FILE.name}), trace filters removed one by one "
+              f"(synthetic seeds {list(SEEDS)}; real: train/)")
+        print(table(rows, [("setting", "s"), *SCORE_COLUMNS]))
+        payload["steps"] = rows
+
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for name in variants:
+            out = Path(tmp) / f"{name.replace('+', '_')}.npz"
+            command = [sys.executable, "-m", "rockmass.imaging.train_pixel_model", "--out", str(out),
+                       "--faces", str(args.faces), *VARIANTS[name]]
+            t0 = time.perf_counter()
+            subprocess.run(command, check=True, capture_output=True,
+                           env={**os.environ, "OMP_NUM_THREADS": "1"})
+            elapsed = time.perf_counter() - t0
+            use_model(out)
+            rows.append({"variant": name, "train_s": elapsed, "model_bytes": out.stat().st_size,
+                         **score_all(ExtractParams(detector="learned"), pairs)})
+            print(f"  {name}: trained in {elapsed:.0f} s", flush=True)
+    use_model(MODEL_FILE)
+    print(f"\n2. retrained pixel models ({args.faces} field-like faces each), at the detector's defaults")
+    print(table(rows, [("variant", "s"), ("train_s", ".0f"), ("model_bytes", "d"), *SCORE_COLUMNS]))
+    payload["variants"] = rows
+    print(f"\nrows saved to {save('bench_pixel_training', payload)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
