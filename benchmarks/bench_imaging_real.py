@@ -111,8 +111,16 @@ def real_pairs(split: str = "val") -> list[tuple[Path, Path]]:
     return [(p, DATA / split / "labels" / f"{p.stem}.png") for p in images]
 
 
-def score_real(pairs, params, joint_width_px: float) -> dict:
-    """Mean and pooled scores of one setting over the labelled images."""
+def confident(traces, min_joint_score):
+    """The traces whose ``joint_score`` reaches ``min_joint_score`` (all of them when it is None)."""
+    if min_joint_score is None or traces.n_traces == 0:
+        return traces
+    return traces.subset(np.asarray(traces.attributes["joint_score"]) >= min_joint_score)
+
+
+def score_real(pairs, params, joint_width_px: float, min_joint_score=None) -> dict:
+    """Mean and pooled scores of one setting over the labelled images (of the traces whose joint
+    score reaches ``min_joint_score``, when given)."""
     import cv2
 
     from rockmass.imaging.extract import extract
@@ -126,9 +134,10 @@ def score_real(pairs, params, joint_width_px: float) -> dict:
         result = extract(image, m_per_px=1.0, joint_width_px=joint_width_px, params=params)
         elapsed += time.perf_counter() - t0
         megapixels += truth.size / 1e6
-        drawn = render_traces(result.traces, truth.shape, 1.0)
+        traces = confident(result.traces, min_joint_score)
+        drawn = render_traces(traces, truth.shape, 1.0)
         counts.append(raster_counts(drawn, truth, tolerance_px=TOLERANCE_PX))
-        n_traces += (result.traces.n_traces, label_trace_count(truth))
+        n_traces += (traces.n_traces, label_trace_count(truth))
     c = np.array(counts, dtype=float).reshape(-1, 4)  # matched drawn, drawn, matched true, true
     with np.errstate(invalid="ignore", divide="ignore"):
         p, r = c[:, 0] / c[:, 1], c[:, 2] / c[:, 3]
@@ -141,8 +150,9 @@ def score_real(pairs, params, joint_width_px: float) -> dict:
                 s_per_image=elapsed / max(len(pairs), 1), MP_per_s=megapixels / max(elapsed, 1e-9))
 
 
-def score_synthetic(make_face, seeds, params) -> dict:
-    """Mean buffered scores (3 px) and dP21 of one setting over synthetic faces."""
+def score_synthetic(make_face, seeds, params, min_joint_score=None) -> dict:
+    """Mean buffered scores (3 px) and dP21 of one setting over synthetic faces (of the traces whose
+    joint score reaches ``min_joint_score``, when given)."""
     from rockmass.imaging.extract import extract
     from rockmass.imaging.metrics import trace_accuracy
 
@@ -152,7 +162,7 @@ def score_synthetic(make_face, seeds, params) -> dict:
         t0 = time.perf_counter()
         result = extract(face.image, m_per_px=face.m_per_px, params=params)
         elapsed = time.perf_counter() - t0
-        acc = trace_accuracy(result.traces, face.truth,
+        acc = trace_accuracy(confident(result.traces, min_joint_score), face.truth,
                              m_per_px=face.m_per_px / result.scale.work_factor)
         rows.append((acc.f1, acc.precision, acc.recall, 100 * acc.p21_rel_error,
                      100 * acc.p20_rel_error, elapsed))
@@ -160,11 +170,56 @@ def score_synthetic(make_face, seeds, params) -> dict:
     return {"F1": f1, "P": p, "R": r, "dP21_%": dp21, "dP20_%": dp20, "time_s": t}
 
 
+def trace_ordering(pairs, params, joint_width_px: float) -> dict:
+    """How well each per-trace attribute orders the traces: the probability that a random true
+    trace ranks above a random false one (ties count half), each trace weighted by its drawn length
+    (a true trace has at least half its pixels within the tolerance of a label; 0.5 is chance)."""
+    import cv2
+
+    from rockmass.imaging.extract import extract
+    from rockmass.imaging.metrics import render_traces
+
+    keys = ("joint_score", "confidence", "contrast", "length")
+    values, true, weight = {k: [] for k in keys}, [], []
+    for image_path, label_path in pairs:
+        truth = label_skeleton(label_path)
+        near = cv2.distanceTransform(np.where(truth, 0, 255).astype(np.uint8), cv2.DIST_L2,
+                                     cv2.DIST_MASK_PRECISE) <= TOLERANCE_PX
+        image = cv2.imread(str(image_path), cv2.IMREAD_COLOR)[..., ::-1]
+        traces = extract(image, m_per_px=1.0, joint_width_px=joint_width_px, params=params).traces
+        lengths = traces.lengths_m()
+        for i in range(traces.n_traces):
+            drawn = render_traces(traces.subset([i]), truth.shape, 1.0)
+            if drawn.any():
+                true.append(near[drawn].mean() >= 0.5)
+                weight.append(drawn.sum())
+                for k in keys:
+                    values[k].append(lengths[i] if k == "length" else traces.attributes[k][i])
+    true, weight = np.array(true), np.array(weight, dtype=float)
+    return {k: pairwise_order(np.array(values[k], dtype=float), true, weight) for k in keys}
+
+
+def pairwise_order(score, true, weight) -> float:
+    """Weighted P(score of a true item > score of a false one), ties counting half (NaN when one
+    class is empty)."""
+    if true.all() or not true.any():
+        return float("nan")
+    s_false, w_false = score[~true], weight[~true]
+    order = np.argsort(s_false)
+    s_sorted, w_cum = s_false[order], np.concatenate([[0.0], np.cumsum(w_false[order])])
+    below = w_cum[np.searchsorted(s_sorted, score[true], side="left")]
+    up_to = w_cum[np.searchsorted(s_sorted, score[true], side="right")]
+    wins = (below + 0.5 * (up_to - below)) * weight[true]
+    return float(wins.sum() / (weight[true].sum() * w_false.sum()))
+
+
 def main(argv=None) -> int:
     import cv2
 
     from rockmass.imaging.extract import ExtractParams, extract
     from rockmass.imaging.learned import MODEL_FILE
+    from rockmass.imaging.synthetic import synthetic_face
+    from rockmass.imaging.trace_score import LOW_SCORE
 
     cv2.setNumThreads(1)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -198,20 +253,30 @@ def main(argv=None) -> int:
             continue
         pairs = pairs[:12] if args.quick else pairs
         rows = []
+        order_rows = []
         for detector in detectors:
             extra_settings = LEARNED_SETTINGS if detector == "learned" and not args.no_settings else ()
             for label, extra in (*settings, *extra_settings):
                 row = score_real(pairs, ExtractParams(detector=detector, **extra), 3.0)
                 rows.append({"split": split, "detector": detector, "setting": label, **row})
+            row = score_real(pairs, ExtractParams(detector=detector), 3.0, min_joint_score=LOW_SCORE)
+            rows.append({"split": split, "detector": detector,
+                         "setting": f"defaults, joint score >= {LOW_SCORE:g}", **row})
+            order_rows.append({"split": split, "detector": detector,
+                               **trace_ordering(pairs, ExtractParams(detector=detector), 3.0)})
         role = ("only measured, never tuned on" if split == "val"
                 else "the learned detector's settings were chosen here")
         print(f"\n1. real faces: {DATA / split} ({len(pairs)} images, {role}; labels skeletonised, "
               f"{TOLERANCE_PX:g} px tolerance, joint width 3 px; F1, P, R are means over images)")
         print(table(rows, REAL_COLUMNS))
         payload["real"] += rows
+        print(f"\n1b. {split}/: how well each trace attribute orders true above false traces "
+              "(length-weighted; 0.5 = chance), detector defaults")
+        print(table(order_rows, [("split", "s"), ("detector", "s"), ("joint_score", ".3f"),
+                                 ("confidence", ".3f"), ("contrast", ".3f"), ("length", ".3f")]))
+        payload.setdefault("ordering", []).extend(order_rows)
 
     if not args.no_synthetic:
-        from rockmass.imaging.synthetic import synthetic_face
         from rockmass.imaging.synthetic_field import TUNNEL_STYLE, field_face
 
         seeds = [1] if args.quick else [1, 2, 3]
@@ -230,6 +295,10 @@ def main(argv=None) -> int:
                     extra = {} if mode is None else {"face_mask": mode}
                     rows.append({"detector": label, "faces": f"{name}, seeds {seeds}",
                                  **score_synthetic(make, seeds, ExtractParams(detector=detector, **extra))})
+                rows.append({"detector": f"{detector}, joint score >= {LOW_SCORE:g}",
+                             "faces": f"{name}, seeds {seeds}",
+                             **score_synthetic(make, seeds, ExtractParams(detector=detector),
+                                               min_joint_score=LOW_SCORE)})
                 if detector == "learned" and not args.no_settings:
                     label, extra = LEARNED_SETTINGS[0]
                     rows.append({"detector": f"learned, {label}", "faces": f"{name}, seeds {seeds}",
@@ -238,7 +307,6 @@ def main(argv=None) -> int:
         print(table(rows, SYNTH_COLUMNS))
         payload["synthetic"] = rows
     if not args.quick:
-        from rockmass.imaging.synthetic import synthetic_face
 
         face = synthetic_face("moderate", seed=1, shape_px=(3000, 4000), m_per_px=0.003)
         rows = []
@@ -253,7 +321,6 @@ def main(argv=None) -> int:
         payload["throughput"] = rows
     if masks:
         from rockmass.imaging.face_mask import face_mask
-        from rockmass.imaging.synthetic import synthetic_face
 
         grey = synthetic_face("moderate", seed=1, shape_px=(3000, 4000), m_per_px=0.003).image
         rgb = np.clip(np.stack([grey * 1.05, grey, grey * 0.9], axis=2) * 255, 0, 255).astype(np.uint8)

@@ -611,6 +611,19 @@ def _render(graph, shape) -> np.ndarray:
     return out
 
 
+def _with_joint_score(traces, detector: str, *, m_per_px: float, joint_width_px: float):
+    """The traces with a ``joint_score`` attribute (eq. (7.1), :mod:`rockmass.imaging.trace_score`)."""
+    import dataclasses
+
+    from . import trace_score
+
+    if not trace_score.scoring():
+        return traces
+    features = trace_score.trace_features(traces, m_per_px=m_per_px, joint_width_px=joint_width_px)
+    score = trace_score.joint_score(features, detector) if traces.n_traces else np.zeros(0)
+    return dataclasses.replace(traces, attributes={**traces.attributes, "joint_score": score})
+
+
 def _read_grey(image_or_path, control_points, clock: _Clock):
     """The photo (file or array) and its grey image, checked: at least :data:`MIN_SIDE_PX` a
     side, not blank, control points on it. Returns (raw, grey, name for messages)."""
@@ -887,12 +900,13 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     del grey
     chains, skeleton, pruned = _trace_chains(binary, params, work_shape, width_work, band_px, clock)
     contrast = vectorize.trace_contrast(chains, flat, mask=mask)
+    band = vectorize.band_width_px(chains, binary)
     keep = np.ones(len(chains), dtype=bool)
     if params.resolved("min_trace_contrast") is not None:
         keep &= contrast >= params.resolved("min_trace_contrast")
     if params.resolved("min_trace_width") is not None:
-        keep &= vectorize.band_width_px(chains, binary) >= params.resolved("min_trace_width") * width_work
-    chains, contrast = [c for c, k in zip(chains, keep) if k], contrast[keep]
+        keep &= band >= params.resolved("min_trace_width") * width_work
+    chains, contrast, band = [c for c, k in zip(chains, keep) if k], contrast[keep], band[keep]
     clock.lap("link")
     confidence = vectorize.mean_along(chains, response)
     chains_in = [np.column_stack([(c[:, 0] + 0.5) / row_factor - 0.5,
@@ -900,7 +914,10 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     traces = vectorize.to_trace_map(chains_in, height_px=h, m_per_px=scale, window_uv_m=window,
                                     tolerance_px=params.simplify_tolerance_px / factor,
                                     frame="face",
-                                    attributes={"confidence": confidence, "contrast": contrast})
+                                    attributes={"confidence": confidence, "contrast": contrast,
+                                                "band_width_px": band / factor})
+    traces = _with_joint_score(traces, params.detector, m_per_px=scale,
+                               joint_width_px=width_work / factor)
     clock.lap("vectorize")
 
     debug_images = {}

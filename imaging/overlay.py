@@ -3,8 +3,9 @@
 The sampling window (a ROI, or the face-mask outline of docs/imaging.md §2.1) is drawn as a dashed
 yellow line when it is not the photo's edge.
 
-When the traces carry a ``confidence`` attribute (:func:`rockmass.imaging.extract`, docs/imaging.md
-§7), each is drawn with opacity 0.25 + 0.75 · confidence, so doubtful traces fade.
+When the traces carry a ``joint_score`` (:func:`rockmass.imaging.extract`, docs/imaging.md §7.1),
+or else a ``confidence`` attribute (§7), each is drawn with opacity 0.25 + 0.75 · that value, so
+doubtful traces fade.
 
 matplotlib is imported inside the function (Agg backend). Large photographs are shown down-sampled
 to at most ``max_side_px`` pixels on their longer side; the traces are scaled with them.
@@ -18,6 +19,11 @@ from ..dfn.plots import _figure, _segment_colours, _set_legend
 from .frame import uv_to_rc
 
 __all__ = ["plot_overlay"]
+
+
+def _shade_key(trace_map) -> str | None:
+    """The attribute the traces' opacity follows: ``joint_score``, else ``confidence``, else none."""
+    return next((k for k in ("joint_score", "confidence") if k in trace_map.attributes), None)
 
 
 def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title: str | None = None,
@@ -55,8 +61,9 @@ def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title
         b = uv_to_rc(segments[:, 2:], h, m_per_px)
         lines = np.stack([a[:, ::-1], b[:, ::-1]], axis=1)  # (x=col, y=row) for matplotlib
         colours = np.array([to_rgba(c) for c in _segment_colours(trace_map, set_ids, "0.7")])
-        confidence = trace_map.attributes.get("confidence")
-        if confidence is not None:
+        shade_key = _shade_key(trace_map)
+        if shade_key is not None:
+            confidence = trace_map.attributes[shade_key]
             alpha = np.clip(np.asarray(confidence, dtype=float), 0.0, 1.0)
             colours[:, 3] = 0.25 + 0.75 * np.nan_to_num(alpha)[trace_map.segment_trace_index()]
         ax.add_collection(LineCollection(lines, colors=colours, linewidths=1.2))
@@ -71,6 +78,7 @@ def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title
     ax.set_xlim(-0.5, w - 0.5)
     ax.set_ylim(h - 0.5, -0.5)
     ax.set_axis_off()
-    shading = ", opacity = confidence" if "confidence" in trace_map.attributes else ""
+    shade_key = _shade_key(trace_map)
+    shading = f", opacity = {shade_key.replace('_', ' ')}" if shade_key else ""
     ax.set_title(title or f"{trace_map.n_traces} traces{shading}", fontsize=10)
     fig.savefig(path, dpi=110)

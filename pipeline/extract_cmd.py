@@ -92,6 +92,12 @@ def run(args) -> int:
 
         if summary["statistics"]:
             print(summary_text(summary["statistics"]))
+        confident = summary.get("statistics_confident") or {}
+        if confident.get("traces_left_out"):
+            print(f"without the {confident['traces_left_out']} traces of joint score under "
+                  f"{confident['min_joint_score']:g}:")
+            print(summary_text(confident["statistics"]) if confident["statistics"]
+                  else "  no trace left")
         for warning in summary["extraction"]["warnings"]:
             print(f"  warning: {warning}", file=sys.stderr)
     return 0

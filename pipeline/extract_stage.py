@@ -124,14 +124,37 @@ def compute(args, document=None):
         validation = errors_text(stats.traces.validation_errors)
         dimension = box_count(traces)
         summary["statistics"] = {**stats.to_dict(), "Box-counting Dimension": dimension_entry(dimension)}
+        summary["statistics_confident"] = _confident_statistics(traces, args.n_sets, unit)
     else:
-        summary["statistics"] = None
+        summary["statistics"] = summary["statistics_confident"] = None
         summary["extraction"]["warnings"].append("no trace was found: nothing to analyse")
     # fractopo's VALIDATION_ERRORS per trace (issue 19): what fractopo would flag, never fixed here
     attributes = {**traces.attributes, "set": set_ids, "VALIDATION_ERRORS": validation}
     traces = dataclasses.replace(traces, attributes=attributes)
     timings = {"read_s": t1 - t0, "extract_s": t2 - t1, "analyse_s": time.perf_counter() - t2}
     return summary, result, traces, image, set_ids, timings, settings
+
+
+def _confident_statistics(traces, n_sets, unit) -> dict:
+    """The statistics of the traces whose ``joint_score`` reaches
+    :data:`rockmass.imaging.trace_score.LOW_SCORE` (docs/imaging.md §7.1), with how many were left
+    out; ``statistics`` is None when none reaches it. The window (and so the area of P20, P21)
+    is that of all the traces."""
+    import numpy as np
+
+    from .dfn import trace_map_statistics
+    from .fractal import box_count
+    from .imaging.trace_score import LOW_SCORE
+
+    keep = np.asarray(traces.attributes["joint_score"], dtype=float) >= LOW_SCORE
+    entry = {"min_joint_score": LOW_SCORE, "traces_kept": int(keep.sum()),
+             "traces_left_out": int((~keep).sum()), "statistics": None}
+    if keep.any():
+        confident = traces.subset(keep)
+        stats = trace_map_statistics(confident, n_sets=n_sets, length_unit=unit)
+        entry["statistics"] = {**stats.to_dict(),
+                               "Box-counting Dimension": dimension_entry(box_count(confident))}
+    return entry
 
 
 def produce(args, out_dir, document=None):

@@ -38,6 +38,27 @@ def test_synthetic_face_gives_every_output_in_metres(face_png, tmp_path):
     assert abs(got - truth_p21) / truth_p21 < 0.25
 
 
+def test_summary_gives_the_statistics_without_low_score_traces(face_png, tmp_path, capsys):
+    # a hand-made threshold on the geojson's joint_score must select what the summary counts
+    from rockmass.dfn import trace_map_statistics
+
+    path, _ = face_png
+    out = tmp_path / "out"
+    assert main(["extract", str(path), "--m-per-px", "0.02", "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    traces = read_traces(out / "traces.geojson")
+    confident = summary["statistics_confident"]
+    score = np.asarray(traces.attributes["joint_score"], dtype=float)
+    kept = score >= confident["min_joint_score"]
+    assert confident["traces_kept"] == kept.sum() > 0
+    assert confident["traces_left_out"] == (~kept).sum()
+    stats = confident["statistics"]
+    assert stats["Number of Traces"]["value"] == kept.sum()
+    expected = trace_map_statistics(traces.subset(kept)).to_dict()["Fracture Intensity P21"]["value"]
+    assert stats["Fracture Intensity P21"]["value"] == pytest.approx(expected)
+    assert stats["Fracture Intensity P21"]["value"] <= summary["statistics"]["Fracture Intensity P21"]["value"]
+
+
 def test_control_points_give_the_same_scale_as_m_per_px(face_png, tmp_path, capsys):
     path, _ = face_png
     assert main(["extract", str(path), "--control-points", "0", "0", "30", "40", "1.0",
