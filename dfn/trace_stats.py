@@ -23,6 +23,8 @@ from .frames import angle_convention, to_convention
 from .intensity import (
     P20_RULES,
     _choice,
+    SamplingWindow,
+    TraceIntensity,
     _real_at_least,
     clipped_lengths_m,
     sampling_window,
@@ -31,6 +33,7 @@ from .intensity import (
 )
 from .mauldon import (
     CIRCLE_REL_TOLERANCE,
+    CircleWindow,
     InscribedCircles,
     MauldonEstimate,
     circle_window,
@@ -39,8 +42,8 @@ from .mauldon import (
     mauldon_circles,
 )
 from .sets2d import RESOLUTION_DEG, JointSets2D, fit_sets_2d, trace_angles_deg
-from .topology import trace_topology
-from .trace_validation import SHARP_TURN_DEG, validate_traces
+from .topology import TraceTopology, trace_topology
+from .trace_validation import SHARP_TURN_DEG, TraceValidation, validate_traces
 from .trace_summary import (
     Diagnostics,
     IntensityParameters,
@@ -185,37 +188,12 @@ def trace_map_statistics(
     >>> d["Fracture Intensity P21"], d["Node Counts"]
     ({'value': 0.16, 'unit': 'm/m²'}, {'I': 4, 'Y': 0, 'X': 1, 'E': 0})
     """
-    _require_trace_map(trace_map)
-    if trace_map.n_traces == 0:
-        raise ValueError("trace_map has 0 traces: there is nothing to analyse")
-    if not isinstance(length_unit, str) or not length_unit.strip():
-        raise TypeError(f"length_unit must be a non-empty string such as 'm' or 'px', got {length_unit!r}")
-    _choice(p20_rule, P20_RULES, "p20_rule")
-    resolution_deg = _real_at_least(
-        resolution_deg, "resolution_deg", "angular resolution in degrees", above_zero=True
+    resolution_deg, scanline_spacing_m = _checked_arguments(
+        trace_map, length_unit, p20_rule, resolution_deg, scanline_spacing_m
     )
-    if scanline_spacing_m is not None:
-        scanline_spacing_m = _real_at_least(
-            scanline_spacing_m, "scanline_spacing_m", "distance between scanlines", above_zero=True
-        )
-    if window is None and trace_map.window_xy_m is None:
-        raise ValueError(
-            "window: the trace map has no sampling window (the mapped area) and none was given; pass "
-            "window=<polygon> (the area that was mapped), or window='bbox' / window='hull' to take "
-            "the traces' bounding box / convex hull (P20 and P21 scale with 1 / area)")
-    resolved = sampling_window(trace_map, window)
-    reaches = shapely.intersects(trace_map.to_shapely(), resolved.polygon)
-    if not reaches.any():
-        raise ValueError(f"none of the {trace_map.n_traces} traces reaches the window (source: {resolved.source})")
-    traces = trace_map if reaches.all() else trace_map.subset(reaches)
-    if snap_tolerance_m is None:
-        tolerance = SNAP_FRACTION * resolved.diameter_m
-    else:
-        tolerance = _real_at_least(snap_tolerance_m, "snap_tolerance_m", "snap distance in metres")
-    circle = circle_window(resolved.polygon, rel_tolerance=circle_rel_tolerance)
-    if not isinstance(mauldon_in_window, (bool, np.bool_)):
-        raise TypeError(f"mauldon_in_window must be True or False, got {mauldon_in_window!r}")
-    circles = inscribed_circles(resolved) if (mauldon_in_window and not circle.is_circle) else None
+    resolved, traces = _traces_in_window(trace_map, window)
+    tolerance = _snap_tolerance(snap_tolerance_m, resolved)
+    circle, circles = _mauldon_windows(resolved, circle_rel_tolerance, mauldon_in_window)
 
     topology = trace_topology(traces, snap_tolerance_m=tolerance, window=resolved)
     validation = validate_traces(traces, snap_tolerance_m=tolerance, sharp_turn_deg=sharp_turn_deg)
@@ -225,18 +203,9 @@ def trace_map_statistics(
     sets = _fit_sets(traces, angles, lengths, n_sets, angle_method, resolution_deg, seed)
     u = _Units(length_unit)
     convention = angle_convention(trace_map.frame)
-    if isinstance(sets, JointSets2D):
-        membership = sets.membership
-        set_summaries = tuple(
-            _set_summary(traces, sets, s, resolved, p20_rule, tolerance, scanline_spacing_m, circle, circles, u,
-                         convention)
-            for s in range(sets.n_sets)
-        )
-        selection = SetSelection(sets.selected_by, {str(k): _number(v) for k, v in sets.bic.items()})
-    else:
-        membership = np.full(traces.n_traces, -1, dtype=np.int64)
-        set_summaries = ()
-        selection = SetSelection(None, {}, sets)
+    membership, set_summaries, selection = _set_results(
+        traces, sets, resolved, p20_rule, tolerance, scanline_spacing_m, circle, circles, u, convention
+    )
     return TraceMapStatistics(
         n_traces=Parameter.of(traces.n_traces, "-"),
         area=Parameter.of(overall.area_m2, u.area),
@@ -253,55 +222,18 @@ def trace_map_statistics(
         node_counts=NodeCounts(topology.n_i, topology.n_y, topology.n_x, topology.n_e),
         sets=set_summaries,
         set_selection=selection,
-        traces=TraceTable(
-            id=traces.attributes["id"].copy(),
-            length=lengths,
-            unit=u.length,
-            censored=topology.censored,
-            set_id=membership,
-            angle_deg=to_convention(angles, convention),
-            connections=topology.connections,
-            end_class=topology.end_class,
-            validation_errors=tuple(validation.errors()),
-        ),
-        window=WindowSummary(
-            source=resolved.source,
-            area=overall.area_m2,
-            unit=u.length,
-            is_circle=circle.is_circle,
-            centre_xy=tuple(circle.centre_xy_m) if circle.is_circle else None,
-            radius=circle.radius_m if circle.is_circle else None,
-            circle_deviation=_number(circle.max_rel_deviation),
-            mauldon_circles=None if circles is None else MauldonCircleSet(
-                circles.n_circles, circles.radius_m, circles.centres_xy_m
-            ),
-        ),
-        settings=StatisticsSettings(
-            snap_tolerance=Parameter.of(topology.snap_tolerance_m, u.length),
-            p20_rule=p20_rule,
-            angle_method=angle_method,
-            n_sets=_number(n_sets),
-            resolution_deg=resolution_deg,
-            mauldon_in_window=bool(mauldon_in_window),
-            seed=_number(seed),
-            scanline_spacing=None if scanline_spacing_m is None else Parameter.of(scanline_spacing_m, u.length),
+        traces=_trace_table(traces, lengths, topology, membership, angles, convention, validation, u),
+        window=_window_summary(resolved, overall, circle, circles, u),
+        settings=_statistics_settings(
+            topology, p20_rule, angle_method, n_sets, resolution_deg, mauldon_in_window, seed,
+            scanline_spacing_m, u,
         ),
         frame=trace_map.frame,
         crs=trace_map.crs,
         angle_convention=convention,
-        diagnostics=Diagnostics(
-            traces_outside_window=int(trace_map.n_traces - traces.n_traces),
-            zero_length_traces=int(np.count_nonzero(traces.degenerate_traces())),
-            end_contacts=int(topology.end_contact.sum()),
-            overlapping_pairs=topology.n_overlapping_pairs,
-        ),
+        diagnostics=_diagnostics(trace_map, traces, topology),
         p21_map=p21_map(traces, resolved, unit=u.length),
-        validation=ValidationSummary(
-            n_flagged=validation.n_flagged,
-            counts=validation.counts(),
-            sharp_turn_deg=validation.sharp_turn_deg,
-            snap_tolerance=Parameter.of(validation.snap_tolerance_m, u.length),
-        ),
+        validation=_validation_summary(validation, u),
     )
 
 
@@ -402,6 +334,68 @@ class _Units:
         self.per_length = f"1/{length}"
 
 
+def _checked_arguments(
+    trace_map: TraceMap, length_unit: str, p20_rule: str, resolution_deg: float,
+    scanline_spacing_m: float | None,
+) -> tuple[float, float | None]:
+    """Check the map and the scalar arguments; ``(resolution_deg, scanline_spacing_m)`` as floats.
+
+    Raises on a value that is not a :class:`TraceMap`, an empty map, a blank ``length_unit``, an
+    unknown ``p20_rule``, or a resolution or scanline spacing that is not a positive number.
+    """
+    _require_trace_map(trace_map)
+    if trace_map.n_traces == 0:
+        raise ValueError("trace_map has 0 traces: there is nothing to analyse")
+    if not isinstance(length_unit, str) or not length_unit.strip():
+        raise TypeError(f"length_unit must be a non-empty string such as 'm' or 'px', got {length_unit!r}")
+    _choice(p20_rule, P20_RULES, "p20_rule")
+    resolution_deg = _real_at_least(
+        resolution_deg, "resolution_deg", "angular resolution in degrees", above_zero=True
+    )
+    if scanline_spacing_m is not None:
+        scanline_spacing_m = _real_at_least(
+            scanline_spacing_m, "scanline_spacing_m", "distance between scanlines", above_zero=True
+        )
+    return resolution_deg, scanline_spacing_m
+
+
+def _traces_in_window(trace_map: TraceMap, window: Any) -> tuple[SamplingWindow, TraceMap]:
+    """The resolved sampling window and the traces that reach it (``trace_map`` itself when all do).
+
+    The area is never chosen silently: a map without a window needs ``window`` (issue 19).
+    """
+    if window is None and trace_map.window_xy_m is None:
+        raise ValueError(
+            "window: the trace map has no sampling window (the mapped area) and none was given; pass "
+            "window=<polygon> (the area that was mapped), or window='bbox' / window='hull' to take "
+            "the traces' bounding box / convex hull (P20 and P21 scale with 1 / area)")
+    resolved = sampling_window(trace_map, window)
+    reaches = shapely.intersects(trace_map.to_shapely(), resolved.polygon)
+    if not reaches.any():
+        raise ValueError(f"none of the {trace_map.n_traces} traces reaches the window (source: {resolved.source})")
+    traces = trace_map if reaches.all() else trace_map.subset(reaches)
+    return resolved, traces
+
+
+def _snap_tolerance(snap_tolerance_m: float | None, resolved: SamplingWindow) -> float:
+    """The snap tolerance: ``snap_tolerance_m`` checked, or :data:`SNAP_FRACTION` × the window diameter."""
+    if snap_tolerance_m is None:
+        return SNAP_FRACTION * resolved.diameter_m
+    return _real_at_least(snap_tolerance_m, "snap_tolerance_m", "snap distance in metres")
+
+
+def _mauldon_windows(
+    resolved: SamplingWindow, circle_rel_tolerance: float, mauldon_in_window: bool
+) -> tuple[CircleWindow, InscribedCircles | None]:
+    """Where Mauldon's estimators are evaluated: the window's circle fit, and the disjoint circles
+    inside it when it is not a circle and ``mauldon_in_window`` is True (else None)."""
+    circle = circle_window(resolved.polygon, rel_tolerance=circle_rel_tolerance)
+    if not isinstance(mauldon_in_window, (bool, np.bool_)):
+        raise TypeError(f"mauldon_in_window must be True or False, got {mauldon_in_window!r}")
+    circles = inscribed_circles(resolved) if (mauldon_in_window and not circle.is_circle) else None
+    return circle, circles
+
+
 def _fit_sets(traces, angles, lengths, n_sets, angle_method, resolution_deg, seed) -> JointSets2D | str:
     """The set fit, or the reason there is none (no trace with a direction inside the window)."""
     if not np.any(np.isfinite(angles) & (lengths > 0.0)):
@@ -409,6 +403,27 @@ def _fit_sets(traces, angles, lengths, n_sets, angle_method, resolution_deg, see
     return fit_sets_2d(
         traces, n_sets, weights=lengths, method=angle_method, resolution_deg=resolution_deg, seed=seed
     )
+
+
+def _set_results(
+    traces, sets: JointSets2D | str, window, p20_rule, tolerance, spacing, circle, circles, u, convention
+) -> tuple[np.ndarray, tuple[SetSummary, ...], SetSelection]:
+    """Per-trace set index, one summary per set and how the sets were chosen; for a fit that could not
+    be made (``sets`` is then its reason), every trace in set -1, no summary, and the reason."""
+    if isinstance(sets, JointSets2D):
+        membership = sets.membership
+        set_summaries = tuple(
+            _set_summary(
+                traces, sets, s, window, p20_rule, tolerance, spacing, circle, circles, u, convention
+            )
+            for s in range(sets.n_sets)
+        )
+        selection = SetSelection(sets.selected_by, {str(k): _number(v) for k, v in sets.bic.items()})
+    else:
+        membership = np.full(traces.n_traces, -1, dtype=np.int64)
+        set_summaries = ()
+        selection = SetSelection(None, {}, sets)
+    return membership, set_summaries, selection
 
 
 def _intensity_parameters(intensity, lengths: np.ndarray, u: _Units) -> IntensityParameters:
@@ -461,4 +476,79 @@ def _set_summary(
         scanline_count=Parameter.of(int(survey.offsets_m.size), "-"),
         scanline_length=Parameter.of(survey.total_length_m, u.length),
         scanline_intersections=Parameter.of(survey.total_intersections, "-"),
+    )
+
+
+def _trace_table(
+    traces: TraceMap, lengths: np.ndarray, topology: TraceTopology, membership: np.ndarray,
+    angles: np.ndarray, convention: str, validation: TraceValidation, u: _Units,
+) -> TraceTable:
+    """The per-trace table: clipped lengths, topology, set index, angles in ``convention`` and labels."""
+    return TraceTable(
+        id=traces.attributes["id"].copy(),
+        length=lengths,
+        unit=u.length,
+        censored=topology.censored,
+        set_id=membership,
+        angle_deg=to_convention(angles, convention),
+        connections=topology.connections,
+        end_class=topology.end_class,
+        validation_errors=tuple(validation.errors()),
+    )
+
+
+def _window_summary(
+    resolved: SamplingWindow, overall: TraceIntensity, circle: CircleWindow, circles: InscribedCircles | None,
+    u: _Units,
+) -> WindowSummary:
+    """The window: its source and area, its circle fit, and the circles Mauldon's counts were pooled in."""
+    return WindowSummary(
+        source=resolved.source,
+        area=overall.area_m2,
+        unit=u.length,
+        is_circle=circle.is_circle,
+        centre_xy=tuple(circle.centre_xy_m) if circle.is_circle else None,
+        radius=circle.radius_m if circle.is_circle else None,
+        circle_deviation=_number(circle.max_rel_deviation),
+        mauldon_circles=None if circles is None else MauldonCircleSet(
+            circles.n_circles, circles.radius_m, circles.centres_xy_m
+        ),
+    )
+
+
+def _statistics_settings(
+    topology: TraceTopology, p20_rule: str, angle_method: str, n_sets: int | None, resolution_deg: float,
+    mauldon_in_window: bool, seed: int, scanline_spacing_m: float | None, u: _Units,
+) -> StatisticsSettings:
+    """The settings used, defaults resolved (the snap tolerance as the topology applied it)."""
+    return StatisticsSettings(
+        snap_tolerance=Parameter.of(topology.snap_tolerance_m, u.length),
+        p20_rule=p20_rule,
+        angle_method=angle_method,
+        n_sets=_number(n_sets),
+        resolution_deg=resolution_deg,
+        mauldon_in_window=bool(mauldon_in_window),
+        seed=_number(seed),
+        scanline_spacing=None if scanline_spacing_m is None else Parameter.of(scanline_spacing_m, u.length),
+    )
+
+
+def _diagnostics(trace_map: TraceMap, traces: TraceMap, topology: TraceTopology) -> Diagnostics:
+    """Counts that flag suspicious input: traces outside the window, degenerate traces, end contacts
+    and overlapping pairs."""
+    return Diagnostics(
+        traces_outside_window=int(trace_map.n_traces - traces.n_traces),
+        zero_length_traces=int(np.count_nonzero(traces.degenerate_traces())),
+        end_contacts=int(topology.end_contact.sum()),
+        overlapping_pairs=topology.n_overlapping_pairs,
+    )
+
+
+def _validation_summary(validation: TraceValidation, u: _Units) -> ValidationSummary:
+    """How many traces fractopo's validation would flag, by label."""
+    return ValidationSummary(
+        n_flagged=validation.n_flagged,
+        counts=validation.counts(),
+        sharp_turn_deg=validation.sharp_turn_deg,
+        snap_tolerance=Parameter.of(validation.snap_tolerance_m, u.length),
     )

@@ -215,6 +215,124 @@ def _big_regions(cue: np.ndarray, *, open_px: float, min_area_px: float) -> np.n
     return big[labels]
 
 
+def _checked_params(mode: str, params: FaceMaskParams | None) -> FaceMaskParams:
+    """The mode checked, and the params (the defaults when None) checked to be FaceMaskParams."""
+    if mode not in ("full", "border"):
+        raise ValueError(f"mode must be 'full' or 'border' ('off': do not call), got {mode!r}")
+    params = FaceMaskParams() if params is None else params
+    if not isinstance(params, FaceMaskParams):
+        raise TypeError(f"params must be a FaceMaskParams, got {type(params).__name__}")
+    return params
+
+
+def _out_shape(image, shape_px) -> tuple[int, ...]:
+    """The (rows, cols) of the mask returned: ``shape_px``, or the image's when None; checked."""
+    full_shape = np.asarray(image).shape[:2]
+    out_shape = tuple(int(v) for v in (full_shape if shape_px is None else shape_px))
+    if len(out_shape) != 2 or min(out_shape) < 1:
+        raise ValueError(f"shape_px must be (rows, cols) >= 1, got {shape_px!r}")
+    return out_shape
+
+
+def _border_band(h: int, w: int, side: float, border_frac: float) -> tuple[np.ndarray, int]:
+    """The ``border`` cue on the (h, w) coarse grid, and its width in pixels."""
+    border = np.ones((h, w), dtype=bool)
+    b = int(round(border_frac * side))
+    if b > 0:
+        border[b:h - b, b:w - b] = False
+    else:
+        border[:] = False
+    return border, b
+
+
+def _bright_cue(hsv: np.ndarray, side: float, params: FaceMaskParams) -> np.ndarray:
+    """The ``bright`` cue: over-exposed pixels, closed then opened with a disk of 0.5 % of s."""
+    import cv2
+
+    bright = hsv[..., 2] >= params.bright_level
+    small = 0.005 * side
+    bright = cv2.morphologyEx(bright.astype(np.uint8), cv2.MORPH_CLOSE, _disk(small))
+    return cv2.morphologyEx(bright, cv2.MORPH_OPEN, _disk(small)).astype(bool)
+
+
+def _texture_energy(rgb: np.ndarray, side: float, params: FaceMaskParams) -> tuple[np.ndarray, int]:
+    """RMS gradient of the log luma over the texture window, and the window's side in pixels."""
+    import cv2
+
+    grey = rgb @ np.array([0.299, 0.587, 0.114], dtype=np.float32)
+    log = cv2.GaussianBlur(np.log(grey + np.float32(0.02)), (0, 0), 1.0)
+    gx = cv2.Sobel(log, cv2.CV_32F, 1, 0, ksize=3)
+    gy = cv2.Sobel(log, cv2.CV_32F, 0, 1, ksize=3)
+    win = max(int(round(params.texture_window_frac * side)) | 1, 3)
+    # the box filter's running sums can dip a hair below 0 on flat ground
+    energy = np.sqrt(np.maximum(cv2.boxFilter((gx * gx + gy * gy) / 64.0, -1, (win, win)), 0.0))
+    return energy, win
+
+
+def _smooth_cue(energy: np.ndarray, win: int, border: np.ndarray, params: FaceMaskParams, *,
+                open_px: float, min_area: float) -> np.ndarray:
+    """The ``smooth`` cue: big regions of low texture energy, dilated by half the window."""
+    import cv2
+
+    inner = energy[~border] if (~border).any() else energy.ravel()
+    reference = float(np.percentile(inner, 90))
+    smooth = _big_regions(energy < params.smooth_ratio * reference, open_px=open_px,
+                          min_area_px=min_area) if reference > 0 else np.zeros(border.shape, bool)
+    if smooth.any():  # the window average carries the rock's texture win / 2 into the smooth
+        smooth = cv2.dilate(smooth.astype(np.uint8), _disk(win / 2)).astype(bool)
+    return smooth
+
+
+def _coloured_cue(hsv: np.ndarray, params: FaceMaskParams, *, open_px: float,
+                  min_area: float) -> np.ndarray:
+    """The ``coloured`` cue: big regions of saturated, not dark, pixels."""
+    coloured = (hsv[..., 1] >= params.saturation_level) & (hsv[..., 2] >= params.saturation_min_value)
+    return _big_regions(coloured, open_px=open_px, min_area_px=min_area)
+
+
+def _with_margin(excluded: np.ndarray, margin_px: float) -> tuple[np.ndarray, np.ndarray]:
+    """``excluded`` dilated by ``margin_px`` (when at least half a pixel), and the rim added."""
+    import cv2
+
+    if margin_px >= 0.5 and excluded.any():
+        grown = cv2.dilate(excluded.astype(np.uint8), _disk(margin_px)).astype(bool)
+    else:
+        grown = excluded
+    return grown, grown & ~excluded
+
+
+def _big_rock_pieces(rock: np.ndarray, keep_component_frac: float) -> np.ndarray:
+    """The pieces of ``rock`` of at least ``keep_component_frac`` of the largest one."""
+    import cv2
+
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(rock.astype(np.uint8), connectivity=8)
+    if n > 1:
+        sizes = stats[1:, cv2.CC_STAT_AREA]
+        keep = np.zeros(n, dtype=bool)
+        keep[1:] = sizes >= keep_component_frac * sizes.max()
+        return keep[labels]
+    return rock
+
+
+def _resized_mask(kept: np.ndarray, border: np.ndarray, out_shape: tuple[int, ...]) -> np.ndarray:
+    """The kept rock (or, if none, everything inside the border band) on the ``out_shape`` grid."""
+    import cv2
+
+    if not kept.any():  # nothing looks like rock: fall back to the border band alone
+        kept = ~border if (~border).any() else np.ones(border.shape, dtype=bool)
+    if kept.shape != out_shape:
+        return cv2.resize(kept.astype(np.uint8), (out_shape[1], out_shape[0]),
+                          interpolation=cv2.INTER_NEAREST).astype(bool)
+    return kept
+
+
+def _excluded_fractions(cues: Mapping[str, np.ndarray], mask: np.ndarray) -> dict[str, float]:
+    """Share of the image each cue leaves out, and ``total``: the share outside ``mask``."""
+    fractions = {k: float(v.mean()) for k, v in cues.items()}
+    fractions["total"] = float(1.0 - mask.mean())
+    return fractions
+
+
 def face_mask_cues(image, *, shape_px: tuple[int, int] | None = None, mode: str = "full",
                    params: FaceMaskParams | None = None, name: str = "image") -> FaceMaskCues:
     """The rock-face mask of a photograph, with the cues behind it.
@@ -280,86 +398,34 @@ def face_mask_cues(image, *, shape_px: tuple[int, int] | None = None, mode: str 
     """
     import cv2
 
-    if mode not in ("full", "border"):
-        raise ValueError(f"mode must be 'full' or 'border' ('off': do not call), got {mode!r}")
-    params = FaceMaskParams() if params is None else params
-    if not isinstance(params, FaceMaskParams):
-        raise TypeError(f"params must be a FaceMaskParams, got {type(params).__name__}")
-    # the border band needs no pixels: only "full" reads (and down-samples) the photo
+    # working copy: checks, and the photo down-sampled to the coarse grid ("full" only: the
+    # border band needs no pixels)
+    params = _checked_params(mode, params)
     rgb = _work_rgb(image, params.work_megapixels, name, pixels=mode == "full")
-    full_shape = np.asarray(image).shape[:2]
-    out_shape = tuple(int(v) for v in (full_shape if shape_px is None else shape_px))
-    if len(out_shape) != 2 or min(out_shape) < 1:
-        raise ValueError(f"shape_px must be (rows, cols) >= 1, got {shape_px!r}")
+    out_shape = _out_shape(image, shape_px)
     h, w = _work_shape(np.asarray(image).shape[:2], params.work_megapixels)
     side = float(min(h, w))
-    cues: dict[str, np.ndarray] = {}
 
-    border = np.ones((h, w), dtype=bool)
-    b = int(round(params.border_frac * side))
-    if b > 0:
-        border[b:h - b, b:w - b] = False
-    else:
-        border[:] = False
-    cues["border"] = border
+    border, b = _border_band(h, w, side, params.border_frac)
+    cues: dict[str, np.ndarray] = {"border": border}
     excluded = np.zeros((h, w), dtype=bool)
     if mode == "full":
-        area = float(h * w)
         hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV)  # float input: S and V = max(R, G, B) in [0, 1]
-        bright = hsv[..., 2] >= params.bright_level
-        small = 0.005 * side
-        bright = cv2.morphologyEx(bright.astype(np.uint8), cv2.MORPH_CLOSE, _disk(small))
-        bright = cv2.morphologyEx(bright, cv2.MORPH_OPEN, _disk(small)).astype(bool)
-
-        grey = rgb @ np.array([0.299, 0.587, 0.114], dtype=np.float32)
-        log = cv2.GaussianBlur(np.log(grey + np.float32(0.02)), (0, 0), 1.0)
-        gx = cv2.Sobel(log, cv2.CV_32F, 1, 0, ksize=3)
-        gy = cv2.Sobel(log, cv2.CV_32F, 0, 1, ksize=3)
-        win = max(int(round(params.texture_window_frac * side)) | 1, 3)
-        # the box filter's running sums can dip a hair below 0 on flat ground
-        energy = np.sqrt(np.maximum(cv2.boxFilter((gx * gx + gy * gy) / 64.0, -1, (win, win)), 0.0))
-        inner = energy[~border] if (~border).any() else energy.ravel()
-        reference = float(np.percentile(inner, 90))
-        open_px, min_area = 0.01 * side, params.min_region_frac * area
-        smooth = _big_regions(energy < params.smooth_ratio * reference, open_px=open_px,
-                              min_area_px=min_area) if reference > 0 else np.zeros((h, w), bool)
-        if smooth.any():  # the window average carries the rock's texture win / 2 into the smooth
-            smooth = cv2.dilate(smooth.astype(np.uint8), _disk(win / 2)).astype(bool)
-
-        coloured = (hsv[..., 1] >= params.saturation_level) & (hsv[..., 2] >= params.saturation_min_value)
-        coloured = _big_regions(coloured, open_px=open_px, min_area_px=min_area)
-        excluded = bright | smooth | coloured
+        bright = _bright_cue(hsv, side, params)
+        energy, win = _texture_energy(rgb, side, params)
+        open_px, min_area = 0.01 * side, params.min_region_frac * float(h * w)
+        smooth = _smooth_cue(energy, win, border, params, open_px=open_px, min_area=min_area)
+        coloured = _coloured_cue(hsv, params, open_px=open_px, min_area=min_area)
         cues.update(bright=bright, smooth=smooth, coloured=coloured)
-        margin_px = params.margin_frac * side
-        if margin_px >= 0.5 and excluded.any():
-            grown = cv2.dilate(excluded.astype(np.uint8), _disk(margin_px)).astype(bool)
-        else:
-            grown = excluded
-        cues["margin"] = grown & ~excluded
-        excluded = grown
+        excluded, cues["margin"] = _with_margin(bright | smooth | coloured, params.margin_frac * side)
 
     rock = ~excluded & ~border
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(rock.astype(np.uint8), connectivity=8)
-    if n > 1:
-        sizes = stats[1:, cv2.CC_STAT_AREA]
-        keep = np.zeros(n, dtype=bool)
-        keep[1:] = sizes >= params.keep_component_frac * sizes.max()
-        kept = keep[labels]
-    else:
-        kept = rock
+    kept = _big_rock_pieces(rock, params.keep_component_frac)
     cues["fragments"] = rock & ~kept
-    if not kept.any():  # nothing looks like rock: fall back to the border band alone
-        kept = ~border if (~border).any() else np.ones((h, w), dtype=bool)
-    if kept.shape != out_shape:
-        mask = cv2.resize(kept.astype(np.uint8), (out_shape[1], out_shape[0]),
-                          interpolation=cv2.INTER_NEAREST).astype(bool)
-    else:
-        mask = kept
-    fractions = {k: float(v.mean()) for k, v in cues.items()}
-    fractions["total"] = float(1.0 - mask.mean())
+    mask = _resized_mask(kept, border, out_shape)
     return FaceMaskCues(mask=mask, cues=MappingProxyType(cues),
-                        excluded_fraction=MappingProxyType(fractions), mode=mode, border_px=b,
-                        margin_px=params.margin_frac * side)
+                        excluded_fraction=MappingProxyType(_excluded_fractions(cues, mask)),
+                        mode=mode, border_px=b, margin_px=params.margin_frac * side)
 
 
 def face_mask(image, *, shape_px: tuple[int, int] | None = None, mode: str = "full",
