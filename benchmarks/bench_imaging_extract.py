@@ -1,4 +1,4 @@
-"""Photo -> traces: accuracy by difficulty, throughput at 2 / 12 / 24 MP, run time against error.
+"""Photo -> traces with the ridge filter: accuracy by difficulty, throughput, run time against error.
 
     python benchmarks/bench_imaging_extract.py [--quick]
 
@@ -13,6 +13,10 @@
    detector (``detector="learned"``) at 12 and 24 MP too. Target >= 1 MP/s on 2 cores (issue 22:
    >= 2 MP/s whole process at 12-24 MP), <= 2 GB at 24 MP.
 3. Run time against error for the main knobs: down-sampling (max_megapixels) and filter scales.
+
+Every row but the learned throughput ones runs the ridge filter (``detector="ridge"``): the chain
+these targets and knobs were set for (the default detector is the learned one, whose accuracy on
+these plain faces is in bench_imaging_real.py and docs/imaging.md §3.1).
 Rows also go to benchmarks/results/bench_imaging_extract.json.
 """
 
@@ -40,7 +44,7 @@ def run_case(difficulty, seed, shape_px=(1000, 1500), m_per_px=0.008, params=Non
     face = synthetic_face(difficulty, seed=seed, shape_px=shape_px, m_per_px=m_per_px)
     t0 = time.perf_counter()
     result = extract(face.image, m_per_px=m_per_px, joint_width_px=joint_width,
-                     params=params or ExtractParams())
+                     params=params or ExtractParams(detector="ridge"))
     elapsed = time.perf_counter() - t0
     # accuracy on the grid the chain worked on (the buffer is 3 working pixels)
     acc = trace_accuracy(result.traces, face.truth, m_per_px=m_per_px / result.scale.work_factor)
@@ -86,7 +90,7 @@ def main(quick: bool = False) -> None:
     for level in ("easy", "moderate", "hard"):
         rows = [run_case(level, s) for s in seeds]
         accuracy.append(mean_row(rows, level=level, setting=f"defaults, seeds {seeds}"))
-    unlinked = ExtractParams(link_gap_px=0.0, border_extend_px=0.0)
+    unlinked = ExtractParams(detector="ridge", link_gap_px=0.0, border_extend_px=0.0)
     for level in ("moderate", "hard"):
         rows = [run_case(level, s, params=unlinked) for s in seeds]
         accuracy.append(mean_row(rows, level=level, setting="no linking, no border (before)"))
@@ -109,13 +113,11 @@ def main(quick: bool = False) -> None:
                              ("node_err", ".2f"), ("processing", "s")]))
 
     curve = []
-    knobs = [("max_megapixels=4 (default)", ExtractParams()),
-             ("max_megapixels=1", ExtractParams(max_megapixels=1.0)),
-             ("max_megapixels=0.5", ExtractParams(max_megapixels=0.5)),
-             ("max_megapixels=8", ExtractParams(max_megapixels=8.0)),
-             ("n_scales=1", ExtractParams(n_scales=1)),
-             ("n_scales=5", ExtractParams(n_scales=5, scale_spread=3.0)),
-             ("scale_spread=4", ExtractParams(scale_spread=4.0))]
+    knobs = [(label, ExtractParams(detector="ridge", **kw)) for label, kw in (
+        ("max_megapixels=4 (default)", {}), ("max_megapixels=1", dict(max_megapixels=1.0)),
+        ("max_megapixels=0.5", dict(max_megapixels=0.5)), ("max_megapixels=8", dict(max_megapixels=8.0)),
+        ("n_scales=1", dict(n_scales=1)), ("n_scales=5", dict(n_scales=5, scale_spread=3.0)),
+        ("scale_spread=4", dict(scale_spread=4.0)))]
     size = (1400, 2100)  # 2.9 MP moderate faces, same 12 m x 8 m
     for label, params in knobs:
         rows = [run_case("moderate", s, shape_px=size, m_per_px=12.0 / size[1], params=params)

@@ -66,9 +66,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="look for bright joints (filled joints, veins, mortar) instead of dark ones; "
                         "set --joint-width to their full width (about 8 px for the mortar of "
                         "skimage's brick photo), or recessed joints split into their two bright rims")
-    p.add_argument("--detector", choices=("ridge", "learned"), dest="detector",
-                   help="joint detector: 'ridge' (multi-scale ridge filter, default) or 'learned' "
-                        "(the shipped pixel classifier; see docs/imaging.md §3.1)")
+    p.add_argument("--detector", choices=("learned", "ridge"), dest="detector",
+                   help="joint detector: 'learned' (the shipped pixel classifier, default; "
+                        "docs/imaging.md §3.1) or 'ridge' (multi-scale ridge filter: bright joints, "
+                        "and clean images whose faint hairlines count as joints; the default with "
+                        "--bright-lines)")
     p.add_argument("--sets", type=int, dest="n_sets", help="number of joint sets (default: by BIC)")
     p.add_argument("--config", help="TOML file; its [imaging] section sets scale, width and params")
     # its own destination: ``rockmass --debug`` (tracebacks) is the global flag of the same name

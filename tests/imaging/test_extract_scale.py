@@ -38,7 +38,8 @@ def _errors(images, truth) -> dict:
     """(dP21, dP20) in % per resolution, every photo at full resolution."""
     out = {}
     for name, (image, m_per_px) in images.items():
-        result = extract(image, m_per_px=m_per_px, params=ExtractParams(max_megapixels=1000))
+        result = extract(image, m_per_px=m_per_px,
+                         params=ExtractParams(max_megapixels=1000, detector="ridge"))
         acc = trace_accuracy(result.traces, truth, m_per_px=0.008, buffer_px=2)
         out[name] = (100 * acc.p21_rel_error, 100 * acc.p20_rel_error, acc.f1)
     return out

@@ -171,7 +171,7 @@ def test_roi_overrides_the_face_mask():
 def test_trace_crossing_the_border_band_still_reaches_the_border():
     image = _rock_texture(SHAPE, seed=8)
     image[:, 200:203] = 0.05  # a dark joint from top to bottom
-    result = extract(image, m_per_px=1.0)  # default: the border band
+    result = extract(image, m_per_px=1.0, params=ExtractParams(detector="ridge"))  # default band
     assert result.summary()["face_mask"]["mode"] == "border"
     found = _long_vertical_near(result, 201)
     assert found and min(r[:, 0].min() for r in found) < 0.5

@@ -150,7 +150,11 @@ def test_training_samples_keep_ignored_pixels_out_of_the_negatives():
 
 
 def test_trace_filters_default_per_detector_and_are_checked():
-    learned, ridge = ExtractParams(detector="learned"), ExtractParams()
+    learned, ridge = ExtractParams(), ExtractParams(detector="ridge")
+    assert learned.detector == "learned"  # the default, except for bright joints:
+    assert ExtractParams(line_polarity="bright").detector == "ridge"
+    with pytest.raises(ValueError, match="needs params.detector = 'ridge'"):
+        ExtractParams(detector="learned", line_polarity="bright")
     assert [learned.resolved(n) for n in ("fill_holes_px", "min_trace_length_px",
                                           "min_trace_contrast", "min_trace_width")] == [400, 70.0, 0.25, 1.0]
     assert [ridge.resolved(n) for n in ("fill_holes_px", "min_trace_length_px",

@@ -22,7 +22,8 @@ def face_png(tmp_path_factory):
 def test_synthetic_face_gives_every_output_in_metres(face_png, tmp_path):
     path, face = face_png
     out = tmp_path / "out"
-    assert main(["extract", str(path), "--m-per-px", "0.02", "--out", str(out), "--debug"]) == 0
+    assert main(["extract", str(path), "--m-per-px", "0.02", "--out", str(out), "--debug",
+                 "--detector", "ridge"]) == 0
     for name in OUTPUTS:
         assert (out / name).stat().st_size > 0
     assert list(out.glob("debug_*.png"))
