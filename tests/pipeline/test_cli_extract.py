@@ -60,6 +60,16 @@ def test_summary_gives_the_statistics_without_low_score_traces(face_png, tmp_pat
     assert stats["Fracture Intensity P21"]["value"] <= summary["statistics"]["Fracture Intensity P21"]["value"]
 
 
+def test_bright_lines_with_the_learned_detector_exit_2(face_png, tmp_path, capsys):
+    # the learned detector finds dark joints only: asked for bright ones it must refuse, not ignore
+    path, _ = face_png
+    code = main(["extract", str(path), "--m-per-px", "0.02", "--out", str(tmp_path / "o"),
+                 "--bright-lines", "--detector", "learned"])
+    assert code == 2
+    assert "needs params.detector = 'ridge'" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
 def test_control_points_give_the_same_scale_as_m_per_px(face_png, tmp_path, capsys):
     path, _ = face_png
     assert main(["extract", str(path), "--control-points", "0", "0", "30", "40", "1.0",
