@@ -139,7 +139,8 @@ def _confident_statistics(traces, n_sets, unit) -> dict:
     """The statistics of the traces whose ``joint_score`` reaches
     :data:`rockmass.imaging.trace_score.LOW_SCORE` (docs/imaging.md §7.1), with how many were left
     out; ``statistics`` is None when none reaches it. The window (and so the area of P20, P21)
-    is that of all the traces."""
+    is that of all the traces. When the kept traces cannot carry the ``n_sets`` asked for (too
+    few distinct angles), their sets are chosen by BIC and ``note`` says why."""
     import numpy as np
 
     from .dfn import trace_map_statistics
@@ -151,7 +152,13 @@ def _confident_statistics(traces, n_sets, unit) -> dict:
              "traces_left_out": int((~keep).sum()), "statistics": None}
     if keep.any():
         confident = traces.subset(keep)
-        stats = trace_map_statistics(confident, n_sets=n_sets, length_unit=unit)
+        try:
+            stats = trace_map_statistics(confident, n_sets=n_sets, length_unit=unit)
+        except ValueError as exc:  # n_sets fitted all traces but not the fewer kept ones
+            if n_sets is None:
+                raise
+            stats = trace_map_statistics(confident, n_sets=None, length_unit=unit)
+            entry["note"] = f"{exc}: the kept traces' sets were chosen by BIC"
         entry["statistics"] = {**stats.to_dict(),
                                "Box-counting Dimension": dimension_entry(box_count(confident))}
     return entry

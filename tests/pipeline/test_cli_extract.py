@@ -165,3 +165,19 @@ def test_face_mask_flags_are_exclusive(face_png, tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["extract", str(path), "--out", str(tmp_path / "o"), "--no-face-mask", "--face-mask", "full"])
     assert exc.value.code == 2
+
+
+def test_confident_statistics_fall_back_to_bic_when_too_few_traces_are_kept():
+    # three traces at two angles, the two of one angle scored low: --sets 2 fits all traces, not
+    # the one kept; its statistics are still given, with sets by BIC and a note saying why
+    from rockmass.dfn import TraceMap
+    from rockmass.extract_stage import _confident_statistics
+
+    traces = TraceMap.from_polylines(
+        [[(0.1, 0.1), (0.9, 0.1)], [(0.1, 0.3), (0.8, 0.9)], [(0.2, 0.2), (0.9, 0.8)]],
+        window=[(0, 0), (1, 0), (1, 1), (0, 1)], attributes={"joint_score": [0.9, 0.2, 0.3]})
+    entry = _confident_statistics(traces, 2, "m")
+    assert (entry["traces_kept"], entry["traces_left_out"]) == (1, 2)
+    assert entry["statistics"]["Number of Traces"]["value"] == 1
+    assert "chosen by BIC" in entry["note"]
+    assert _confident_statistics(traces, None, "m").get("note") is None
