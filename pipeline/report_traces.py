@@ -5,6 +5,7 @@ fitted size law, the P21 map, and the box-counting dimension.
 
 from __future__ import annotations
 
+import html
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -29,7 +30,29 @@ def _section_traces(run: _Run) -> str:
         large.append(_image(run, "traces", "traces.png", "Digitised trace map, by set"))
         small.append(_image(run, "traces", "rose.png", "Rose diagram of the trace map (length-weighted)",
                             "small"))
-    return "".join(large + small)
+    confident = _confident_table(run) if run.has("extract") else ""
+    return "".join(large + small) + confident
+
+
+def _confident_table(run: _Run) -> str:
+    """The extracted traces' headline statistics with and without the low-score traces
+    (``statistics_confident`` of extract/summary.json, docs/imaging.md §7.1); empty without it."""
+    summary = run.json("extract", "summary.json")
+    confident = summary.get("statistics_confident") or {}
+    every, kept = summary.get("statistics"), confident.get("statistics")
+    if not isinstance(every, dict) or not isinstance(kept, dict):
+        return ""
+    keys = ("Number of Traces", "Areal Frequency P20", "Fracture Intensity P21", "Trace Mean Length",
+            "Box-counting Dimension")
+    rows = [[key, fmt(_value(every.get(key) or {})), fmt(_value(kept.get(key) or {}))] for key in keys]
+    threshold = confident.get("min_joint_score")
+    text = (f"{confident.get('traces_left_out')} of the {_value(every.get('Number of Traces') or {})} "
+            f"extracted traces score under {fmt(threshold)}. The per-trace joint score "
+            "(docs/imaging.md §7.1) says how likely each is a joint. On real photographs the second "
+            "column is the closer to a geologist's map of the major joints; on clean images whose every "
+            "faint line is a joint, the first.")
+    return f"<p>{html.escape(text)}</p>" + table(
+        ["extracted traces", "all", f"joint score ≥ {fmt(threshold)}"], rows, "t-confident")
 
 
 def _trace_stage(run: _Run) -> str:

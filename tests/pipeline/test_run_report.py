@@ -321,6 +321,18 @@ def test_intensity_table_equals_the_stage_summaries(run_dir):
         assert _same(rows["P21", f"dfn, realization {i}, section {sec['name']}"][1], sec["p21"])
 
 
+def test_confident_table_equals_the_extract_summary(run_dir):
+    # all traces against those of joint score >= the threshold, as extract/summary.json gives them
+    out, _, _, page = run_dir
+    summary = _stage_json(out, "extract", "summary.json")
+    kept = summary["statistics_confident"]["statistics"]
+    header = page.tables["t-confident"][0]
+    assert header[1] == "all" and header[2].startswith("joint score")
+    for key in ("Number of Traces", "Fracture Intensity P21"):
+        assert _same(page.cell("t-confident", key, "all"), summary["statistics"][key]["value"])
+        assert _same(page.cell("t-confident", key, header[2]), kept[key]["value"])
+
+
 def test_dfn_table_gives_every_set_of_every_realization(run_dir):
     out, _, _, page = run_dir
     rows = {(r[0], r[1]): r for r in page.tables["t-dfn"][1:]}
