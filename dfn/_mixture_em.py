@@ -177,11 +177,20 @@ def candidate_set_counts(n_sets, max_sets: int, n_distinct: int, distinct_what: 
     return [k_given]
 
 
+#: When k is chosen (not given), a fit with a set of fewer effective members than this is not a
+#: candidate: one joint is not a set (a set is a group of near-parallel joints), and a component on
+#: one datum always gains likelihood (κ up to its cap), which BIC's penalty on a few data does not
+#: outweigh (three near-parallel traces split into two sets 5 degrees apart).
+MIN_SET_MEMBERS = 2.0
+
+
 def fit_mixture(model: _MixtureModel, n: int, candidates: list[int], seed: int, n_init: int,
                 free_parameters: Callable[[int], int], n_bic: float) -> tuple[MixtureFit, dict, int]:
     """Fit every k in ``candidates`` and keep the one of smallest BIC (the smaller k on a tie).
 
-    BIC = -2 log L + p(k) ln ``n_bic`` with p = ``free_parameters(k)`` (Schwarz 1978).
+    BIC = -2 log L + p(k) ln ``n_bic`` with p = ``free_parameters(k)`` (Schwarz 1978). With more than
+    one candidate, a k > 1 whose smallest set has fewer than :data:`MIN_SET_MEMBERS` effective
+    members (π_k ``n_bic``) is left out of the choice (its BIC is still reported).
 
     Returns
     -------
@@ -196,6 +205,10 @@ def fit_mixture(model: _MixtureModel, n: int, candidates: list[int], seed: int, 
     bic = {k: (None if f is None else -2.0 * f.log_likelihood + free_parameters(k) * math.log(n_bic))
            for k, f in fits.items()}
     feasible = [k for k in candidates if bic[k] is not None]
+    if len(candidates) > 1:
+        populated = [k for k in feasible if k == 1
+                     or fits[k].components.weight.min() * n_bic >= MIN_SET_MEMBERS]
+        feasible = populated or feasible[:1]
     if not feasible:
         raise ValueError(f"could not fit n_sets={candidates[0]} sets: a set emptied during EM; give fewer sets")
     k = min(feasible, key=lambda kk: (bic[kk], kk))

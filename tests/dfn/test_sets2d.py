@@ -258,3 +258,16 @@ def test_inputs_are_not_modified():
     before = angles.copy(), weights.copy()
     fit_axial_mixture(angles, weights)
     assert np.array_equal(angles, before[0]) and np.array_equal(weights, before[1])
+
+
+def test_one_trace_is_not_a_set_when_k_is_chosen():
+    # three near-parallel traces of a small map (0.3, 1.1 and 175.3 degrees, i.e. within 5 degrees
+    # axially): BIC alone splits off the third as a "set" with kappa at its cap; a set needs at
+    # least two effective members, so k = 1 -- unless the user asks for two
+    from rockmass.dfn.sets2d import fit_axial_mixture
+
+    angles, lengths = [0.3, 1.1, 175.3], [300.0, 290.0, 320.0]
+    fit = fit_axial_mixture(angles, weights=lengths)
+    assert fit.n_sets == 1 and fit.selected_by == "bic"
+    assert fit.bic[2] < fit.bic[1]  # the split had the smaller BIC: the guard, not BIC, refuses it
+    assert fit_axial_mixture(angles, weights=lengths, n_sets=2).n_sets == 2
