@@ -184,13 +184,27 @@ def candidate_set_counts(n_sets, max_sets: int, n_distinct: int, distinct_what: 
 MIN_SET_MEMBERS = 2.0
 
 
+def set_members(weights: np.ndarray, posterior: np.ndarray) -> np.ndarray:
+    """Effective number of members of each set: Kish's (Σ_i r_ik)² / Σ_i r_ik² of the data's
+    weights shared out by the posteriors, r_ik = w_i p_ik (two equal members: 2; one: 1, whatever
+    its weight).
+
+    Examples
+    --------
+    >>> set_members(np.array([1.0, 1.0, 5.0]), np.array([[1.0, 0.0], [1.0, 0.0], [0.0, 1.0]]))
+    array([2., 1.])
+    """
+    r = np.asarray(weights, dtype=np.float64)[:, None] * np.asarray(posterior, dtype=np.float64)
+    return r.sum(axis=0) ** 2 / np.maximum((r * r).sum(axis=0), 1e-300)
+
+
 def fit_mixture(model: _MixtureModel, n: int, candidates: list[int], seed: int, n_init: int,
                 free_parameters: Callable[[int], int], n_bic: float) -> tuple[MixtureFit, dict, int]:
     """Fit every k in ``candidates`` and keep the one of smallest BIC (the smaller k on a tie).
 
     BIC = -2 log L + p(k) ln ``n_bic`` with p = ``free_parameters(k)`` (Schwarz 1978). With more than
-    one candidate, a k > 1 whose smallest set has fewer than :data:`MIN_SET_MEMBERS` effective
-    members (π_k ``n_bic``) is left out of the choice (its BIC is still reported).
+    one candidate, a k > 1 with a set of fewer than :data:`MIN_SET_MEMBERS` effective members
+    (:func:`set_members`) is left out of the choice (its BIC is still reported).
 
     Returns
     -------
@@ -206,8 +220,8 @@ def fit_mixture(model: _MixtureModel, n: int, candidates: list[int], seed: int, 
            for k, f in fits.items()}
     feasible = [k for k in candidates if bic[k] is not None]
     if len(candidates) > 1:
-        populated = [k for k in feasible if k == 1
-                     or fits[k].components.weight.min() * n_bic >= MIN_SET_MEMBERS]
+        populated = [k for k in feasible if k == 1 or set_members(
+            model.weights, fits[k].posterior).min() >= MIN_SET_MEMBERS - 1e-9]
         feasible = populated or feasible[:1]
     if not feasible:
         raise ValueError(f"could not fit n_sets={candidates[0]} sets: a set emptied during EM; give fewer sets")
