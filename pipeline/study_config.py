@@ -340,7 +340,7 @@ def expand_cases(document: StudyDocument, raw: dict, config_path,
     problems: list[tuple[str, str]] = []
     for path in seed_fields:
         if path in grid or any(path in entry for entry in listed):
-            problems.append((f"study.seed_fields", f"{path} is set by the realizations and also "
+            problems.append(("study.seed_fields", f"{path} is set by the realizations and also "
                              "varied by study.grid / study.cases; vary one or the other"))
     for path in grid:
         if any(path in entry for entry in listed):
