@@ -177,26 +177,23 @@ def trace_ordering(pairs, params, joint_width_px: float) -> dict:
     import cv2
 
     from rockmass.imaging.extract import extract
-    from rockmass.imaging.metrics import render_traces
+    from rockmass.imaging.train_trace_score import trace_labels
 
     keys = ("joint_score", "confidence", "contrast", "length")
     values, true, weight = {k: [] for k in keys}, [], []
     for image_path, label_path in pairs:
-        truth = label_skeleton(label_path)
-        near = cv2.distanceTransform(np.where(truth, 0, 255).astype(np.uint8), cv2.DIST_L2,
-                                     cv2.DIST_MASK_PRECISE) <= TOLERANCE_PX
         image = cv2.imread(str(image_path), cv2.IMREAD_COLOR)[..., ::-1]
         traces = extract(image, m_per_px=1.0, joint_width_px=joint_width_px, params=params).traces
-        lengths = traces.lengths_m()
-        for i in range(traces.n_traces):
-            drawn = render_traces(traces.subset([i]), truth.shape, 1.0)
-            if drawn.any():
-                true.append(near[drawn].mean() >= 0.5)
-                weight.append(drawn.sum())
-                for k in keys:
-                    values[k].append(lengths[i] if k == "length" else traces.attributes[k][i])
-    true, weight = np.array(true), np.array(weight, dtype=float)
-    return {k: pairwise_order(np.array(values[k], dtype=float), true, weight) for k in keys}
+        labels, pixels = trace_labels(traces, label_skeleton(label_path), 1.0,
+                                      tolerance_px=TOLERANCE_PX)
+        drawn = pixels > 0
+        true.append(labels[drawn] > 0.5)
+        weight.append(pixels[drawn])
+        for k in keys:
+            column = traces.lengths_m() if k == "length" else traces.attributes[k]
+            values[k].append(np.asarray(column, dtype=float)[drawn])
+    true, weight = np.concatenate(true), np.concatenate(weight).astype(float)
+    return {k: pairwise_order(np.concatenate(values[k]), true, weight) for k in keys}
 
 
 def pairwise_order(score, true, weight) -> float:

@@ -629,7 +629,7 @@ def _with_joint_score(traces, detector: str, *, m_per_px: float, joint_width_px:
     if not trace_score.scoring():
         return traces
     features = trace_score.trace_features(traces, m_per_px=m_per_px, joint_width_px=joint_width_px)
-    score = trace_score.joint_score(features, detector) if traces.n_traces else np.zeros(0)
+    score = trace_score.joint_score(features, detector)
     return dataclasses.replace(traces, attributes={**traces.attributes, "joint_score": score})
 
 

@@ -55,16 +55,14 @@ def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title
     fig = _figure((10.0, 10.0 * h / w + 0.6))
     ax = fig.add_subplot()
     ax.imshow(shown, cmap="gray", extent=(-0.5, w - 0.5, h - 0.5, -0.5), interpolation="antialiased")
-    segments = trace_map.segments()
+    segments, shade_key = trace_map.segments(), _shade_key(trace_map)
     if segments.shape[0]:
         a = uv_to_rc(segments[:, :2], h, m_per_px)
         b = uv_to_rc(segments[:, 2:], h, m_per_px)
         lines = np.stack([a[:, ::-1], b[:, ::-1]], axis=1)  # (x=col, y=row) for matplotlib
         colours = np.array([to_rgba(c) for c in _segment_colours(trace_map, set_ids, "0.7")])
-        shade_key = _shade_key(trace_map)
         if shade_key is not None:
-            confidence = trace_map.attributes[shade_key]
-            alpha = np.clip(np.asarray(confidence, dtype=float), 0.0, 1.0)
+            alpha = np.clip(np.asarray(trace_map.attributes[shade_key], dtype=float), 0.0, 1.0)
             colours[:, 3] = 0.25 + 0.75 * np.nan_to_num(alpha)[trace_map.segment_trace_index()]
         ax.add_collection(LineCollection(lines, colors=colours, linewidths=1.2))
     window = trace_map.window_xy_m
@@ -78,7 +76,6 @@ def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title
     ax.set_xlim(-0.5, w - 0.5)
     ax.set_ylim(h - 0.5, -0.5)
     ax.set_axis_off()
-    shade_key = _shade_key(trace_map)
     shading = f", opacity = {shade_key.replace('_', ' ')}" if shade_key else ""
     ax.set_title(title or f"{trace_map.n_traces} traces{shading}", fontsize=10)
     fig.savefig(path, dpi=110)

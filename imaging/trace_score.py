@@ -25,6 +25,7 @@ without pickle).
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -39,25 +40,23 @@ FEATURE_NAMES = ("log_length_widths", "contrast", "log_band_widths", "straightne
 LOW_SCORE = 0.5
 
 _CACHE: dict[str, dict] = {}
-_SCORING = [True]
+_UNSCORED = [0]  # depth of nested unscored() blocks
 
 
 def scoring() -> bool:
     """Whether :func:`rockmass.imaging.extract` scores its traces (False only inside :func:`unscored`)."""
-    return _SCORING[-1]
+    return _UNSCORED[0] == 0
 
 
-class unscored:
+@contextmanager
+def unscored():
     """Context in which :func:`rockmass.imaging.extract` leaves out the ``joint_score`` attribute:
     for fitting the score's weights, before any exist (:mod:`rockmass.imaging.train_trace_score`)."""
-
-    def __enter__(self):
-        _SCORING.append(False)
-        return self
-
-    def __exit__(self, *exc):
-        _SCORING.pop()
-        return False
+    _UNSCORED[0] += 1
+    try:
+        yield
+    finally:
+        _UNSCORED[0] -= 1
 
 
 def trace_features(trace_map, *, m_per_px: float, joint_width_px: float) -> np.ndarray:
@@ -80,8 +79,8 @@ def trace_features(trace_map, *, m_per_px: float, joint_width_px: float) -> np.n
         return np.zeros((0, len(FEATURE_NAMES)))
     width = float(joint_width_px)
     lengths_px = np.asarray(trace_map.lengths_m(), dtype=float) / float(m_per_px)
-    chords = np.array([np.hypot(*(trace_map.polyline(i)[-1] - trace_map.polyline(i)[0]))
-                       for i in range(n)]) / float(m_per_px)
+    ends = np.array([trace_map.polyline(i)[[0, -1]] for i in range(n)])  # (n, 2 ends, 2)
+    chords = np.hypot(*(ends[:, 1] - ends[:, 0]).T) / float(m_per_px)
     band = np.asarray(trace_map.attributes["band_width_px"], dtype=float)
     return np.column_stack([np.log(np.maximum(lengths_px, 1e-9) / width),
                             np.asarray(trace_map.attributes["contrast"], dtype=float),

@@ -38,20 +38,22 @@ TRUE_SHARE = 0.5
 TOLERANCE_PX = 3.0
 
 
-def trace_labels(traces, truth, shape_px, m_per_px: float) -> np.ndarray:
-    """1 for each trace with at least :data:`TRUE_SHARE` of its 1-px drawing within
-    :data:`TOLERANCE_PX` of the truth's centre lines, else 0."""
+def trace_labels(traces, truth_lines, m_per_px: float, *, tolerance_px: float = TOLERANCE_PX):
+    """(labels, drawn pixels) of each trace: label 1 when at least :data:`TRUE_SHARE` of its 1-px
+    drawing on the grid of the bool mask ``truth_lines`` (the true centre lines, 1 px wide) lies
+    within ``tolerance_px`` of them, else 0; a trace that draws no pixel is 0 with 0 pixels."""
     import cv2
 
     from .metrics import render_traces
 
-    near = cv2.distanceTransform(np.where(render_traces(truth, shape_px, m_per_px), 0, 255)
-                                 .astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE) <= TOLERANCE_PX
-    labels = np.zeros(traces.n_traces)
+    near = cv2.distanceTransform(np.where(truth_lines, 0, 255).astype(np.uint8), cv2.DIST_L2,
+                                 cv2.DIST_MASK_PRECISE) <= tolerance_px
+    labels, pixels = np.zeros(traces.n_traces), np.zeros(traces.n_traces, dtype=np.int64)
     for i in range(traces.n_traces):
-        drawn = render_traces(traces.subset([i]), shape_px, m_per_px)
-        labels[i] = float(drawn.any() and near[drawn].mean() >= TRUE_SHARE)
-    return labels
+        drawn = render_traces(traces.subset([i]), near.shape, m_per_px)
+        pixels[i] = drawn.sum()
+        labels[i] = float(pixels[i] > 0 and near[drawn].mean() >= TRUE_SHARE)
+    return labels, pixels
 
 
 def fit_logistic(x, y, weight, *, penalty: float = 1e-3, iterations: int = 50):
@@ -94,6 +96,7 @@ def _faces(first_seed: int, n_field: int, n_plain: int):
 def training_traces(detector: str, first_seed: int, n_field: int, n_plain: int):
     """(features, labels, lengths in px) of the unfiltered traces of the training faces."""
     from .extract import ExtractParams, extract
+    from .metrics import render_traces
 
     params = ExtractParams(detector=detector, min_trace_contrast=float("-inf"), min_trace_width=0.0,
                            min_trace_length_px=20.0)
@@ -104,7 +107,8 @@ def training_traces(detector: str, first_seed: int, n_field: int, n_plain: int):
         traces = result.traces
         xs.append(trace_features(traces, m_per_px=face.m_per_px,
                                  joint_width_px=result.joint_width_px))
-        ys.append(trace_labels(traces, face.truth, face.image.shape, face.m_per_px))
+        truth = render_traces(face.truth, face.image.shape, face.m_per_px)
+        ys.append(trace_labels(traces, truth, face.m_per_px)[0])
         ws.append(traces.lengths_m() / face.m_per_px)
     return np.concatenate(xs), np.concatenate(ys), np.concatenate(ws)
 

@@ -64,8 +64,6 @@ def compute(args, document=None):
 
     import numpy as np
 
-    from .dfn import trace_map_statistics
-    from .fractal import box_count
     from .imaging import extract
     from .image_limits import check_image_pixels, max_pixels
     from .imaging.enhance import read_photo
@@ -119,12 +117,11 @@ def compute(args, document=None):
     if traces.n_traces >= 1:
         from .dfn.trace_validation import errors_text
 
-        stats = trace_map_statistics(traces, n_sets=args.n_sets, length_unit=unit)
+        stats, summary["statistics"] = _statistics(traces, args.n_sets, unit)
         set_ids = np.array(stats.traces.set_id, dtype=np.int64)
         validation = errors_text(stats.traces.validation_errors)
-        dimension = box_count(traces)
-        summary["statistics"] = {**stats.to_dict(), "Box-counting Dimension": dimension_entry(dimension)}
-        summary["statistics_confident"] = _confident_statistics(traces, args.n_sets, unit)
+        summary["statistics_confident"] = _confident_statistics(traces, args.n_sets, unit,
+                                                                summary["statistics"])
     else:
         summary["statistics"] = summary["statistics_confident"] = None
         summary["extraction"]["warnings"].append("no trace was found: nothing to analyse")
@@ -135,32 +132,40 @@ def compute(args, document=None):
     return summary, result, traces, image, set_ids, timings, settings
 
 
-def _confident_statistics(traces, n_sets, unit) -> dict:
-    """The statistics of the traces whose ``joint_score`` reaches
-    :data:`rockmass.imaging.trace_score.LOW_SCORE` (docs/imaging.md §7.1), with how many were left
-    out; ``statistics`` is None when none reaches it. The window (and so the area of P20, P21)
-    is that of all the traces. When the kept traces cannot carry the ``n_sets`` asked for (too
-    few distinct angles), their sets are chosen by BIC and ``note`` says why."""
-    import numpy as np
-
+def _statistics(traces, n_sets, unit):
+    """(TraceMapStatistics, its summary dict with the box-counting dimension) of a trace map."""
     from .dfn import trace_map_statistics
     from .fractal import box_count
+
+    stats = trace_map_statistics(traces, n_sets=n_sets, length_unit=unit)
+    return stats, {**stats.to_dict(), "Box-counting Dimension": dimension_entry(box_count(traces))}
+
+
+def _confident_statistics(traces, n_sets, unit, every: dict) -> dict:
+    """The statistics of the traces whose ``joint_score`` reaches
+    :data:`rockmass.imaging.trace_score.LOW_SCORE` (docs/imaging.md §7.1), with how many were left
+    out; ``statistics`` is None when none reaches it, and ``every`` (the statistics of all the
+    traces) when none is left out. The window (and so the area of P20, P21) is that of all the
+    traces. When the kept traces cannot carry the ``n_sets`` asked for (too few distinct angles),
+    their sets are chosen by BIC and ``note`` says why."""
+    import numpy as np
+
     from .imaging.trace_score import LOW_SCORE
 
     keep = np.asarray(traces.attributes["joint_score"], dtype=float) >= LOW_SCORE
     entry = {"min_joint_score": LOW_SCORE, "traces_kept": int(keep.sum()),
              "traces_left_out": int((~keep).sum()), "statistics": None}
-    if keep.any():
+    if keep.all():
+        entry["statistics"] = every
+    elif keep.any():
         confident = traces.subset(keep)
         try:
-            stats = trace_map_statistics(confident, n_sets=n_sets, length_unit=unit)
+            entry["statistics"] = _statistics(confident, n_sets, unit)[1]
         except ValueError as exc:  # n_sets fitted all traces but not the fewer kept ones
             if n_sets is None:
                 raise
-            stats = trace_map_statistics(confident, n_sets=None, length_unit=unit)
+            entry["statistics"] = _statistics(confident, None, unit)[1]
             entry["note"] = f"{exc}: the kept traces' sets were chosen by BIC"
-        entry["statistics"] = {**stats.to_dict(),
-                               "Box-counting Dimension": dimension_entry(box_count(confident))}
     return entry
 
 

@@ -58,9 +58,14 @@ def test_fit_needs_both_classes():
 
 
 def test_labels_mark_the_trace_on_the_truth():
-    truth = TraceMap.from_polylines([[(0.1, 0.5), (0.9, 0.5)]])
+    # truth: row 50 of a 100 x 100 grid at 0.01 m/px (v = 0.5 m); one trace 1 px beside it, one
+    # 30 px away; both 80 px long (81 pixels drawn)
+    truth = np.zeros((100, 100), bool)
+    truth[49, 10:91] = True
     traces = TraceMap.from_polylines([[(0.1, 0.51), (0.9, 0.51)], [(0.1, 0.2), (0.9, 0.2)]])
-    assert trace_labels(traces, truth, (100, 100), 0.01).tolist() == [1.0, 0.0]
+    labels, pixels = trace_labels(traces, truth, 0.01)
+    assert labels.tolist() == [1.0, 0.0] and pixels.tolist() == [81, 81]
+    assert trace_labels(traces, truth, 0.01, tolerance_px=35.0)[0].tolist() == [1.0, 1.0]
 
 
 def test_extracted_traces_carry_a_score_and_a_band_width():

@@ -176,8 +176,14 @@ def test_confident_statistics_fall_back_to_bic_when_too_few_traces_are_kept():
     traces = TraceMap.from_polylines(
         [[(0.1, 0.1), (0.9, 0.1)], [(0.1, 0.3), (0.8, 0.9)], [(0.2, 0.2), (0.9, 0.8)]],
         window=[(0, 0), (1, 0), (1, 1), (0, 1)], attributes={"joint_score": [0.9, 0.2, 0.3]})
-    entry = _confident_statistics(traces, 2, "m")
+    entry = _confident_statistics(traces, 2, "m", {})
     assert (entry["traces_kept"], entry["traces_left_out"]) == (1, 2)
     assert entry["statistics"]["Number of Traces"]["value"] == 1
     assert "chosen by BIC" in entry["note"]
-    assert _confident_statistics(traces, None, "m").get("note") is None
+    assert _confident_statistics(traces, None, "m", {}).get("note") is None
+    # none left out: the statistics of all traces are reused, not fitted again
+    every = {"Number of Traces": {"value": 3}}
+    all_kept = TraceMap.from_polylines([traces.polyline(i) for i in range(3)],
+                                       window=[(0, 0), (1, 0), (1, 1), (0, 1)],
+                                       attributes={"joint_score": [0.9, 0.6, 0.5]})
+    assert _confident_statistics(all_kept, 2, "m", every)["statistics"] is every
