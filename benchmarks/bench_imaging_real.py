@@ -2,7 +2,7 @@
 
     python benchmarks/bench_imaging_real.py [--quick] [--detectors ridge,learned] [--splits val,train]
                                             [--no-synthetic] [--no-settings]
-                                            [--face-masks full,border,off]
+                                            [--face-masks full,border,off] [--upsampled 2,4]
 
 1. Real faces: ``../shared/data/rock-face-fractures`` (natural rock faces, 300-400 px, with
    hand-traced major fractures painted red about 5 px wide; AGPL-3.0, read from the shared data
@@ -37,6 +37,14 @@
 
 4. Face mask alone (with ``--face-masks``): :func:`rockmass.imaging.face_mask.face_mask` on a
    12 MP (3000 x 4000) RGB photo (the moderate face of section 3 in colour), best of 5, one core.
+
+5. Photo size (with ``--upsampled``, e.g. ``2,4``): the ``val/`` photos enlarged that many times
+   (bicubic) with their labels, scored at the tolerance times the enlargement, at the defaults with
+   the joint width not given and given as 3 px times the enlargement. The same scenes at more
+   pixels: how far the chain's pixel-valued settings tie it to the photos' size.
+
+Each photo is extracted once per setting: the joint-score rows and section 1b reuse the traces
+(and report the time of that one extraction).
 
 The header names the shipped model file and its size. Rows also go to
 benchmarks/results/bench_imaging_real.json (``..._quick.json`` with ``--quick``).
@@ -81,14 +89,17 @@ LEARNED_SETTINGS = (
 LABEL_MIN_TRACE_PX = 10.0
 
 
-def label_skeleton(path: Path) -> np.ndarray:
-    """Skeleton of the red strokes of a label image (bool mask)."""
+def label_skeleton(path: Path, upsample: float = 1.0) -> np.ndarray:
+    """Skeleton of the red strokes of a label image (bool mask), the label image enlarged
+    ``upsample`` times first (nearest neighbour)."""
     import cv2
     from skimage.morphology import skeletonize
 
     bgr = cv2.imread(str(path), cv2.IMREAD_COLOR)
     if bgr is None:
         raise OSError(f"{path}: cannot read the label image")
+    if upsample != 1.0:
+        bgr = cv2.resize(bgr, None, fx=upsample, fy=upsample, interpolation=cv2.INTER_NEAREST)
     red = (bgr[..., 2] > 128) & (bgr[..., 1] < 100) & (bgr[..., 0] < 100)
     return skeletonize(red)
 
@@ -118,26 +129,51 @@ def confident(traces, min_joint_score):
     return traces.subset(np.asarray(traces.attributes["joint_score"]) >= min_joint_score)
 
 
-def score_real(pairs, params, joint_width_px: float, min_joint_score=None) -> dict:
-    """Mean and pooled scores of one setting over the labelled images (of the traces whose joint
-    score reaches ``min_joint_score``, when given)."""
+_EXTRACTIONS: dict = {}
+
+
+def _extract_real(image_path: Path, shape, params, joint_width_px, upsample: float):
+    """(traces, seconds) of one real photo (enlarged to ``shape`` when ``upsample`` != 1); each
+    (photo, settings) is extracted once per run and its first time reported again."""
     import cv2
 
     from rockmass.imaging.extract import extract
+
+    key = (str(image_path), repr(params), joint_width_px, upsample)
+    if key not in _EXTRACTIONS:
+        image = cv2.imread(str(image_path), cv2.IMREAD_COLOR)[..., ::-1]  # RGB, as read_photo
+        if upsample != 1.0:
+            image = cv2.resize(image, shape[::-1], interpolation=cv2.INTER_CUBIC)
+        t0 = time.perf_counter()
+        result = extract(np.ascontiguousarray(image), m_per_px=1.0, joint_width_px=joint_width_px,
+                         params=params)
+        _EXTRACTIONS[key] = (result.traces, time.perf_counter() - t0)
+    return _EXTRACTIONS[key]
+
+
+def score_real(pairs, params, joint_width_px: float | None, min_joint_score=None,
+               upsample: float = 1.0) -> dict:
+    """Mean and pooled scores of one setting over the labelled images (of the traces whose joint
+    score reaches ``min_joint_score``, when given). With ``upsample`` > 1 each photo is enlarged
+    that many times (bicubic) and its label with it, and the tolerance grows in proportion: the
+    same scene at a higher pixel count. ``band_px`` is the length-weighted median of the traces'
+    ``band_width_px``."""
     from rockmass.imaging.metrics import raster_counts, render_traces
 
     counts, elapsed, megapixels, n_traces = [], 0.0, 0.0, np.zeros(2)
+    bands, lengths = [], []
     for image_path, label_path in pairs:
-        truth = label_skeleton(label_path)
-        image = cv2.imread(str(image_path), cv2.IMREAD_COLOR)[..., ::-1]  # RGB, as read_photo
-        t0 = time.perf_counter()
-        result = extract(image, m_per_px=1.0, joint_width_px=joint_width_px, params=params)
-        elapsed += time.perf_counter() - t0
+        truth = label_skeleton(label_path, upsample)
+        traces, seconds = _extract_real(image_path, truth.shape, params, joint_width_px, upsample)
+        elapsed += seconds
         megapixels += truth.size / 1e6
-        traces = confident(result.traces, min_joint_score)
+        traces = confident(traces, min_joint_score)
         drawn = render_traces(traces, truth.shape, 1.0)
-        counts.append(raster_counts(drawn, truth, tolerance_px=TOLERANCE_PX))
+        counts.append(raster_counts(drawn, truth, tolerance_px=TOLERANCE_PX * upsample))
         n_traces += (traces.n_traces, label_trace_count(truth))
+        if traces.n_traces:
+            bands.append(np.asarray(traces.attributes["band_width_px"], dtype=float))
+            lengths.append(traces.lengths_m())
     c = np.array(counts, dtype=float).reshape(-1, 4)  # matched drawn, drawn, matched true, true
     with np.errstate(invalid="ignore", divide="ignore"):
         p, r = c[:, 0] / c[:, 1], c[:, 2] / c[:, 3]
@@ -147,7 +183,16 @@ def score_real(pairs, params, joint_width_px: float, min_joint_score=None) -> di
                 R=float(np.nanmean(r)), F1_pooled=float(2 * pp * pr / max(pp + pr, 1e-12)),
                 dP21_pct=float(100 * (c[:, 1].sum() / max(c[:, 3].sum(), 1) - 1)),
                 dP20_pct=float(100 * (n_traces[0] / max(n_traces[1], 1) - 1)),
-                s_per_image=elapsed / max(len(pairs), 1), MP_per_s=megapixels / max(elapsed, 1e-9))
+                s_per_image=elapsed / max(len(pairs), 1), MP_per_s=megapixels / max(elapsed, 1e-9),
+                band_px=_weighted_median(np.concatenate(bands), np.concatenate(lengths))
+                if bands else float("nan"))
+
+
+def _weighted_median(values, weights) -> float:
+    """The value below which half the total weight lies."""
+    order = np.argsort(values)
+    cumulative = np.cumsum(weights[order])
+    return float(values[order][np.searchsorted(cumulative, 0.5 * cumulative[-1])])
 
 
 def score_synthetic(make_face, seeds, params, min_joint_score=None) -> dict:
@@ -174,18 +219,14 @@ def trace_ordering(pairs, params, joint_width_px: float) -> dict:
     """How well each per-trace attribute orders the traces: the probability that a random true
     trace ranks above a random false one (ties count half), each trace weighted by its drawn length
     (a true trace has at least half its pixels within the tolerance of a label; 0.5 is chance)."""
-    import cv2
-
-    from rockmass.imaging.extract import extract
     from rockmass.imaging.train_trace_score import trace_labels
 
     keys = ("joint_score", "confidence", "contrast", "length")
     values, true, weight = {k: [] for k in keys}, [], []
     for image_path, label_path in pairs:
-        image = cv2.imread(str(image_path), cv2.IMREAD_COLOR)[..., ::-1]
-        traces = extract(image, m_per_px=1.0, joint_width_px=joint_width_px, params=params).traces
-        labels, pixels = trace_labels(traces, label_skeleton(label_path), 1.0,
-                                      tolerance_px=TOLERANCE_PX)
+        truth = label_skeleton(label_path)
+        traces, _ = _extract_real(image_path, truth.shape, params, joint_width_px, 1.0)
+        labels, pixels = trace_labels(traces, truth, 1.0, tolerance_px=TOLERANCE_PX)
         drawn = pixels > 0
         true.append(labels[drawn] > 0.5)
         weight.append(pixels[drawn])
@@ -228,6 +269,9 @@ def main(argv=None) -> int:
     parser.add_argument("--no-synthetic", action="store_true", help="real images only")
     parser.add_argument("--no-settings", action="store_true",
                         help="real images at the defaults only (not the other learned settings)")
+    parser.add_argument("--upsampled", default="",
+                        help="comma-separated enlargements of the val/ photos for section 5 "
+                             "(e.g. 2,4); default: no section 5")
     parser.add_argument("--face-masks", default="",
                         help="comma-separated ExtractParams.face_mask modes to compare on the real "
                              "faces (full, border, off); default: the default mode only")
@@ -332,6 +376,23 @@ def main(argv=None) -> int:
         print("\n4. face mask alone (12 MP RGB, best of 5; one core)")
         print(table(rows, [("mode", "s"), ("MP", ".1f"), ("time_s", ".3f")]))
         payload["face_mask_time"] = rows
+    enlargements = [float(f) for f in args.upsampled.split(",") if f.strip()]
+    if enlargements and (DATA / "val" / "images").is_dir():
+        pairs = real_pairs("val")[:12] if args.quick else real_pairs("val")
+        rows = []
+        for detector in detectors:
+            for factor in [1.0, *enlargements]:
+                for width in ([None] if factor == 1.0 else [None, 3.0 * factor]):
+                    row = score_real(pairs, ExtractParams(detector=detector), width, upsample=factor)
+                    rows.append({"detector": detector, "enlarged": factor,
+                                 "joint_width_px": "default" if width is None else f"{width:g}", **row})
+        print(f"\n5. the val/ photos enlarged (bicubic; labels with them, tolerance {TOLERANCE_PX:g} px "
+              "x the enlargement): the same scenes at more pixels, the joint width not given or given "
+              "in proportion; band_px = length-weighted median band width of the traces")
+        print(table(rows, [("detector", "s"), ("enlarged", "g"), ("joint_width_px", "s"),
+                           ("F1", ".3f"), ("P", ".3f"), ("R", ".3f"), ("dP21_pct", "+.0f"),
+                           ("band_px", ".1f"), ("s_per_image", ".2f")]))
+        payload["enlarged"] = rows
     suffix = "_face_mask" if masks else ""
     path = save(("bench_imaging_real_quick" if args.quick else "bench_imaging_real") + suffix, payload)
     print(f"\nrows saved to {path}")

@@ -469,8 +469,10 @@ class Extraction:
         much the pixel lengths were multiplied).
     joint_width_px : float
         Expected joint width used, input pixels.
-    joint_width_source : {"default", "joint_width_px", "joint_width_m"}
-        Where it came from.
+    joint_width_source : str
+        Where it came from: "default", "joint_width_px" or "joint_width_m", the last two followed
+        by ", capped" when the learned detector used its default width, narrower than the one
+        given (see :func:`extract`).
     face_orientation : (dip_deg, dip_direction_deg) or None
         The face plane, for placing the traces in 3D later.
     timings_s : mapping of str to float
@@ -817,7 +819,10 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         Instead of ``m_per_px``: two pixel positions and their distance in metres (see
         :func:`scale_from_control_points`). With neither, the result is in pixels, with a warning.
     joint_width_px : float, optional
-        Expected joint width in input pixels, > 0; sets the ridge filter scales (σ ≈ w / 2).
+        Expected joint width in input pixels, > 0; sets the ridge filter scales (σ ≈ w / 2). The
+        learned detector uses it for its width filter, linking and joint scores up to the
+        default width of the working grid, and caps a wider one with a warning: its probability
+        bands do not widen with the joints (docs/imaging.md §3.1).
     joint_width_m : float, optional
         Instead of ``joint_width_px``: the width in metres on the face (needs a scale). With
         neither, :data:`DEFAULT_JOINT_WIDTH_PX` pixels of the working grid (times
@@ -897,6 +902,14 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
                  else f"joint_width_m = {joint_width_m:g} m ({width_work / factor:.4g} px)")
         raise ValueError(f"{given} is not narrower than the {h} x {w} pixel image; give the "
                          "width of one joint (default 3 px of the working grid)")
+    if params.detector == "learned" and width_work > DEFAULT_JOINT_WIDTH_PX * scale_of_grid:
+        notes.append(f"the joint width given ({width_work / factor:.4g} px, "
+                     f"{width_work:.4g} px of the working grid) is wider than the learned detector "
+                     f"uses: its probability bands do not widen with the joints (docs/imaging.md "
+                     f"§3.1), so its width filter, linking and joint scores use "
+                     f"{DEFAULT_JOINT_WIDTH_PX * scale_of_grid:g} px of the working grid; "
+                     f"--detector ridge sets its filter scales from the width given")
+        width_work, width_source = DEFAULT_JOINT_WIDTH_PX * scale_of_grid, f"{width_source}, capped"
     if scale_of_grid > 1.0:
         notes.append(f"working grid {work_shape[0] * work_shape[1] / 1e6:.1f} MP, above the "
                      f"{REFERENCE_MEGAPIXELS:g} MP the pixel settings are given for: pixel lengths "

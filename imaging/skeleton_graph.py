@@ -298,20 +298,33 @@ def prune_spurs(graph: SkeletonGraph, min_length_px: float) -> SkeletonGraph:
         if not spurs:
             break
         # where all branches of a node but one (or all) are spurs, the node is a forked line end
-        # (or a small isolated star): keep its longest spur, which continues the line
+        # (or a small isolated star): keep the spur that continues the line, the straightest on
+        # from the one other branch (the longest spur of a star)
         by_node: dict[int, list[int]] = {}
         for b in spurs:
             node = work.src[b] if degree[work.src[b]] >= 3 else work.dst[b]
             by_node.setdefault(node, []).append(b)
         for node, bs in by_node.items():
             if degree[node] - len(bs) <= 1:
-                bs = sorted(bs, key=work.length)[:-1]
+                stems = [b for b, _ in table[node] if b not in bs]
+                bs.remove(_continuation(work, node, stems[0], bs) if stems else max(bs, key=work.length))
             for b in bs:
                 work.alive[b] = False
                 work.partners.pop((b, 0), None)
                 work.partners.pop((b, 1), None)
         work.merge_pass_through()
     return work.freeze()
+
+
+def _continuation(work: _Graph, node: int, stem: int, spurs: list[int]) -> int:
+    """The spur at ``node`` that continues branch ``stem`` with the least turn (directions as in
+    :func:`end_directions`, default reach)."""
+    def leaving(b):
+        chain = work.branches[b] if work.src[b] == node else work.branches[b][::-1]
+        return _direction(chain, 2.0, 12.0)
+
+    into = leaving(stem)
+    return min(spurs, key=lambda b: (_deviation_deg(into, leaving(b)), -work.length(b)))
 
 
 def _unit(vector) -> np.ndarray:
@@ -359,15 +372,29 @@ def _deviation_deg(d_a: np.ndarray, d_b: np.ndarray) -> float:
     return float(np.degrees(np.arccos(cosine)))
 
 
-def _best_pairing(directions: list[np.ndarray], max_turn_deg: float) -> list[tuple[int, int]]:
-    """Greedy straight-through pairs among branch directions at a node, each turn <= max_turn_deg."""
+#: At a junction, a pair that takes in a short dangling branch (see :func:`chain_traces`) must be
+#: straighter than a pair of through-branches by this much to be preferred, degrees.
+SHORT_DANGLING_TURN_PENALTY_DEG = 15.0
+
+
+def _best_pairing(directions: list[np.ndarray], max_turn_deg: float,
+                  short_dangling: list[bool] | None = None) -> list[tuple[int, int]]:
+    """Greedy straight-through pairs among branch directions at a node, each turn <= max_turn_deg.
+
+    Pairs are taken straightest first, a pair with a ``short_dangling`` branch ranked as if it
+    turned :data:`SHORT_DANGLING_TURN_PENALTY_DEG` more.
+    """
     n = len(directions)
-    candidates = sorted((_deviation_deg(directions[i], directions[j]), i, j)
-                        for i in range(n) for j in range(i + 1, n))
+    penalty = [SHORT_DANGLING_TURN_PENALTY_DEG if short_dangling and short_dangling[i] else 0.0
+               for i in range(n)]
+    candidates = []
+    for i in range(n):
+        for j in range(i + 1, n):
+            turn = _deviation_deg(directions[i], directions[j])
+            if turn <= max_turn_deg:
+                candidates.append((turn + max(penalty[i], penalty[j]), i, j))
     used, pairs = set(), []
-    for turn, i, j in candidates:
-        if turn > max_turn_deg:
-            break
+    for _, i, j in sorted(candidates):
         if i not in used and j not in used:
             pairs.append((i, j))
             used.update((i, j))
@@ -513,6 +540,20 @@ def bridge_gaps(graph: SkeletonGraph, *, max_distance_px: float, max_angle_deg: 
                          graph.src, graph.dst, partners)
 
 
+def _short_dangling(graph: SkeletonGraph, partner: dict, max_length_px: float) -> np.ndarray:
+    """(n_branches,) bool: branches shorter than ``max_length_px`` with one end free (a degree-1
+    node not bridged to another end) and the other at a junction (degree 3 or more)."""
+    degree = graph.degrees()
+    lengths = graph.branch_lengths_px()
+    free_end = [(degree[graph.src[b]] == 1 and (b, 0) not in partner,
+                 degree[graph.dst[b]] == 1 and (b, 1) not in partner) for b in range(graph.n_branches)]
+    at_junction = [(degree[graph.src[b]] >= 3, degree[graph.dst[b]] >= 3)
+                   for b in range(graph.n_branches)]
+    return np.array([lengths[b] < max_length_px
+                     and ((free_end[b][0] and at_junction[b][1]) or (free_end[b][1] and at_junction[b][0]))
+                     for b in range(graph.n_branches)], dtype=bool)
+
+
 def chain_traces(graph: SkeletonGraph, *, max_turn_deg: float = 30.0, min_length_px: float = 0.0,
                  skip_px: float = 2.0, reach_px: float = 12.0) -> list[np.ndarray]:
     """Join branches into traces: straight through junctions, across bridged gaps.
@@ -523,7 +564,11 @@ def chain_traces(graph: SkeletonGraph, *, max_turn_deg: float = 30.0, min_length
     max_turn_deg : float, default 30.0
         At a junction, two branches continue one trace when the path through them turns by at most
         this; pairs are taken greedily, straightest first. So an X gives two traces, and a T gives
-        the bar as one trace with the stem ending at it.
+        the bar as one trace with the stem ending at it. A *short dangling* branch (shorter than
+        ``2 * reach_px``, from the junction to a free end) ranks as if it turned
+        :data:`SHORT_DANGLING_TURN_PENALTY_DEG` more: its direction is measured over a few pixels
+        bent by the junction, and a texture spur just over the pruning length would otherwise take
+        a line's continuation and leave two overlapping traces.
     min_length_px : float, default 0.0
         Traces shorter than this (pixels, along the chain) are dropped.
     skip_px, reach_px : float
@@ -545,6 +590,7 @@ def chain_traces(graph: SkeletonGraph, *, max_turn_deg: float = 30.0, min_length
     for b in range(n):
         at_node.setdefault(int(graph.src[b]), []).append((b, 0))
         at_node.setdefault(int(graph.dst[b]), []).append((b, 1))
+    short_dangling = _short_dangling(graph, partner, 2.0 * reach_px)
     for node, ends in at_node.items():
         free = [e for e in ends if e not in partner]
         if len(free) == 2 and len(ends) == 2 and free[0][0] != free[1][0]:
@@ -552,7 +598,8 @@ def chain_traces(graph: SkeletonGraph, *, max_turn_deg: float = 30.0, min_length
             continue
         if len(free) < 2:
             continue
-        for i, j in _best_pairing([directions[e] for e in free], max_turn_deg):
+        for i, j in _best_pairing([directions[e] for e in free], max_turn_deg,
+                                  [bool(short_dangling[b]) for b, _ in free]):
             partner[free[i]], partner[free[j]] = free[j], free[i]
 
     visited = np.zeros(n, dtype=bool)

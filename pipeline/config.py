@@ -141,7 +141,8 @@ class ImagingConfig(StrictModel):
         Scale, metres per input pixel, > 0. Without it (and without control points on the command
         line) the traces are in pixels and every output says so.
     joint_width_px : float, optional
-        Expected joint width in input pixels, > 0; sets the ridge filter scales. Default: 3 pixels
+        Expected joint width in input pixels, > 0; sets the ridge filter scales (the learned
+        detector caps it at the default, and warns). Default: 3 pixels
         of the working grid (the photo down-sampled to ``params.max_megapixels``), the same view of
         a joint at any photo size.
     joint_width_m : float, optional

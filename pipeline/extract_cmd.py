@@ -40,8 +40,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                        help="two pixel positions and the distance between them on the face, metres")
     width = p.add_mutually_exclusive_group()
     width.add_argument("--joint-width", type=float, dest="joint_width_px", metavar="PX",
-                       help="expected joint width in pixels of the photo (default: 3 pixels of the "
-                            "working grid, the photo down-sampled to max_megapixels)")
+                       help="expected joint width in pixels of the photo (default: 3 pixels of "
+                            "the working grid, the photo down-sampled to max_megapixels; the "
+                            "learned detector caps a wider one at that)")
     width.add_argument("--joint-width-m", type=float, dest="joint_width_m", metavar="M",
                        help="expected joint width in metres on the face (needs a scale)")
     p.add_argument("--face-dip", type=float, dest="face_dip_deg", help="dip of the face plane, deg")

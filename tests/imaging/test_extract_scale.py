@@ -10,6 +10,7 @@ import json
 from dataclasses import replace
 
 import cv2
+import numpy as np
 import pytest
 
 from rockmass.accuracy import trace_accuracy
@@ -62,19 +63,38 @@ def test_pixel_settings_scaled_to_the_grid_keep_the_traces_the_same_at_any_resol
 
 def test_the_default_joint_width_is_three_pixels_of_the_working_grid():
     face = synthetic_face("easy", seed=5, shape_px=(600, 900), m_per_px=0.01)
-    result = extract(face.image, m_per_px=0.01, params=ExtractParams(max_megapixels=0.135))
+    params = ExtractParams(max_megapixels=0.135, detector="ridge")
+    result = extract(face.image, m_per_px=0.01, params=params)
     factor = result.scale.work_factor
     assert factor == pytest.approx(0.5, rel=0.01)
     assert result.joint_width_px == pytest.approx(DEFAULT_JOINT_WIDTH_PX / factor)
     assert result.joint_width_source == "default"
-    given = extract(face.image, m_per_px=0.01, joint_width_px=3.0,
-                    params=ExtractParams(max_megapixels=0.135))
+    given = extract(face.image, m_per_px=0.01, joint_width_px=3.0, params=params)
     assert (given.joint_width_px, given.joint_width_source) == (3.0, "joint_width_px")
+
+
+def test_the_learned_detector_caps_a_wide_joint_width_and_says_so():
+    # its probability bands do not widen with the joints, so a width filter in a wide given joint
+    # width removed nearly every trace of a large photo (benchmarks/bench_imaging_real.py section 5)
+    face = synthetic_face("easy", seed=5, shape_px=(300, 450), m_per_px=0.02)
+    plain = extract(face.image, m_per_px=0.02)
+    wide = extract(face.image, m_per_px=0.02, joint_width_px=12.0)
+    assert (wide.joint_width_px, wide.joint_width_source) == (plain.joint_width_px,
+                                                              "joint_width_px, capped")
+    assert any("joint width given (12 px, 12 px of the working grid) is wider" in w
+               for w in wide.warnings)
+    assert wide.traces.n_traces == plain.traces.n_traces > 0
+    for i in range(plain.traces.n_traces):
+        np.testing.assert_array_equal(wide.traces.polyline(i), plain.traces.polyline(i))
+    narrow = extract(face.image, m_per_px=0.02, joint_width_px=2.0)  # a narrower one is used
+    assert (narrow.joint_width_px, narrow.joint_width_source) == (2.0, "joint_width_px")
+    assert not any("wider" in w for w in narrow.warnings)
 
 
 def test_a_joint_width_in_metres_is_divided_by_the_scale():
     face = synthetic_face("easy", seed=5, shape_px=(300, 450), m_per_px=0.02)
-    result = extract(face.image, m_per_px=0.02, joint_width_m=0.08)
+    result = extract(face.image, m_per_px=0.02, joint_width_m=0.08,
+                     params=ExtractParams(detector="ridge"))
     assert result.joint_width_px == pytest.approx(4.0)
     assert result.joint_width_source == "joint_width_m"
     assert result.summary()["joint_width_source"] == "joint_width_m"
@@ -127,7 +147,7 @@ def small_face_png(tmp_path_factory):
 
 def test_cli_joint_width_in_metres_reaches_the_summary(small_face_png, tmp_path, capsys):
     assert main(["extract", str(small_face_png), "--m-per-px", "0.02", "--joint-width-m", "0.1",
-                 "--out", str(tmp_path / "out"), "--json"]) == 0
+                 "--detector", "ridge", "--out", str(tmp_path / "out"), "--json"]) == 0
     extraction = json.loads(capsys.readouterr().out)["extraction"]
     assert extraction["joint_width_px"] == pytest.approx(5.0)
     assert extraction["joint_width_source"] == "joint_width_m"
@@ -137,7 +157,7 @@ def test_cli_flag_replaces_the_config_files_width(small_face_png, tmp_path, caps
     config = tmp_path / "c.toml"
     config.write_text("[imaging]\nm_per_px = 0.02\njoint_width_px = 4.0\n")
     assert main(["extract", str(small_face_png), "--config", str(config), "--joint-width-m", "0.1",
-                 "--out", str(tmp_path / "out"), "--json"]) == 0
+                 "--detector", "ridge", "--out", str(tmp_path / "out"), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["extraction"]["joint_width_px"] == pytest.approx(5.0)
 
 

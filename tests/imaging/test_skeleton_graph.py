@@ -62,6 +62,20 @@ def test_three_pixel_spur_is_pruned_and_line_rejoined():
     assert graph.branch_lengths_px()[0] == 49.0
 
 
+def test_forked_line_end_keeps_the_straight_prong_not_the_longer_one():
+    # a line ending in a fork of two short prongs, 5 px straight on and 7 diagonal steps (9.9 px)
+    # to the side: the straight one continues the line (the longer one would hook its end)
+    skel = np.zeros((40, 80), dtype=bool)
+    skel[20, 5:51] = True  # the line, ending at the fork node (20, 50)
+    skel[20, 51:56] = True  # straight prong, 5 px
+    for k in range(1, 8):
+        skel[20 + k, 50 + k] = True  # diagonal prong
+    graph = prune_spurs(build_graph(skel), 10.0)
+    assert graph.n_branches == 1
+    branch = graph.branch(0)
+    assert np.all(branch[:, 0] == 20) and branch[:, 1].max() == 55
+
+
 def test_crossing_lines_give_two_traces_not_four():
     mask = _thick([(10, 60, 110, 60), (20, 10, 100, 110)], width=5)
     traces = _chain(mask)
@@ -77,6 +91,50 @@ def test_t_stem_ends_at_the_bar():
     top = stem[np.argmin(stem[:, 0])]
     assert abs(top[0] - 30) <= 3 and abs(top[1] - 60) <= 2  # the stem reaches the bar's centre line
     assert np.ptp(bar[:, 1]) > 95
+
+
+def _line_with_texture_spur():
+    """A 1-px vertical line that steps one column aside twice near a junction, as a skeleton does
+    beside a small blob, and an 11-px spur from that junction, 24 degrees off the line (the
+    pixels of a case met on a photograph)."""
+    skel = np.zeros((300, 260), dtype=bool)
+    skel[0:128, 200] = True
+    skel[128:139, 201] = True
+    skel[139, 202] = True  # the junction
+    skel[140:147, 202] = True
+    skel[147:300, 201] = True
+    for r, c in [(130, 206), (131, 206), (132, 205), (133, 205), (134, 204), (135, 204), (136, 204),
+                 (137, 204), (138, 203)]:
+        skel[r, c] = True
+    return skel
+
+
+def test_short_dangling_spur_does_not_take_the_lines_continuation():
+    # measured over 2-12 px, the line's two halves turn by 11.4 degrees through the junction and the
+    # spur with the lower half by 10.2: pairing by turn alone chained the spur with the lower half
+    # and left two traces overlapping beside the spur; the spur is a short dangling branch, ranked
+    # 15 degrees worse, so the line is chained straight through
+    graph = prune_spurs(build_graph(_line_with_texture_spur()), 10.0)
+    assert graph.n_branches == 3  # the spur (10.7 px) survives pruning
+    traces = chain_traces(graph, max_turn_deg=35.0, skip_px=2.0, reach_px=12.0)
+    line = max(traces, key=_length)
+    assert line[:, 0].min() == 0 and line[:, 0].max() == 299
+    assert np.all(line[:, 1] <= 202)  # it does not run through the spur
+    assert sorted(len(t) for t in traces) == [10, 300]  # one pixel a row, and the spur
+
+
+def test_long_branch_beats_short_one_only_within_the_penalty():
+    # a straight stub dangling 8 px past a junction keeps the line's continuation over a long branch
+    # turning 30 degrees (15 + 0 < 30): the penalty ranks, it does not forbid
+    skel = np.zeros((200, 200), dtype=bool)
+    skel[100, 20:100] = True  # the line, coming from the left
+    skel[100, 101:109] = True  # the straight stub, 8 px
+    for k in range(1, 90):  # a long branch at 30 degrees
+        skel[100 + round(k * np.sin(np.radians(30))), 100 + k] = True
+    skel[100, 100] = True
+    traces = chain_traces(build_graph(skel), max_turn_deg=35.0)
+    straight = [t for t in traces if np.ptp(t[:, 0]) == 0]
+    assert max(_length(t) for t in straight) >= 87
 
 
 def test_six_pixel_collinear_gap_is_bridged():
