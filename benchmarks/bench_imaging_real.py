@@ -91,17 +91,18 @@ LABEL_MIN_TRACE_PX = 10.0
 
 def label_skeleton(path: Path, upsample: float = 1.0) -> np.ndarray:
     """Skeleton of the red strokes of a label image (bool mask), the label image enlarged
-    ``upsample`` times first (nearest neighbour)."""
+    ``upsample`` times first (nearest neighbour); :mod:`rockmass.imaging.labels`."""
     import cv2
-    from skimage.morphology import skeletonize
 
+    from rockmass.imaging.labels import label_centre_lines
+
+    if upsample == 1.0:
+        return label_centre_lines(path)
     bgr = cv2.imread(str(path), cv2.IMREAD_COLOR)
     if bgr is None:
         raise OSError(f"{path}: cannot read the label image")
-    if upsample != 1.0:
-        bgr = cv2.resize(bgr, None, fx=upsample, fy=upsample, interpolation=cv2.INTER_NEAREST)
-    red = (bgr[..., 2] > 128) & (bgr[..., 1] < 100) & (bgr[..., 0] < 100)
-    return skeletonize(red)
+    big = cv2.resize(bgr, None, fx=upsample, fy=upsample, interpolation=cv2.INTER_NEAREST)
+    return label_centre_lines(np.ascontiguousarray(big[..., ::-1]))
 
 
 def label_trace_count(truth: np.ndarray) -> int:

@@ -219,6 +219,12 @@ class ExtractParams:
         and on the plain synthetic faces the band costs 0.008 (0.978 -> 0.970, ridge)
         (``benchmarks/bench_imaging_real.py --face-masks``): hence "border" by default,
         "full" for photos showing lining, sky or machinery (docs/imaging.md §2.1).
+    pixel_model : str or None, default None
+        The learned detector's model file (``.npz``); None: the one shipped in the package
+        (:data:`rockmass.imaging.learned.MODEL_FILE`). A model trained on the user's own labelled
+        photographs by ``python -m rockmass.imaging.train_pixel_model --photos DIR --labels DIR``
+        (docs/imaging.md §3.2); a relative path is taken from the working directory. The
+        thresholds and trace filters above were chosen for the shipped model.
     """
 
     max_megapixels: float = 4.0
@@ -255,6 +261,7 @@ class ExtractParams:
     min_trace_width: float | None = None
     simplify_tolerance_px: float = 1.0
     face_mask: str = "border"
+    pixel_model: str | None = None
 
     def __post_init__(self) -> None:
         if self.detector is None:  # the default: learned, except for bright joints
@@ -269,6 +276,9 @@ class ExtractParams:
         if self.face_mask not in FACE_MASK_MODES:
             raise ValueError(f"params.face_mask must be one of {', '.join(FACE_MASK_MODES)}, "
                              f"got {self.face_mask!r}")
+        if self.pixel_model is not None and self.detector != "learned":
+            raise ValueError(f"params.pixel_model ({self.pixel_model!r}) is the learned detector's "
+                             f"model; params.detector is {self.detector!r}")
         if self.line_polarity not in ("dark", "bright"):
             raise ValueError(f"params.line_polarity must be 'dark' or 'bright', got {self.line_polarity!r}")
         positive = ("max_megapixels", "background_sigma_px", "scale_spread", "min_sigma_px",
@@ -751,7 +761,7 @@ def _joint_pixels(grey, params: ExtractParams, width_work: float, mask, clock: _
             method=params.flatten_method, clahe=params.clahe, clahe_clip_limit=params.clahe_clip_limit)
     clock.lap("flatten")
     if params.detector == "learned":
-        response = learned.joint_probability(flat)
+        response = learned.joint_probability(flat, learned.load_model(params.pixel_model))
         clock.lap("ridges")
         binary = segment.hysteresis_mask(response, low=params.prob_low, high=params.prob_high,
                                          min_size_px=params.min_object_px, mask=mask)

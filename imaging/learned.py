@@ -145,14 +145,23 @@ def load_model(path=None) -> PixelModel:
     if key in _CACHE:
         return _CACHE[key]
     if not Path(key).is_file():
+        if path is not None and Path(key) != MODEL_FILE.resolve():
+            raise FileNotFoundError(f"{path}: no such model file (params.pixel_model; train one with "
+                                    "python -m rockmass.imaging.train_pixel_model)")
         raise FileNotFoundError(f"{key}: the learned detector's model file is missing (it ships with "
                                 "rockmass; reinstall, or train one with python -m "
                                 "rockmass.imaging.train_pixel_model)")
-    with np.load(key, allow_pickle=False) as data:
-        n_stages = sum(1 for name in data.files if name.endswith("_mean"))
-        model = PixelModel(stages=tuple(_read_stage(data, i) for i in range(n_stages)),
-                           feature_names=tuple(str(s) for s in data["feature_names"]),
-                           info=json.loads(str(data["info"])))
+    import zipfile
+
+    try:
+        with np.load(key, allow_pickle=False) as data:
+            n_stages = sum(1 for name in data.files if name.endswith("_mean"))
+            model = PixelModel(stages=tuple(_read_stage(data, i) for i in range(n_stages)),
+                               feature_names=tuple(str(s) for s in data["feature_names"]),
+                               info=json.loads(str(data["info"])))
+    except (ValueError, KeyError, OSError, zipfile.BadZipFile, AttributeError) as error:
+        raise ValueError(f"{key}: not a pixel model written by rockmass.imaging.train_pixel_model "
+                         f"({type(error).__name__}: {error})") from error
     expected = FEATURE_NAMES + (CONTEXT_NAMES if n_stages > 1 else ())
     if model.feature_names != expected:
         raise ValueError(f"{key}: the model was trained on other features ({len(model.feature_names)}"

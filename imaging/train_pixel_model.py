@@ -1,6 +1,7 @@
 """Train the learned joint detector's pixel model on synthetic faces only, reproducibly.
 
     OMP_NUM_THREADS=1 python -m rockmass.imaging.train_pixel_model [--out FILE] [--faces N] [--seed S]
+                      [--photos DIR --labels DIR]
 
 Training data (docs/imaging.md §3.1): per stage, ``--faces`` field-like faces
 (:func:`rockmass.imaging.synthetic_field.field_face`, 400 x 400 px) and a quarter as many faces of
@@ -24,6 +25,11 @@ that a thin dark line is not taught to be "no joint" when the plain faces teach 
 ``benchmarks/bench_pixel_training.py`` compares them; neither lifts the plain faces' F1 at the
 detector's defaults, whose loss lies in the trace filters (docs/imaging.md §3.1).
 
+Your own photographs (docs/imaging.md §3.2): ``--photos DIR --labels DIR --out FILE`` adds the
+labelled photographs of DIR (labels of the same name and size, traces painted red or white on
+black, :mod:`rockmass.imaging.labels`) to the first lot, every tenth held out for the loss;
+``--faces 0`` trains on them alone. ``rockmass extract --pixel-model FILE`` then uses the model.
+
 Each perceptron (eq. (3.2)) is fitted by minimising the class-balanced binary cross-entropy with Adam
 (Kingma & Ba 2015) on mini-batches, from a fixed seed. The default ``--seed`` (10 000) keeps the
 training faces apart from the seeds tests and benchmarks use (0-999).
@@ -32,6 +38,7 @@ training faces apart from the seeds tests and benchmarks use (0-999).
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import platform
 import sys
@@ -43,7 +50,7 @@ from .features import CONTEXT_NAMES, FEATURE_NAMES, context_features, pixel_feat
 from .learned import MODEL_FILE, PixelModel, Stage, model_input
 from .synthetic_field import TUNNEL_STYLE
 
-__all__ = ["face_samples", "training_faces", "fit_mlp", "main"]
+__all__ = ["face_samples", "training_faces", "labelled_photos", "fit_mlp", "main"]
 
 POSITIVE_PX = 1.0
 NEGATIVE_PX = 3.0
@@ -89,6 +96,43 @@ def training_faces(first_seed: int, n_field: int, n_plain: int, *, style=None,
                                   m_per_px=0.016)
             lines = render_traces(face.truth, face.image.shape, face.m_per_px)
         yield seed, face.image, lines, ignore
+
+
+def labelled_photos(photos_dir, labels_dir) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(grey image in [0, 1], label centre lines) of every labelled photograph of ``photos_dir``
+    (:func:`rockmass.imaging.labels.labelled_pairs`), at the photograph's own size.
+
+    Raises
+    ------
+    ValueError
+        A label's size differs from its photograph's.
+    """
+    from .enhance import read_photo, to_grey
+    from .labels import label_centre_lines, labelled_pairs
+
+    out = []
+    for photo, label in labelled_pairs(photos_dir, labels_dir):
+        grey = to_grey(read_photo(photo), name=str(photo))
+        lines = label_centre_lines(label)
+        if lines.shape != grey.shape:
+            raise ValueError(f"{label}: label is {lines.shape[1]} x {lines.shape[0]} px, its photo "
+                             f"{photo.name} {grey.shape[1]} x {grey.shape[0]} px")
+        out.append((grey, lines))
+    return out
+
+
+def _data_note(n_synthetic: int, photos: list, photos_dir) -> str:
+    """What the model was trained on, for its ``info``."""
+    parts = ["synthetic faces (field_face, synthetic_face)"] if n_synthetic else []
+    if photos:
+        held = sum(_held_photo(k, photos) for k in range(len(photos)))
+        parts.append(f"{len(photos)} labelled photographs of {photos_dir} ({held} held out)")
+    return " and ".join(parts) + ("" if photos else " only")
+
+
+def _held_photo(k: int, photos: list) -> bool:
+    """Every tenth photograph is held out (when there are at least ten)."""
+    return len(photos) >= 10 and k % 10 == 9
 
 
 def fit_mlp(x, y, *, hidden=(32, 16), epochs=12, batch=1024, learning_rate=3e-3, seed=0):
@@ -165,8 +209,24 @@ def main(argv=None) -> int:
                         help="field faces of TUNNEL_STYLE (half-casts, shotcrete)")
     parser.add_argument("--ignore-minor-cracks", action="store_true",
                         help="leave the field faces' minor cracks out of the negatives")
+    parser.add_argument("--photos", metavar="DIR",
+                        help="also train on your own photographs in DIR (with --labels; needs --out)")
+    parser.add_argument("--labels", metavar="DIR",
+                        help="their hand-traced labels, same file names: traces painted red, or "
+                             "white on black (rockmass.imaging.labels)")
     args = parser.parse_args(argv)
-    n_plain = max(args.faces // 4, 1) if args.plain_faces is None else args.plain_faces
+    if (args.photos is None) != (args.labels is None):
+        parser.error("--photos and --labels go together")
+    if args.photos is not None and args.out == str(MODEL_FILE):
+        parser.error("give --out for a model trained on your photos (the default replaces the "
+                     "model shipped with rockmass)")
+    if args.photos is not None and args.stages == 2:
+        parser.error("--stages 2 trains on synthetic faces only; use --stages 1 with --photos")
+    n_plain = (max(args.faces // 4, 1) if args.faces else 0) if args.plain_faces is None \
+        else args.plain_faces
+    photos = labelled_photos(args.photos, args.labels) if args.photos is not None else []
+    if not photos and args.faces + n_plain == 0:
+        parser.error("nothing to train on: --faces 0 and no --photos")
     fit = dict(hidden=tuple(args.hidden), epochs=args.epochs, seed=args.seed)
 
     t0 = time.perf_counter()
@@ -174,8 +234,11 @@ def main(argv=None) -> int:
     xs, ys = [], []
     faces = dict(style=TUNNEL_STYLE if args.tunnel_style else None,
                  ignore_minor_cracks=args.ignore_minor_cracks)
-    for seed, image, lines, ignore in training_faces(args.seed, args.faces, n_plain, **faces):
-        features = pixel_features(model_input(image.astype(np.float32) / 255.0))
+    synthetic = ((image.astype(np.float32) / 255.0, lines, ignore)
+                 for _, image, lines, ignore in training_faces(args.seed, args.faces, n_plain, **faces))
+    own = ((grey, lines, None) for k, (grey, lines) in enumerate(photos) if not _held_photo(k, photos))
+    for grey, lines, ignore in itertools.chain(synthetic, own):
+        features = pixel_features(model_input(grey))
         index, labels = face_samples(features, lines, rng, ignore=ignore)
         xs.append(features.reshape(features.shape[0], -1)[:, index].T)
         ys.append(labels)
@@ -198,6 +261,16 @@ def main(argv=None) -> int:
         xs.append(both.reshape(both.shape[0], -1)[:, index].T)
         ys.append(labels)
         held.append(np.full(len(labels), k % 10 == 9))
+    for k, (grey, lines) in enumerate(photos):
+        if _held_photo(k, photos):  # measured, never fitted
+            features = pixel_features(model_input(grey))
+            index, labels = face_samples(features, lines, rng)
+            xs.append(features.reshape(features.shape[0], -1)[:, index].T)
+            ys.append(labels)
+            held.append(np.ones(len(labels), dtype=bool))
+    if not xs:
+        raise SystemExit("train_pixel_model: no held-out faces (train on at least ten faces or "
+                         "photos to have a held-out loss)")
     x, y, held = np.concatenate(xs), np.concatenate(ys), np.concatenate(held)
     n_features = len(FEATURE_NAMES)
     if args.stages == 2:
@@ -214,7 +287,8 @@ def main(argv=None) -> int:
                                   for i, stage in enumerate(stages)],
             "stage1_s": round(t_stage1, 1), "total_s": round(time.perf_counter() - t0, 1),
             "python": platform.python_version(), "numpy": np.__version__,
-            "data": "synthetic faces only (field_face, synthetic_face)"}
+            "data": _data_note(args.faces + n_plain, photos, args.photos),
+            "photos": args.photos, "labels": args.labels}
     model = PixelModel(stages=stages, feature_names=names, info=info)
     path = model.save(args.out)
     print(json.dumps(info, indent=2))

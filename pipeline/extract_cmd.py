@@ -72,6 +72,10 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "docs/imaging.md §3.1) or 'ridge' (multi-scale ridge filter: bright joints, "
                         "and clean images whose faint hairlines count as joints; the default with "
                         "--bright-lines)")
+    p.add_argument("--pixel-model", dest="pixel_model", metavar="FILE.npz",
+                   help="the learned detector's model: one trained on your own labelled photos by "
+                        "python -m rockmass.imaging.train_pixel_model --photos DIR --labels DIR "
+                        "(default: the model shipped with rockmass)")
     p.add_argument("--sets", type=int, dest="n_sets", help="number of joint sets (default: by BIC)")
     p.add_argument("--config", help="TOML file; its [imaging] section sets scale, width and params")
     # its own destination: ``rockmass --debug`` (tracebacks) is the global flag of the same name

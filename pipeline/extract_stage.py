@@ -52,7 +52,22 @@ def _settings(args, document=None):
         values["params"] = {**values["params"], "detector": args.detector}
     if getattr(args, "face_mask", None) is not None:  # likewise
         values["params"] = {**values["params"], "face_mask": args.face_mask}
+    if getattr(args, "pixel_model", None) is not None:  # likewise
+        values["params"] = {**values["params"], "pixel_model": str(args.pixel_model)}
+    if values["params"].get("pixel_model") is not None:
+        _check_pixel_model(values["params"]["pixel_model"])
     return values
+
+
+def _check_pixel_model(path) -> None:
+    """A model file given by ``--pixel-model`` or ``imaging.params.pixel_model`` must load before
+    anything is written (exit 2 naming it)."""
+    from .imaging.learned import load_model
+
+    try:
+        load_model(path)
+    except (OSError, ValueError, KeyError) as error:
+        raise InputError(f"imaging.params.pixel_model / --pixel-model: {error}") from error
 
 
 @reads("photo")

@@ -1,0 +1,83 @@
+"""Hand-traced joint labels of a photograph: read a label image as a mask and its centre lines.
+
+Two label formats are read, the ones public labelled sets use:
+
+- *painted*: the traces painted in pure red on anything else (``R > 128``, ``G < 100``,
+  ``B < 100``), as in the rock-face-fractures set of ``../shared/data`` (whose label files also
+  carry a 1-px white frame that is not a label);
+- *mask*: white (or any bright value, grey > 127) traces on black, in a grey or colour image.
+
+An image with any red-painted pixel is read as painted, else as a mask. The centre lines are the
+mask thinned to one pixel (Zhang & Suen 1984, :func:`rockmass.imaging.skeleton_graph.skeletonize`),
+which is how the benchmarks score against labels and how :mod:`rockmass.imaging.train_pixel_model`
+samples positives from a user's own labelled photographs.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["label_mask", "label_centre_lines", "labelled_pairs"]
+
+#: Image file suffixes read as photographs when pairing a folder of photos with its labels.
+PHOTO_SUFFIXES = (".jpg", ".jpeg", ".png", ".tif", ".tiff", ".bmp")
+
+
+def label_mask(label) -> np.ndarray:
+    """Bool mask of the traces of a label image (a path, or an (H, W) / (H, W, 3) uint8 array in
+    RGB order).
+
+    Examples
+    --------
+    >>> rgb = np.zeros((5, 5, 3), np.uint8); rgb[2, :, 0] = 255; rgb[0, :] = 255  # red + white
+    >>> label_mask(rgb).sum(), label_mask(rgb)[2].all()
+    (np.int64(5), np.True_)
+    >>> label_mask(np.where(np.eye(4, dtype=bool), 255, 0).astype(np.uint8)).sum()
+    np.int64(4)
+    """
+    if isinstance(label, (str, Path)):
+        import cv2
+
+        bgr = cv2.imread(str(label), cv2.IMREAD_UNCHANGED)
+        if bgr is None:
+            raise OSError(f"{label}: cannot read the label image")
+        label = bgr[..., 2::-1] if bgr.ndim == 3 else bgr  # BGR(A) -> RGB
+    array = np.asarray(label)
+    if array.dtype != np.uint8:
+        raise ValueError(f"label image must be 8 bit, got {array.dtype}")
+    if array.ndim == 3:
+        red = (array[..., 0] > 128) & (array[..., 1] < 100) & (array[..., 2] < 100)
+        if red.any():
+            return red
+        array = array[..., :3].mean(axis=2)
+    return array > 127
+
+
+def label_centre_lines(label) -> np.ndarray:
+    """One-pixel centre lines (bool) of :func:`label_mask`."""
+    from .skeleton_graph import skeletonize
+
+    return skeletonize(label_mask(label))
+
+
+def labelled_pairs(photos_dir, labels_dir) -> list[tuple[Path, Path]]:
+    """(photo, label) paths: every photo of ``photos_dir`` whose stem has a label file of any
+    :data:`PHOTO_SUFFIXES` suffix in ``labels_dir``, sorted by name.
+
+    Raises
+    ------
+    FileNotFoundError
+        A folder is missing, or no photo has a label.
+    """
+    photos_dir, labels_dir = Path(photos_dir), Path(labels_dir)
+    for folder, what in ((photos_dir, "photos"), (labels_dir, "labels")):
+        if not folder.is_dir():
+            raise FileNotFoundError(f"{folder}: no such folder of {what}")
+    labels = {p.stem: p for p in labels_dir.iterdir() if p.suffix.lower() in PHOTO_SUFFIXES}
+    pairs = [(p, labels[p.stem]) for p in sorted(photos_dir.iterdir())
+             if p.suffix.lower() in PHOTO_SUFFIXES and p.stem in labels]
+    if not pairs:
+        raise FileNotFoundError(f"{photos_dir}: no photo has a label of the same name in {labels_dir}")
+    return pairs

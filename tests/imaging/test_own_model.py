@@ -1,0 +1,134 @@
+"""A pixel model trained on the user's own labelled photographs (train_pixel_model --photos), its
+label reading, and its use by extract / the CLI (params.pixel_model, --pixel-model)."""
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from rockmass.cli import main as cli
+from rockmass.imaging.extract import ExtractParams, extract
+from rockmass.imaging.labels import label_centre_lines, label_mask, labelled_pairs
+from rockmass.imaging.learned import load_model
+from rockmass.imaging.metrics import raster_counts, render_traces
+from rockmass.imaging.train_pixel_model import main as train
+
+
+def _vein_photo(seed, shape=(240, 320), n=5):
+    """A grey rock texture crossed by ``n`` straight *bright* veins 3 px wide, and their label
+    (white on black). The shipped model is trained on dark joints only."""
+    rng = np.random.default_rng(seed)
+    rock = cv2.GaussianBlur(rng.normal(0, 1, shape).astype(np.float32), (0, 0), 2.0)
+    image = 0.45 + 0.06 * rock / rock.std()
+    label = np.zeros(shape, np.uint8)
+    for _ in range(n):
+        centre, angle = rng.uniform([0, 0], shape[::-1]), rng.uniform(0, np.pi)
+        reach = np.array([np.cos(angle), np.sin(angle)]) * 400
+        a, b = (tuple(int(v) for v in centre - reach), tuple(int(v) for v in centre + reach))
+        cv2.line(image, a, b, 0.8, 3)
+        cv2.line(label, a, b, 255, 3)
+    return (np.clip(image, 0, 1) * 255).astype(np.uint8), label
+
+
+@pytest.fixture(scope="module")
+def vein_model(tmp_path_factory):
+    root = tmp_path_factory.mktemp("veins")
+    (root / "photos").mkdir()
+    (root / "labels").mkdir()
+    for seed in range(12):
+        image, label = _vein_photo(seed)
+        cv2.imwrite(str(root / "photos" / f"v{seed:02d}.png"), image)
+        cv2.imwrite(str(root / "labels" / f"v{seed:02d}.png"), label)
+    out = root / "veins.npz"
+    assert train(["--faces", "0", "--epochs", "4", "--photos", str(root / "photos"),
+                  "--labels", str(root / "labels"), "--out", str(out)]) == 0
+    return root, out
+
+
+def _precision_recall(image, label, **params):
+    truth = label_centre_lines(label)
+    result = extract(image, m_per_px=1.0,
+                     params=ExtractParams(min_trace_contrast=float("-inf"), **params))
+    c = raster_counts(render_traces(result.traces, truth.shape, 1.0), truth, tolerance_px=3.0)
+    return c[0] / max(c[1], 1), c[2] / max(c[3], 1)
+
+
+def test_a_model_trained_on_labelled_vein_photos_finds_the_veins_the_shipped_one_misses(vein_model):
+    _, model = vein_model
+    info = load_model(model).info
+    assert "12 labelled photographs" in info["data"] and "(1 held out)" in info["data"]
+    assert "synthetic" not in info["data"]  # --faces 0: the photos only
+    for seed in (100, 101):  # photos it never saw
+        image, label = _vein_photo(seed)
+        shipped = _precision_recall(image, label)
+        own = _precision_recall(image, label, pixel_model=str(model))
+        assert own[0] > 0.95 and own[1] > 0.95
+        assert shipped[0] < 0.5 and shipped[1] < 0.5
+
+
+def test_labels_painted_red_or_white_on_black_give_the_same_centre_lines(tmp_path):
+    _, white = _vein_photo(7)
+    painted = np.zeros(white.shape + (3,), np.uint8)
+    painted[0, :] = 255  # a white frame, as the rock-face-fractures labels have: not a label
+    painted[white > 0] = (0, 0, 255)  # BGR red
+    cv2.imwrite(str(tmp_path / "red.png"), painted)
+    cv2.imwrite(str(tmp_path / "white.png"), white)
+    assert not label_mask(tmp_path / "red.png")[0].all()
+    np.testing.assert_array_equal(label_centre_lines(tmp_path / "red.png"),
+                                  label_centre_lines(tmp_path / "white.png"))
+
+
+def test_photos_without_labels_and_missing_folders_are_named(tmp_path):
+    (tmp_path / "photos").mkdir()
+    (tmp_path / "labels").mkdir()
+    cv2.imwrite(str(tmp_path / "photos" / "a.jpg"), np.zeros((8, 8), np.uint8))
+    with pytest.raises(FileNotFoundError, match="no photo has a label"):
+        labelled_pairs(tmp_path / "photos", tmp_path / "labels")
+    with pytest.raises(FileNotFoundError, match="no such folder of labels"):
+        labelled_pairs(tmp_path / "photos", tmp_path / "nowhere")
+    cv2.imwrite(str(tmp_path / "labels" / "a.png"), np.zeros((8, 9), np.uint8))
+    with pytest.raises(ValueError, match="a.png: label is 9 x 8 px, its photo a.jpg 8 x 8 px"):
+        train(["--faces", "0", "--photos", str(tmp_path / "photos"), "--labels",
+               str(tmp_path / "labels"), "--out", str(tmp_path / "m.npz")])
+
+
+@pytest.mark.parametrize("args", [["--photos", "p"], ["--photos", "p", "--labels", "l"],
+                                  ["--faces", "0", "--plain-faces", "0"]])
+def test_training_options_that_cannot_work_are_refused(args, capsys):
+    with pytest.raises(SystemExit) as stop:
+        train(args)  # no --labels; no --out (would replace the shipped model); nothing to train on
+    assert stop.value.code == 2
+    assert any(word in capsys.readouterr().err for word in ("--labels", "--out", "nothing to train"))
+
+
+def test_pixel_model_is_for_the_learned_detector_and_must_exist(tmp_path):
+    with pytest.raises(ValueError, match="pixel_model .* is the learned detector's model"):
+        ExtractParams(detector="ridge", pixel_model="m.npz")
+    with pytest.raises(FileNotFoundError, match="nowhere.npz: no such model file"):
+        extract(_vein_photo(0)[0], m_per_px=1.0,
+                params=ExtractParams(pixel_model=str(tmp_path / "nowhere.npz")))
+
+
+@pytest.mark.parametrize("content", [b"hello", b"PK\x03\x04 not a zip"])
+def test_a_file_that_is_not_a_model_is_refused_by_name(content, tmp_path):
+    path = tmp_path / "bad.npz"
+    path.write_bytes(content)
+    with pytest.raises(ValueError, match="bad.npz: not a pixel model written by"):
+        load_model(path)
+
+
+def test_cli_uses_the_model_given_and_records_it(vein_model, tmp_path, capsys):
+    root, model = vein_model
+    photo = root / "photos" / "v03.png"
+    out = tmp_path / "out"
+    assert cli(["extract", str(photo), "--m-per-px", "0.01", "--pixel-model", str(model),
+                "--out", str(out), "--json"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["extraction"]["params"]["pixel_model"] == str(model)
+    capsys.readouterr()
+    missing = tmp_path / "missing"
+    assert cli(["extract", str(photo), "--pixel-model", str(tmp_path / "none.npz"),
+                "--out", str(missing)]) == 2
+    assert "none.npz: no such model file" in capsys.readouterr().err
+    assert not missing.exists()
