@@ -50,7 +50,15 @@ Table 9 — what moves. Four cycles at 1.14 and 1.2 a_c: how many blocks end dis
 table by more than 0.1 and 0.5 mm, how many of them lie within two tunnel radii, and the extent of
 the moving mass (a single keyblock, as the experiment's ingot, or a large part of the model).
 
-``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–9.
+Table 10 — which blocks must be free to slip (not in the default run: ``--tables 10``). Six cycles at
+1.2 a_c with every block but a chosen set fixed and driven with the table, so that only the set can
+move: the top-left block alone; the wedge of blocks that fail together pseudo-statically just above
+a_c, with the top-left block; every block within 0.25 m of the tunnel centre. Does the shakedown
+need the mass around the tunnel, or does the sliding set lock by itself? ``fell_before``: blocks
+taken out in the static stages (gravity, excavation) before the shaking, when the free set cannot
+stand by itself against its rigid surroundings.
+
+``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–10.
 """
 
 from __future__ import annotations
@@ -67,7 +75,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import header, save, table  # noqa: E402
 
 from rockmass.solve_stage import prepare  # noqa: E402
-from rockmass.solver import TableSine, VelocityInput, run  # noqa: E402
+from rockmass.solver import Fix, TableSine, VelocityInput, run  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "samples" / "solve_shaketable.toml"
@@ -278,6 +286,60 @@ def moving_mass(model, settings, frequency_hz: float, a_c: float, ratios, cycles
     return rows
 
 
+def rigid_except(model, settings, free, motion):
+    """The sample's settings with every block not in ``free`` fixed and driven with the table
+    (``motion`` in x): those blocks move as one with the table; the ``free`` ones alone can slip."""
+    driven = "blocks:" + ",".join(str(i) for i in range(model.n_blocks) if i not in free)
+    inputs = tuple(VelocityInput(v.where, v.component, motion) for v in settings.velocity_inputs)
+    return dataclasses.replace(settings, fixes=tuple(settings.fixes) + (Fix(where=driven),),
+                               velocity_inputs=inputs + (VelocityInput(driven, "x", motion),))
+
+
+def isolated(model, settings, frequency_hz: float, a_c: float, ratio: float, cycles: int) -> list:
+    """Table 10: the top-left block's slip per cycle at a_max = ratio · a_c when only some blocks
+    are free and the rest move rigidly with the table: the top-left block alone; the blocks that
+    fail together pseudo-statically at k_h = 1.02 a_c/g (the wedge into the tunnel, and the
+    top-left block); the blocks within 0.25 m of the tunnel centre."""
+    import shapely
+
+    omega = 2 * math.pi * frequency_hz
+    motion = TableSine(ratio * a_c / omega ** 2, frequency_hz, cycles=cycles)
+    monitor = next(m for m in settings.monitors if m.name == "top_left")
+    point = shapely.Point(*monitor.point_xy_m)
+    polygons = model.to_shapely()
+    top_left = next(i for i in range(model.n_blocks) if polygons[i].contains(point))
+    tilted = dataclasses.replace(settings, stages=static_stages(settings), velocity_inputs=(),
+                                 gravity_m_s2=(1.02 * a_c, -G))
+    wedge = {int(b["block"]) for s in run(model, tilted).stages for b in s.failed_blocks}
+    c = model.centroid_xy_m
+    near = {int(i) for i in np.flatnonzero(np.hypot(c[:, 0] - 0.61, c[:, 1] - 0.305) < 0.25)}
+    rows = []
+    for label, free in (("top-left block alone", {top_left}),
+                        ("wedge failing at 1.02 a_c, + top-left", wedge | {top_left}),
+                        ("within 0.25 m of the tunnel centre", near)):
+        base = rigid_except(model, settings, free, motion)
+        stage = next(s for s in settings.stages if s.kind == "dynamic")
+        stage = dataclasses.replace(stage, duration_s=cycles / frequency_hz + 0.05, frames=0)
+        t0 = time.perf_counter()
+        result = run(model, dataclasses.replace(base, stages=static_stages(settings) + (stage,)))
+        wall = time.perf_counter() - t0
+        h = result.history
+        mask = np.asarray(h["stage"]) == "shaking"
+        t = h["time_s"][mask] - h["time_s"][mask][0]
+        rel = np.column_stack([h["top_left_ux_m"] - h["table_ux_m"],
+                               h["top_left_uy_m"] - h["table_uy_m"]])[mask]
+        previous = 0.0
+        for cycle in range(1, cycles + 1):
+            i = min(int(np.searchsorted(t, cycle / frequency_hz)), len(t) - 1)
+            slip = 1e3 * float(np.hypot(*(rel[i] - rel[0])))
+            rows.append({"free": label, "blocks": len(free), "cycle": cycle, "slip_mm": slip,
+                         "increment_mm": slip - previous, "status": result.status,
+                         "fell_before": sum(len(s.failed_blocks) for s in result.stages
+                                            if s.kind == "static"), "wall_s": wall})
+            previous = slip
+    return rows
+
+
 def main(quick: bool = False, frequency_hz: float | None = None,
          tables=(1, 3, 4, 5, 6, 7, 8, 9)) -> None:
     print(header("bench_shaketable: Ahola et al. (1996) shake table, Varma et al. (2019) §3"))
@@ -359,6 +421,15 @@ def main(quick: bool = False, frequency_hz: float | None = None,
                            ("moved_0p5mm", "d"), ("near_tunnel_0p1mm", "d"), ("x_m", "s"),
                            ("y_m", "s"), ("max_mm", ".3f"), ("status", "s"), ("wall_s", ".0f")]))
         results["moving_mass"] = rows
+    if 10 in tables:
+        a_c = threshold_a_c(frequency_hz)
+        rows = isolated(model, settings, frequency_hz, a_c, 1.2, 3 if quick else 6)
+        print(f"\nTable 10 — which blocks must be free: 1.2 a_c, {3 if quick else 6} cycles, every "
+              "other block fixed and driven with the table")
+        print(table(rows, [("free", "s"), ("blocks", "d"), ("cycle", "d"), ("slip_mm", ".3f"),
+                           ("increment_mm", "+.3f"), ("status", "s"), ("fell_before", "d"),
+                           ("wall_s", ".0f")]))
+        results["isolated"] = rows
     partial = "" if tables == (1, 3, 4, 5, 6, 7, 8, 9) and band is not None else "_tables" + "".join(
         map(str, tables))
     save("bench_shaketable" + ("_quick" if quick else "") + partial, results)
