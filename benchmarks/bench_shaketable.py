@@ -168,11 +168,7 @@ def shaking(model, settings, levels, frequency_hz: float, cycles: int,
     t0 = time.perf_counter()
     result = run(model, shaken_settings(settings, motion, len(levels) * period, **damping))
     wall = time.perf_counter() - t0
-    h = result.history
-    mask = np.asarray(h["stage"]) == "shaking"
-    t = h["time_s"][mask] - h["time_s"][mask][0]
-    rel = np.column_stack([h["top_left_ux_m"] - h["table_ux_m"],
-                           h["top_left_uy_m"] - h["table_uy_m"]])[mask]
+    t, rel = top_left_against_table(result)
     rows = []
     for k, d in enumerate(levels):
         for c in range(1, cycles + 1):
@@ -187,6 +183,17 @@ def shaking(model, settings, levels, frequency_hz: float, cycles: int,
                          "down_mm": -1e3 * float(rel[i, 1] - rel[0, 1])})
     return {"rows": rows, "status": result.status,
             "energy": dict(result.stages[-1].energy)}, wall
+
+
+def top_left_against_table(result) -> tuple[np.ndarray, np.ndarray]:
+    """(time from the start of the shaking, s; the top-left block's (x, y) displacement relative
+    to the table, m) over the shaking stage of a run."""
+    h = result.history
+    mask = np.asarray(h["stage"]) == "shaking"
+    t = h["time_s"][mask] - h["time_s"][mask][0]
+    rel = np.column_stack([h["top_left_ux_m"] - h["table_ux_m"],
+                           h["top_left_uy_m"] - h["table_uy_m"]])[mask]
+    return t, rel
 
 
 def frequency_for(a_c: float, d_m: float) -> float:
@@ -286,13 +293,15 @@ def moving_mass(model, settings, frequency_hz: float, a_c: float, ratios, cycles
     return rows
 
 
-def rigid_except(model, settings, free, motion):
-    """The sample's settings with every block not in ``free`` fixed and driven with the table
-    (``motion`` in x): those blocks move as one with the table; the ``free`` ones alone can slip."""
+def rigid_except(model, settings, free):
+    """The sample's settings with every block not in ``free`` fixed and driven in x like the table
+    (as its velocity inputs are): those blocks move as one with the table; the ``free`` ones alone
+    can slip."""
     driven = "blocks:" + ",".join(str(i) for i in range(model.n_blocks) if i not in free)
-    inputs = tuple(VelocityInput(v.where, v.component, motion) for v in settings.velocity_inputs)
-    return dataclasses.replace(settings, fixes=tuple(settings.fixes) + (Fix(where=driven),),
-                               velocity_inputs=inputs + (VelocityInput(driven, "x", motion),))
+    table_motion = settings.velocity_inputs[0].history
+    return dataclasses.replace(
+        settings, fixes=tuple(settings.fixes) + (Fix(where=driven),),
+        velocity_inputs=tuple(settings.velocity_inputs) + (VelocityInput(driven, "x", table_motion),))
 
 
 def isolated(model, settings, frequency_hz: float, a_c: float, ratio: float, cycles: int) -> list:
@@ -317,17 +326,11 @@ def isolated(model, settings, frequency_hz: float, a_c: float, ratio: float, cyc
     for label, free in (("top-left block alone", {top_left}),
                         ("wedge failing at 1.02 a_c, + top-left", wedge | {top_left}),
                         ("within 0.25 m of the tunnel centre", near)):
-        base = rigid_except(model, settings, free, motion)
-        stage = next(s for s in settings.stages if s.kind == "dynamic")
-        stage = dataclasses.replace(stage, duration_s=cycles / frequency_hz + 0.05, frames=0)
         t0 = time.perf_counter()
-        result = run(model, dataclasses.replace(base, stages=static_stages(settings) + (stage,)))
+        result = run(model, shaken_settings(rigid_except(model, settings, free), motion,
+                                            cycles / frequency_hz))
         wall = time.perf_counter() - t0
-        h = result.history
-        mask = np.asarray(h["stage"]) == "shaking"
-        t = h["time_s"][mask] - h["time_s"][mask][0]
-        rel = np.column_stack([h["top_left_ux_m"] - h["table_ux_m"],
-                               h["top_left_uy_m"] - h["table_uy_m"]])[mask]
+        t, rel = top_left_against_table(result)
         previous = 0.0
         for cycle in range(1, cycles + 1):
             i = min(int(np.searchsorted(t, cycle / frequency_hz)), len(t) - 1)
