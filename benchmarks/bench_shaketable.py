@@ -56,7 +56,10 @@ move: the top-left block alone; the wedge of blocks that fail together pseudo-st
 a_c, with the top-left block; every block within 0.25 m of the tunnel centre. Does the shakedown
 need the mass around the tunnel, or does the sliding set lock by itself? ``fell_before``: blocks
 taken out in the static stages (gravity, excavation) before the shaking, when the free set cannot
-stand by itself against its rigid surroundings.
+stand by itself against its rigid surroundings. Table 10b: the free blocks' contacts among
+themselves and with the rigid rest, before the shaking (static stages only) and after it — how
+many, their total normal force, their largest plastic slip: where the set slipped, and whether
+it ended clamped harder than it began.
 
 ``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–10.
 """
@@ -322,13 +325,13 @@ def isolated(model, settings, frequency_hz: float, a_c: float, ratio: float, cyc
     wedge = {int(b["block"]) for s in run(model, tilted).stages for b in s.failed_blocks}
     c = model.centroid_xy_m
     near = {int(i) for i in np.flatnonzero(np.hypot(c[:, 0] - 0.61, c[:, 1] - 0.305) < 0.25)}
-    rows = []
+    rows, contacts = [], []
     for label, free in (("top-left block alone", {top_left}),
                         ("wedge failing at 1.02 a_c, + top-left", wedge | {top_left}),
                         ("within 0.25 m of the tunnel centre", near)):
+        rigid = rigid_except(model, settings, free)
         t0 = time.perf_counter()
-        result = run(model, shaken_settings(rigid_except(model, settings, free), motion,
-                                            cycles / frequency_hz))
+        result = run(model, shaken_settings(rigid, motion, cycles / frequency_hz))
         wall = time.perf_counter() - t0
         t, rel = top_left_against_table(result)
         previous = 0.0
@@ -340,7 +343,25 @@ def isolated(model, settings, frequency_hz: float, a_c: float, ratio: float, cyc
                          "fell_before": sum(len(s.failed_blocks) for s in result.stages
                                             if s.kind == "static"), "wall_s": wall})
             previous = slip
-    return rows
+        before = run(model, dataclasses.replace(rigid, stages=static_stages(settings)))
+        for when, state in (("before shaking", before), (f"after {cycles} cycles", result)):
+            contacts.append({"free": label, "when": when, **contact_forces(state.contacts, free)})
+    return rows, contacts
+
+
+def contact_forces(contacts: dict, free: set) -> dict:
+    """Contacts among the ``free`` blocks ("inner") and between them and the rest ("edge"): count,
+    total normal force per metre of model depth (kN/m), largest plastic slip (mm)."""
+    a, b = np.asarray(contacts["block_a"]), np.asarray(contacts["block_b"])
+    in_a, in_b = np.isin(a, list(free)), np.isin(b, list(free))
+    force = np.asarray(contacts["normal_stress_pa"]) * np.asarray(contacts["length_m"])
+    slip = np.abs(np.asarray(contacts["plastic_slip_m"]))
+    out = {}
+    for name, chosen in (("inner", in_a & in_b), ("edge", in_a ^ in_b)):
+        out[f"{name}_contacts"] = int(chosen.sum())
+        out[f"{name}_force_kN_m"] = float(force[chosen].sum() / 1e3)
+        out[f"{name}_max_slip_mm"] = float(1e3 * slip[chosen].max()) if chosen.any() else 0.0
+    return out
 
 
 def main(quick: bool = False, frequency_hz: float | None = None,
@@ -426,13 +447,19 @@ def main(quick: bool = False, frequency_hz: float | None = None,
         results["moving_mass"] = rows
     if 10 in tables:
         a_c = threshold_a_c(frequency_hz)
-        rows = isolated(model, settings, frequency_hz, a_c, 1.2, 3 if quick else 6)
+        rows, contacts = isolated(model, settings, frequency_hz, a_c, 1.2, 3 if quick else 6)
         print(f"\nTable 10 — which blocks must be free: 1.2 a_c, {3 if quick else 6} cycles, every "
               "other block fixed and driven with the table")
         print(table(rows, [("free", "s"), ("blocks", "d"), ("cycle", "d"), ("slip_mm", ".3f"),
                            ("increment_mm", "+.3f"), ("status", "s"), ("fell_before", "d"),
                            ("wall_s", ".0f")]))
-        results["isolated"] = rows
+        print("\nTable 10b — the free blocks' contacts before and after the shaking: among "
+              "themselves (inner) and with the rigid rest (edge); normal force in kN per m of depth")
+        print(table(contacts, [("free", "s"), ("when", "s"), ("inner_contacts", "d"),
+                               ("inner_force_kN_m", ".2f"), ("inner_max_slip_mm", ".2f"),
+                               ("edge_contacts", "d"), ("edge_force_kN_m", ".2f"),
+                               ("edge_max_slip_mm", ".2f")]))
+        results["isolated"], results["isolated_contacts"] = rows, contacts
     partial = "" if tables == (1, 3, 4, 5, 6, 7, 8, 9) and band is not None else "_tables" + "".join(
         map(str, tables))
     save("bench_shaketable" + ("_quick" if quick else "") + partial, results)
