@@ -497,6 +497,9 @@ class Extraction:
         ``mode`` (``params.face_mask``), ``masked_fraction`` (share of the working grid outside
         the mask or ROI, 0 without), ``excluded_fraction`` per cue (face mask only) and ``window``
         ("image", "roi" or "face outline").
+    detector_model : mapping or None
+        With the learned detector, the model used (:func:`rockmass.imaging.learned.model_record`:
+        file, shipped or not, sha256, what it was trained on); None with the ridge detector.
     """
 
     traces: Any
@@ -509,6 +512,7 @@ class Extraction:
     debug: Mapping[str, np.ndarray] = field(default_factory=dict)
     face_mask: Mapping[str, Any] = field(default_factory=dict)
     joint_width_source: str = "joint_width_px"
+    detector_model: Mapping[str, Any] | None = None
 
     def summary(self) -> dict:
         """A JSON-ready dict of the scale, parameters, timings and warnings (no arrays)."""
@@ -517,8 +521,9 @@ class Extraction:
                 "joint_width_px": self.joint_width_px,
                 "joint_width_source": self.joint_width_source,
                 "face_orientation": self.face_orientation,
-                "face_mask": dict(self.face_mask), "timings_s": dict(self.timings_s),
-                "warnings": list(self.warnings)}
+                "face_mask": dict(self.face_mask),
+                "detector_model": None if self.detector_model is None else dict(self.detector_model),
+                "timings_s": dict(self.timings_s), "warnings": list(self.warnings)}
 
 
 def scale_from_control_points(control_points, shape_px: tuple[int, int] | None = None) -> float:
@@ -876,7 +881,7 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     >>> result.scale.units, result.traces.n_traces > 0
     ('m', True)
     """
-    from . import vectorize
+    from . import learned, vectorize
 
     params = ExtractParams() if params is None else params
     if not isinstance(params, ExtractParams):
@@ -970,4 +975,6 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         params=given_params, joint_width_px=float(width_work / factor),
         joint_width_source=width_source, face_orientation=orientation,
         timings_s=MappingProxyType(dict(clock.timings)), warnings=tuple(notes),
-        debug=MappingProxyType(debug_images), face_mask=MappingProxyType(face_info))
+        debug=MappingProxyType(debug_images), face_mask=MappingProxyType(face_info),
+        detector_model=None if params.detector != "learned"
+        else MappingProxyType(learned.model_record(params.pixel_model)))

@@ -26,8 +26,8 @@ import numpy as np
 
 from .features import CONTEXT_NAMES, FEATURE_NAMES, context_features, pixel_features
 
-__all__ = ["MODEL_FILE", "MODEL_LINE_WIDTH_PX", "Stage", "PixelModel", "load_model", "model_input",
-           "joint_probability"]
+__all__ = ["MODEL_FILE", "MODEL_LINE_WIDTH_PX", "Stage", "PixelModel", "load_model", "model_record",
+           "model_input", "joint_probability"]
 
 #: The shipped model, inside the installed package.
 MODEL_FILE = Path(__file__).resolve().parent / "models" / "joint_pixel_mlp.npz"
@@ -168,6 +168,19 @@ def load_model(path=None) -> PixelModel:
                          f" named) than this rockmass computes ({len(expected)}); retrain it")
     _CACHE[key] = model
     return model
+
+
+def model_record(path=None) -> dict:
+    """Which model a result came from, for its summary: ``file`` (resolved path), ``shipped``
+    (bool: the model of the package), ``sha256`` of the file and ``trained_on`` (the ``data`` entry
+    of its ``info``). The model is loaded (and checked) as :func:`load_model` does."""
+    import hashlib
+
+    model = load_model(path)
+    key = str(Path(path or MODEL_FILE).resolve())
+    return {"file": key, "shipped": key == str(MODEL_FILE.resolve()),
+            "sha256": hashlib.sha256(Path(key).read_bytes()).hexdigest(),
+            "trained_on": model.info.get("data")}
 
 
 def model_input(grey, *, background_sigma_px: float = 40.0) -> np.ndarray:

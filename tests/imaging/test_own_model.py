@@ -1,6 +1,7 @@
 """A pixel model trained on the user's own labelled photographs (train_pixel_model --photos), its
 label reading, and its use by extract / the CLI (params.pixel_model, --pixel-model)."""
 
+import hashlib
 import json
 
 import cv2
@@ -10,7 +11,7 @@ import pytest
 from rockmass.cli import main as cli
 from rockmass.imaging.extract import ExtractParams, extract
 from rockmass.imaging.labels import label_centre_lines, label_mask, labelled_pairs
-from rockmass.imaging.learned import load_model
+from rockmass.imaging.learned import MODEL_FILE, load_model
 from rockmass.imaging.metrics import raster_counts, render_traces
 from rockmass.imaging.train_pixel_model import main as train
 
@@ -118,6 +119,21 @@ def test_a_file_that_is_not_a_model_is_refused_by_name(content, tmp_path):
         load_model(path)
 
 
+def test_results_name_the_model_they_came_from(vein_model):
+    _, model = vein_model
+    image = _vein_photo(100)[0]
+    shipped = extract(image, m_per_px=1.0).summary()["detector_model"]
+    assert shipped["shipped"] and shipped["file"] == str(MODEL_FILE.resolve())
+    assert shipped["sha256"] == hashlib.sha256(MODEL_FILE.read_bytes()).hexdigest()
+    assert shipped["trained_on"].startswith("synthetic faces")
+    own = extract(image, m_per_px=1.0, params=ExtractParams(pixel_model=str(model))).summary()
+    assert not own["detector_model"]["shipped"]
+    assert own["detector_model"]["sha256"] == hashlib.sha256(model.read_bytes()).hexdigest()
+    assert "12 labelled photographs" in own["detector_model"]["trained_on"]
+    ridge = extract(image, m_per_px=1.0, params=ExtractParams(detector="ridge")).summary()
+    assert ridge["detector_model"] is None
+
+
 def test_cli_uses_the_model_given_and_records_it(vein_model, tmp_path, capsys):
     root, model = vein_model
     photo = root / "photos" / "v03.png"
@@ -126,6 +142,7 @@ def test_cli_uses_the_model_given_and_records_it(vein_model, tmp_path, capsys):
                 "--out", str(out), "--json"]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["extraction"]["params"]["pixel_model"] == str(model)
+    assert summary["extraction"]["detector_model"]["file"] == str(model.resolve())
     capsys.readouterr()
     missing = tmp_path / "missing"
     assert cli(["extract", str(photo), "--pixel-model", str(tmp_path / "none.npz"),
