@@ -82,13 +82,6 @@ def score_all(params, pairs) -> dict:
     return row
 
 
-def use_model(path: Path) -> None:
-    """Point the learned detector at another model file (this process only)."""
-    import rockmass.imaging.learned as learned
-
-    learned.MODEL_FILE = Path(path)
-
-
 SCORE_COLUMNS = [("moderate_F1", ".3f"), ("moderate_dP21", "+.1f"), ("tunnel_F1", ".3f"),
                  ("tunnel_dP21", "+.1f"), ("real_F1", ".3f"), ("real_dP21", "+.1f")]
 
@@ -135,11 +128,9 @@ def main(argv=None) -> int:
             subprocess.run(command, check=True, capture_output=True,
                            env={**os.environ, "OMP_NUM_THREADS": "1"})
             elapsed = time.perf_counter() - t0
-            use_model(out)
             rows.append({"variant": name, "train_s": elapsed, "model_bytes": out.stat().st_size,
-                         **score_all(ExtractParams(detector="learned"), pairs)})
+                         **score_all(ExtractParams(detector="learned", pixel_model=str(out)), pairs)})
             print(f"  {name}: trained in {elapsed:.0f} s", flush=True)
-    use_model(MODEL_FILE)
     print(f"\n2. retrained pixel models ({args.faces} field-like faces each), at the detector's defaults")
     print(table(rows, [("variant", "s"), ("train_s", ".0f"), ("model_bytes", "d"), *SCORE_COLUMNS]))
     payload["variants"] = rows
