@@ -61,7 +61,11 @@ themselves and with the rigid rest, before the shaking (static stages only) and 
 many, their total normal force, their largest plastic slip: where the set slipped, and whether
 it ended clamped harder than it began.
 
-``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–10.
+Table 11 — what does not unlock the wedge (``--tables 11``, 6 min): the wedge of Table 10, its
+surroundings rigid, at 1.2 a_c with the sample's joints and rounding, with joints five times softer
+(kn, ks × 0.2) and with a corner rounding of 5 mm.
+
+``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–11.
 """
 
 from __future__ import annotations
@@ -307,15 +311,11 @@ def rigid_except(model, settings, free):
         velocity_inputs=tuple(settings.velocity_inputs) + (VelocityInput(driven, "x", table_motion),))
 
 
-def isolated(model, settings, frequency_hz: float, a_c: float, ratio: float, cycles: int) -> list:
-    """Table 10: the top-left block's slip per cycle at a_max = ratio · a_c when only some blocks
-    are free and the rest move rigidly with the table: the top-left block alone; the blocks that
-    fail together pseudo-statically at k_h = 1.02 a_c/g (the wedge into the tunnel, and the
-    top-left block); the blocks within 0.25 m of the tunnel centre."""
+def top_left_and_wedge(model, settings, a_c: float) -> tuple[int, set]:
+    """The top-left block (the one under its monitor point) and the blocks that fail together
+    pseudo-statically at k_h = 1.02 a_c/g (the wedge into the tunnel)."""
     import shapely
 
-    omega = 2 * math.pi * frequency_hz
-    motion = TableSine(ratio * a_c / omega ** 2, frequency_hz, cycles=cycles)
     monitor = next(m for m in settings.monitors if m.name == "top_left")
     point = shapely.Point(*monitor.point_xy_m)
     polygons = model.to_shapely()
@@ -323,6 +323,47 @@ def isolated(model, settings, frequency_hz: float, a_c: float, ratio: float, cyc
     tilted = dataclasses.replace(settings, stages=static_stages(settings), velocity_inputs=(),
                                  gravity_m_s2=(1.02 * a_c, -G))
     wedge = {int(b["block"]) for s in run(model, tilted).stages for b in s.failed_blocks}
+    return top_left, wedge
+
+
+def wedge_variants(model, settings, frequency_hz: float, a_c: float, ratio: float,
+                   cycles: int) -> list:
+    """Table 11: the wedge of Table 10 (its blocks and the top-left one free, the rest rigid with
+    the table) with the sample's joints and rounding, with joints five times softer, and with a
+    corner rounding of 5 mm: does either let it keep slipping?"""
+    omega = 2 * math.pi * frequency_hz
+    motion = TableSine(ratio * a_c / omega ** 2, frequency_hz, cycles=cycles)
+    top_left, wedge = top_left_and_wedge(model, settings, a_c)
+    free = wedge | {top_left}
+    joint = settings.joints["default"]
+    soft = dataclasses.replace(joint, kn_pa_m=0.2 * joint.kn_pa_m, ks_pa_m=0.2 * joint.ks_pa_m)
+    rows = []
+    for label, varied in (("sample (Table 1 joints, d = 2 mm)", settings),
+                          ("joints 5x softer", dataclasses.replace(settings,
+                                                                   joints={"default": soft})),
+                          ("rounding d = 5 mm", dataclasses.replace(settings, rounding_m=0.005))):
+        t0 = time.perf_counter()
+        result = run(model, shaken_settings(rigid_except(model, varied, free), motion,
+                                            cycles / frequency_hz))
+        wall = time.perf_counter() - t0
+        t, rel = top_left_against_table(result)
+        slips = [1e3 * float(np.hypot(*(rel[min(int(np.searchsorted(t, c / frequency_hz)),
+                                                len(t) - 1)] - rel[0])))
+                 for c in range(1, cycles + 1)]
+        rows.append({"variant": label, "blocks": len(free), **{f"cycle_{c}_mm": v for c, v in
+                                                               enumerate(slips, 1)},
+                     "status": result.status, "wall_s": wall})
+    return rows
+
+
+def isolated(model, settings, frequency_hz: float, a_c: float, ratio: float, cycles: int) -> list:
+    """Table 10: the top-left block's slip per cycle at a_max = ratio · a_c when only some blocks
+    are free and the rest move rigidly with the table: the top-left block alone; the blocks that
+    fail together pseudo-statically at k_h = 1.02 a_c/g (the wedge into the tunnel, and the
+    top-left block); the blocks within 0.25 m of the tunnel centre."""
+    omega = 2 * math.pi * frequency_hz
+    motion = TableSine(ratio * a_c / omega ** 2, frequency_hz, cycles=cycles)
+    top_left, wedge = top_left_and_wedge(model, settings, a_c)
     c = model.centroid_xy_m
     near = {int(i) for i in np.flatnonzero(np.hypot(c[:, 0] - 0.61, c[:, 1] - 0.305) < 0.25)}
     rows, contacts = [], []
@@ -460,6 +501,16 @@ def main(quick: bool = False, frequency_hz: float | None = None,
                                ("edge_contacts", "d"), ("edge_force_kN_m", ".2f"),
                                ("edge_max_slip_mm", ".2f")]))
         results["isolated"], results["isolated_contacts"] = rows, contacts
+    if 11 in tables:
+        a_c = threshold_a_c(frequency_hz)
+        n = 3 if quick else 6
+        rows = wedge_variants(model, settings, frequency_hz, a_c, 1.2, n)
+        print(f"\nTable 11 — the wedge of Table 10 with other joints and rounding: 1.2 a_c, top-left "
+              f"block's accumulated slip after each of {n} cycles, mm")
+        print(table(rows, [("variant", "s"), ("blocks", "d"),
+                           *[(f"cycle_{c}_mm", ".3f") for c in range(1, n + 1)],
+                           ("status", "s"), ("wall_s", ".0f")]))
+        results["wedge_variants"] = rows
     partial = "" if tables == (1, 3, 4, 5, 6, 7, 8, 9) and band is not None else "_tables" + "".join(
         map(str, tables))
     save("bench_shaketable" + ("_quick" if quick else "") + partial, results)
