@@ -135,12 +135,16 @@ _EXTRACTIONS: dict = {}
 
 def _extract_real(image_path: Path, shape, params, joint_width_px, upsample: float):
     """(traces, seconds) of one real photo (enlarged to ``shape`` when ``upsample`` != 1); each
-    (photo, settings) is extracted once per run and its first time reported again."""
+    (photo, settings, model) is extracted once per run and its first time reported again. The key
+    holds the model file the learned detector would read (``params.pixel_model``, else the
+    module's ``MODEL_FILE`` at call time), so another model never gets cached traces."""
     import cv2
 
+    from rockmass.imaging import learned
     from rockmass.imaging.extract import extract
 
-    key = (str(image_path), repr(params), joint_width_px, upsample)
+    model = str(Path(params.pixel_model or learned.MODEL_FILE).resolve())
+    key = (str(image_path), repr(params), model, joint_width_px, upsample)
     if key not in _EXTRACTIONS:
         image = cv2.imread(str(image_path), cv2.IMREAD_COLOR)[..., ::-1]  # RGB, as read_photo
         if upsample != 1.0:
