@@ -203,6 +203,14 @@ def top_left_against_table(result) -> tuple[np.ndarray, np.ndarray]:
     return t, rel
 
 
+def slip_after_cycles(result, frequency_hz: float, cycles: int) -> list[float]:
+    """The top-left block's displacement relative to the table, mm, after each of ``cycles``
+    cycles at ``frequency_hz`` (from its place when the shaking starts)."""
+    t, rel = top_left_against_table(result)
+    at = [min(int(np.searchsorted(t, c / frequency_hz)), len(t) - 1) for c in range(1, cycles + 1)]
+    return [1e3 * float(np.hypot(*(rel[i] - rel[0]))) for i in at]
+
+
 def frequency_for(a_c: float, d_m: float) -> float:
     """f at which a table swinging ± d has the peak acceleration a_c: √(a_c/d)/(2π)."""
     return math.sqrt(a_c / d_m) / (2 * math.pi)
@@ -346,10 +354,7 @@ def wedge_variants(model, settings, frequency_hz: float, a_c: float, ratio: floa
         result = run(model, shaken_settings(rigid_except(model, varied, free), motion,
                                             cycles / frequency_hz))
         wall = time.perf_counter() - t0
-        t, rel = top_left_against_table(result)
-        slips = [1e3 * float(np.hypot(*(rel[min(int(np.searchsorted(t, c / frequency_hz)),
-                                                len(t) - 1)] - rel[0])))
-                 for c in range(1, cycles + 1)]
+        slips = slip_after_cycles(result, frequency_hz, cycles)
         rows.append({"variant": label, "blocks": len(free), **{f"cycle_{c}_mm": v for c, v in
                                                                enumerate(slips, 1)},
                      "status": result.status, "wall_s": wall})
@@ -374,16 +379,12 @@ def isolated(model, settings, frequency_hz: float, a_c: float, ratio: float, cyc
         t0 = time.perf_counter()
         result = run(model, shaken_settings(rigid, motion, cycles / frequency_hz))
         wall = time.perf_counter() - t0
-        t, rel = top_left_against_table(result)
-        previous = 0.0
-        for cycle in range(1, cycles + 1):
-            i = min(int(np.searchsorted(t, cycle / frequency_hz)), len(t) - 1)
-            slip = 1e3 * float(np.hypot(*(rel[i] - rel[0])))
+        fell = sum(len(s.failed_blocks) for s in result.stages if s.kind == "static")
+        slips = slip_after_cycles(result, frequency_hz, cycles)
+        for cycle, (slip, previous) in enumerate(zip(slips, [0.0, *slips[:-1]]), 1):
             rows.append({"free": label, "blocks": len(free), "cycle": cycle, "slip_mm": slip,
                          "increment_mm": slip - previous, "status": result.status,
-                         "fell_before": sum(len(s.failed_blocks) for s in result.stages
-                                            if s.kind == "static"), "wall_s": wall})
-            previous = slip
+                         "fell_before": fell, "wall_s": wall})
         before = run(model, dataclasses.replace(rigid, stages=static_stages(settings)))
         for when, state in (("before shaking", before), (f"after {cycles} cycles", result)):
             contacts.append({"free": label, "when": when, **contact_forces(state.contacts, free)})

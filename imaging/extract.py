@@ -677,9 +677,10 @@ def _read_grey(image_or_path, control_points, clock: _Clock):
     return raw, grey, name
 
 
-def _working_grid(grey, max_megapixels: float, notes: list) -> tuple:
+def working_grid(grey, max_megapixels: float, notes: list) -> tuple:
     """The grey image area-averaged down to at most ``max_megapixels`` (the working grid; a note
-    says so), or as it is. Returns (grey on the working grid, its shape, the mode in words)."""
+    says so in ``notes``), or as it is. Returns (grey on the working grid, its shape, the mode in
+    words). :mod:`rockmass.imaging.train_pixel_model` puts a user's photographs on the same grid."""
     import cv2
 
     h, w = grey.shape
@@ -904,7 +905,7 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     clock = _Clock(progress)
     raw, grey, name = _read_grey(image_or_path, control_points, clock)
     h, w = grey.shape
-    grey, work_shape, processing = _working_grid(grey, params.max_megapixels, notes)
+    grey, work_shape, processing = working_grid(grey, params.max_megapixels, notes)
     row_factor, col_factor = work_shape[0] / h, work_shape[1] / w
     factor = float(np.sqrt(row_factor * col_factor))
     given_params, scale_of_grid = params, grid_scale(work_shape[0] * work_shape[1] / 1e6)
@@ -917,14 +918,15 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
                  else f"joint_width_m = {joint_width_m:g} m ({width_work / factor:.4g} px)")
         raise ValueError(f"{given} is not narrower than the {h} x {w} pixel image; give the "
                          "width of one joint (default 3 px of the working grid)")
-    if params.detector == "learned" and width_work > DEFAULT_JOINT_WIDTH_PX * scale_of_grid:
+    learned_width = DEFAULT_JOINT_WIDTH_PX * scale_of_grid  # the width its bands keep
+    if params.detector == "learned" and width_work > learned_width:
         notes.append(f"the joint width given ({width_work / factor:.4g} px, "
                      f"{width_work:.4g} px of the working grid) is wider than the learned detector "
                      f"uses: its probability bands do not widen with the joints (docs/imaging.md "
-                     f"§3.1), so its width filter, linking and joint scores use "
-                     f"{DEFAULT_JOINT_WIDTH_PX * scale_of_grid:g} px of the working grid; "
-                     f"--detector ridge sets its filter scales from the width given")
-        width_work, width_source = DEFAULT_JOINT_WIDTH_PX * scale_of_grid, f"{width_source}, capped"
+                     f"§3.1), so its width filter, linking and joint scores use {learned_width:g} px "
+                     f"of the working grid; --detector ridge sets its filter scales from the width "
+                     f"given")
+        width_work, width_source = learned_width, f"{width_source}, capped"
     if scale_of_grid > 1.0:
         notes.append(f"working grid {work_shape[0] * work_shape[1] / 1e6:.1f} MP, above the "
                      f"{REFERENCE_MEGAPIXELS:g} MP the pixel settings are given for: pixel lengths "

@@ -120,6 +120,7 @@ class PixelModel:
 
 
 _CACHE: dict[str, PixelModel] = {}
+_RECORDS: dict[str, dict] = {}
 
 
 def _read_stage(data, i):
@@ -141,7 +142,7 @@ def load_model(path=None) -> PixelModel:
     """
     import json
 
-    key = str(Path(path or MODEL_FILE).resolve())
+    key = _resolved(path)
     if key in _CACHE:
         return _CACHE[key]
     if not Path(key).is_file():
@@ -159,7 +160,7 @@ def load_model(path=None) -> PixelModel:
             model = PixelModel(stages=tuple(_read_stage(data, i) for i in range(n_stages)),
                                feature_names=tuple(str(s) for s in data["feature_names"]),
                                info=json.loads(str(data["info"])))
-    except (ValueError, KeyError, OSError, zipfile.BadZipFile, AttributeError) as error:
+    except (ValueError, KeyError, OSError, zipfile.BadZipFile, TypeError) as error:
         raise ValueError(f"{key}: not a pixel model written by rockmass.imaging.train_pixel_model "
                          f"({type(error).__name__}: {error})") from error
     expected = FEATURE_NAMES + (CONTEXT_NAMES if n_stages > 1 else ())
@@ -170,17 +171,25 @@ def load_model(path=None) -> PixelModel:
     return model
 
 
+def _resolved(path) -> str:
+    """The absolute path of a model file (None: the shipped one), the key of the caches."""
+    return str(Path(path or MODEL_FILE).resolve())
+
+
 def model_record(path=None) -> dict:
     """Which model a result came from, for its summary: ``file`` (resolved path), ``shipped``
     (bool: the model of the package), ``sha256`` of the file and ``trained_on`` (the ``data`` entry
-    of its ``info``). The model is loaded (and checked) as :func:`load_model` does."""
+    of its ``info``). The model is loaded (and checked) as :func:`load_model` does; the file is
+    hashed once per path, like the model it caches."""
     import hashlib
 
-    model = load_model(path)
-    key = str(Path(path or MODEL_FILE).resolve())
-    return {"file": key, "shipped": key == str(MODEL_FILE.resolve()),
-            "sha256": hashlib.sha256(Path(key).read_bytes()).hexdigest(),
-            "trained_on": model.info.get("data")}
+    key = _resolved(path)
+    if key not in _RECORDS:
+        model = load_model(path)
+        _RECORDS[key] = {"file": key, "shipped": key == _resolved(None),
+                         "sha256": hashlib.sha256(Path(key).read_bytes()).hexdigest(),
+                         "trained_on": model.info.get("data")}
+    return dict(_RECORDS[key])
 
 
 def model_input(grey, *, background_sigma_px: float = 40.0) -> np.ndarray:

@@ -37,6 +37,11 @@ __all__ = ["SkeletonGraph", "skeletonize", "build_graph", "prune_spurs", "repair
            "bridge_gaps", "chain_traces", "end_directions"]
 
 
+
+#: Branch directions are measured between these arc lengths from the branch end, pixels (past the
+#: hook a skeleton makes where it enters a junction; the defaults of every step below).
+TANGENT_SKIP_PX, TANGENT_REACH_PX = 2.0, 12.0
+
 @dataclass(frozen=True, eq=False)
 class SkeletonGraph:
     """Nodes and branches of a skeleton, in pixel (row, col) coordinates.
@@ -307,7 +312,8 @@ def prune_spurs(graph: SkeletonGraph, min_length_px: float) -> SkeletonGraph:
         for node, bs in by_node.items():
             if degree[node] - len(bs) <= 1:
                 stems = [b for b, _ in table[node] if b not in bs]
-                bs.remove(_continuation(work, node, stems[0], bs) if stems else max(bs, key=work.length))
+                kept = _continuation(work, node, stems[0], bs) if stems else max(bs, key=work.length)
+                bs.remove(kept)
             for b in bs:
                 work.alive[b] = False
                 work.partners.pop((b, 0), None)
@@ -318,10 +324,10 @@ def prune_spurs(graph: SkeletonGraph, min_length_px: float) -> SkeletonGraph:
 
 def _continuation(work: _Graph, node: int, stem: int, spurs: list[int]) -> int:
     """The spur at ``node`` that continues branch ``stem`` with the least turn (directions as in
-    :func:`end_directions`, default reach)."""
+    :func:`end_directions`, at its default arc lengths)."""
     def leaving(b):
         chain = work.branches[b] if work.src[b] == node else work.branches[b][::-1]
-        return _direction(chain, 2.0, 12.0)
+        return _direction(chain, TANGENT_SKIP_PX, TANGENT_REACH_PX)
 
     into = leaving(stem)
     return min(spurs, key=lambda b: (_deviation_deg(into, leaving(b)), -work.length(b)))
@@ -351,8 +357,8 @@ def _direction(chain: np.ndarray, skip_px: float, reach_px: float) -> np.ndarray
     return _unit(far - near)
 
 
-def end_directions(graph: SkeletonGraph, *, skip_px: float = 2.0, reach_px: float = 12.0
-                   ) -> np.ndarray:
+def end_directions(graph: SkeletonGraph, *, skip_px: float = TANGENT_SKIP_PX,
+                   reach_px: float = TANGENT_REACH_PX) -> np.ndarray:
     """(n_branches, 2, 2) unit directions at each branch end, pointing *into* the branch.
 
     ``[i, 0]`` is at the src end, ``[i, 1]`` at the dst end; measured between arc lengths
@@ -402,7 +408,8 @@ def _best_pairing(directions: list[np.ndarray], max_turn_deg: float,
 
 
 def repair_crossings(graph: SkeletonGraph, *, max_link_px: float, max_turn_deg: float = 30.0,
-                     skip_px: float = 2.0, reach_px: float = 12.0) -> SkeletonGraph:
+                     skip_px: float = TANGENT_SKIP_PX,
+                     reach_px: float = TANGENT_REACH_PX) -> SkeletonGraph:
     """Merge the two Y nodes a skeleton makes of one X crossing into one node of degree 4.
 
     Parameters
@@ -462,7 +469,8 @@ def repair_crossings(graph: SkeletonGraph, *, max_link_px: float, max_turn_deg: 
 
 
 def bridge_gaps(graph: SkeletonGraph, *, max_distance_px: float, max_angle_deg: float = 20.0,
-                skip_px: float = 2.0, reach_px: float = 12.0) -> SkeletonGraph:
+                skip_px: float = TANGENT_SKIP_PX,
+                reach_px: float = TANGENT_REACH_PX) -> SkeletonGraph:
     """Pair free line ends across gaps no longer than a distance and aligned within an angle.
 
     Parameters
@@ -540,22 +548,20 @@ def bridge_gaps(graph: SkeletonGraph, *, max_distance_px: float, max_angle_deg: 
                          graph.src, graph.dst, partners)
 
 
-def _short_dangling(graph: SkeletonGraph, partner: dict, max_length_px: float) -> np.ndarray:
-    """(n_branches,) bool: branches shorter than ``max_length_px`` with one end free (a degree-1
-    node not bridged to another end) and the other at a junction (degree 3 or more)."""
+def _short_dangling(graph: SkeletonGraph, max_length_px: float) -> np.ndarray:
+    """(n_branches,) bool: branches shorter than ``max_length_px`` from a junction (degree 3 or
+    more) to a free end (degree 1, not bridged to another end)."""
     degree = graph.degrees()
-    lengths = graph.branch_lengths_px()
-    free_end = [(degree[graph.src[b]] == 1 and (b, 0) not in partner,
-                 degree[graph.dst[b]] == 1 and (b, 1) not in partner) for b in range(graph.n_branches)]
-    at_junction = [(degree[graph.src[b]] >= 3, degree[graph.dst[b]] >= 3)
-                   for b in range(graph.n_branches)]
-    return np.array([lengths[b] < max_length_px
-                     and ((free_end[b][0] and at_junction[b][1]) or (free_end[b][1] and at_junction[b][0]))
-                     for b in range(graph.n_branches)], dtype=bool)
+    end_degree = np.column_stack([degree[graph.src], degree[graph.dst]])  # (n_branches, 2 ends)
+    free = (end_degree == 1) & (graph.partners[:, :, 0] < 0)
+    junction = end_degree >= 3
+    dangling = (free[:, 0] & junction[:, 1]) | (free[:, 1] & junction[:, 0])
+    return dangling & (graph.branch_lengths_px() < max_length_px)
 
 
 def chain_traces(graph: SkeletonGraph, *, max_turn_deg: float = 30.0, min_length_px: float = 0.0,
-                 skip_px: float = 2.0, reach_px: float = 12.0) -> list[np.ndarray]:
+                 skip_px: float = TANGENT_SKIP_PX,
+                 reach_px: float = TANGENT_REACH_PX) -> list[np.ndarray]:
     """Join branches into traces: straight through junctions, across bridged gaps.
 
     Parameters
@@ -590,7 +596,7 @@ def chain_traces(graph: SkeletonGraph, *, max_turn_deg: float = 30.0, min_length
     for b in range(n):
         at_node.setdefault(int(graph.src[b]), []).append((b, 0))
         at_node.setdefault(int(graph.dst[b]), []).append((b, 1))
-    short_dangling = _short_dangling(graph, partner, 2.0 * reach_px)
+    short_dangling = _short_dangling(graph, 2.0 * reach_px)
     for node, ends in at_node.items():
         free = [e for e in ends if e not in partner]
         if len(free) == 2 and len(ends) == 2 and free[0][0] != free[1][0]:

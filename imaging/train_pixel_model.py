@@ -28,7 +28,11 @@ detector's defaults, whose loss lies in the trace filters (docs/imaging.md §3.1
 Your own photographs (docs/imaging.md §3.2): ``--photos DIR --labels DIR --out FILE`` adds the
 labelled photographs of DIR (labels of the same name and size, traces painted red or white on
 black, :mod:`rockmass.imaging.labels`) to the first lot, every tenth held out for the loss;
-``--faces 0`` trains on them alone. ``rockmass extract --pixel-model FILE`` then uses the model.
+``--faces 0`` trains on them alone. Each photo is read when it is used (not all held in memory)
+and put on the working grid extraction runs the model on (``--max-megapixels``, the default of
+:class:`rockmass.imaging.extract.ExtractParams`): a model trained on full-size 24 MP photos would
+see joints wider in pixels than it is later shown. ``rockmass extract --pixel-model FILE`` then
+uses the model.
 
 Each perceptron (eq. (3.2)) is fitted by minimising the class-balanced binary cross-entropy with Adam
 (Kingma & Ba 2015) on mini-batches, from a fixed seed. The default ``--seed`` (10 000) keeps the
@@ -43,6 +47,7 @@ import json
 import platform
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -50,7 +55,7 @@ from .features import CONTEXT_NAMES, FEATURE_NAMES, context_features, pixel_feat
 from .learned import MODEL_FILE, PixelModel, Stage, model_input
 from .synthetic_field import TUNNEL_STYLE
 
-__all__ = ["face_samples", "training_faces", "labelled_photos", "fit_mlp", "main"]
+__all__ = ["face_samples", "training_faces", "labelled_photo", "fit_mlp", "main"]
 
 POSITIVE_PX = 1.0
 NEGATIVE_PX = 3.0
@@ -98,27 +103,34 @@ def training_faces(first_seed: int, n_field: int, n_plain: int, *, style=None,
         yield seed, face.image, lines, ignore
 
 
-def labelled_photos(photos_dir, labels_dir) -> list[tuple[np.ndarray, np.ndarray]]:
-    """(grey image in [0, 1], label centre lines) of every labelled photograph of ``photos_dir``
-    (:func:`rockmass.imaging.labels.labelled_pairs`), at the photograph's own size.
+def labelled_photo(photo, label, max_megapixels: float) -> tuple[np.ndarray, np.ndarray]:
+    """(grey image in [0, 1], label centre lines) of one labelled photograph, on the working grid
+    :func:`rockmass.imaging.extract.extract` would run the model on (the photo area-averaged to at
+    most ``max_megapixels``): the centre lines are thinned at the photo's size, carried to the
+    grid (a grid pixel any centre line crosses) and thinned again.
 
     Raises
     ------
     ValueError
-        A label's size differs from its photograph's.
+        The label's size differs from the photograph's.
     """
-    from .enhance import read_photo, to_grey
-    from .labels import label_centre_lines, labelled_pairs
+    import cv2
 
-    out = []
-    for photo, label in labelled_pairs(photos_dir, labels_dir):
-        grey = to_grey(read_photo(photo), name=str(photo))
-        lines = label_centre_lines(label)
-        if lines.shape != grey.shape:
-            raise ValueError(f"{label}: label is {lines.shape[1]} x {lines.shape[0]} px, its photo "
-                             f"{photo.name} {grey.shape[1]} x {grey.shape[0]} px")
-        out.append((grey, lines))
-    return out
+    from .enhance import read_photo, to_grey
+    from .extract import working_grid
+    from .labels import label_centre_lines
+    from .skeleton_graph import skeletonize
+
+    grey = to_grey(read_photo(photo), name=str(photo))
+    lines = label_centre_lines(label)
+    if lines.shape != grey.shape:
+        raise ValueError(f"{label}: label is {lines.shape[1]} x {lines.shape[0]} px, its photo "
+                         f"{Path(photo).name} {grey.shape[1]} x {grey.shape[0]} px")
+    grey, (h, w), _ = working_grid(grey, max_megapixels, [])
+    if lines.shape != (h, w):
+        coverage = cv2.resize(lines.astype(np.float32), (w, h), interpolation=cv2.INTER_AREA)
+        lines = skeletonize(coverage > 0)
+    return grey, lines
 
 
 def _data_note(n_synthetic: int, photos: list, photos_dir) -> str:
@@ -193,6 +205,9 @@ def _stage(x, y, **kwargs) -> Stage:
 def main(argv=None) -> int:
     import cv2
 
+    from .extract import ExtractParams
+    from .labels import labelled_pairs
+
     cv2.setNumThreads(1)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=str(MODEL_FILE), help=f"model file (default {MODEL_FILE})")
@@ -214,6 +229,9 @@ def main(argv=None) -> int:
     parser.add_argument("--labels", metavar="DIR",
                         help="their hand-traced labels, same file names: traces painted red, or "
                              "white on black (rockmass.imaging.labels)")
+    parser.add_argument("--max-megapixels", type=float, default=ExtractParams().max_megapixels,
+                        help="photos are trained on down-sampled to this, as extract runs the model "
+                             "(default: ExtractParams' max_megapixels, %(default)g)")
     args = parser.parse_args(argv)
     if (args.photos is None) != (args.labels is None):
         parser.error("--photos and --labels go together")
@@ -222,9 +240,10 @@ def main(argv=None) -> int:
                      "model shipped with rockmass)")
     if args.photos is not None and args.stages == 2:
         parser.error("--stages 2 trains on synthetic faces only; use --stages 1 with --photos")
-    n_plain = (max(args.faces // 4, 1) if args.faces else 0) if args.plain_faces is None \
-        else args.plain_faces
-    photos = labelled_photos(args.photos, args.labels) if args.photos is not None else []
+    n_plain = args.plain_faces
+    if n_plain is None:  # a quarter of the field faces, at least one when there are any
+        n_plain = max(args.faces // 4, 1) if args.faces else 0
+    photos = labelled_pairs(args.photos, args.labels) if args.photos is not None else []
     if not photos and args.faces + n_plain == 0:
         parser.error("nothing to train on: --faces 0 and no --photos")
     fit = dict(hidden=tuple(args.hidden), epochs=args.epochs, seed=args.seed)
@@ -236,7 +255,8 @@ def main(argv=None) -> int:
                  ignore_minor_cracks=args.ignore_minor_cracks)
     synthetic = ((image.astype(np.float32) / 255.0, lines, ignore)
                  for _, image, lines, ignore in training_faces(args.seed, args.faces, n_plain, **faces))
-    own = ((grey, lines, None) for k, (grey, lines) in enumerate(photos) if not _held_photo(k, photos))
+    own = ((*labelled_photo(photo, label, args.max_megapixels), None)
+           for k, (photo, label) in enumerate(photos) if not _held_photo(k, photos))
     for grey, lines, ignore in itertools.chain(synthetic, own):
         features = pixel_features(model_input(grey))
         index, labels = face_samples(features, lines, rng, ignore=ignore)
@@ -261,8 +281,9 @@ def main(argv=None) -> int:
         xs.append(both.reshape(both.shape[0], -1)[:, index].T)
         ys.append(labels)
         held.append(np.full(len(labels), k % 10 == 9))
-    for k, (grey, lines) in enumerate(photos):
+    for k, (photo, label) in enumerate(photos):
         if _held_photo(k, photos):  # measured, never fitted
+            grey, lines = labelled_photo(photo, label, args.max_megapixels)
             features = pixel_features(model_input(grey))
             index, labels = face_samples(features, lines, rng)
             xs.append(features.reshape(features.shape[0], -1)[:, index].T)

@@ -66,7 +66,7 @@ def _check_pixel_model(path) -> None:
 
     try:
         load_model(path)
-    except (OSError, ValueError, KeyError) as error:
+    except (OSError, ValueError) as error:  # missing, or not a model (load_model says which)
         raise InputError(f"imaging.params.pixel_model / --pixel-model: {error}") from error
 
 

@@ -34,6 +34,20 @@ def _section_traces(run: _Run) -> str:
     return "".join(large + small) + confident
 
 
+#: Which column of the confident-statistics table to read, by detector (docs/imaging.md §7.1:
+#: on the real labelled photographs the ridge filter's score-kept traces are far closer to the
+#: labels than all its traces; the learned detector's filters have already removed most doubtful
+#: traces, and its score-kept set is the smaller, more conservative one).
+_CONFIDENT_READING = {
+    "ridge": "With the ridge filter, on real photographs the second column is the closer to a "
+             "geologist's map of the major joints; on clean images whose every faint line is a "
+             "joint, the first.",
+    "learned": "The learned detector's filters have already left out most doubtful traces: the "
+               "second column is the more conservative reading (fewer traces, less trace length), "
+               "not a more accurate one.",
+}
+
+
 def _confident_table(run: _Run) -> str:
     """The extracted traces' headline statistics with and without the low-score traces
     (``statistics_confident`` of extract/summary.json, docs/imaging.md §7.1); empty without it."""
@@ -46,11 +60,11 @@ def _confident_table(run: _Run) -> str:
             "Box-counting Dimension")
     rows = [[key, fmt(_value(every.get(key) or {})), fmt(_value(kept.get(key) or {}))] for key in keys]
     threshold = confident.get("min_joint_score")
+    detector = ((summary.get("extraction") or {}).get("params") or {}).get("detector")
     text = (f"{confident.get('traces_left_out')} of the {_value(every.get('Number of Traces') or {})} "
             f"extracted traces score under {fmt(threshold)}. The per-trace joint score "
-            "(docs/imaging.md §7.1) says how likely each is a joint. On real photographs the second "
-            "column is the closer to a geologist's map of the major joints; on clean images whose every "
-            "faint line is a joint, the first.")
+            "(docs/imaging.md §7.1) says how likely each is a joint. " + _CONFIDENT_READING.get(
+                detector, ""))
     return f"<p>{html.escape(text)}</p>" + table(
         ["extracted traces", "all", f"joint score ≥ {fmt(threshold)}"], rows, "t-confident")
 

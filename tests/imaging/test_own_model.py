@@ -2,6 +2,7 @@
 label reading, and its use by extract / the CLI (params.pixel_model, --pixel-model)."""
 
 import hashlib
+import io
 import json
 
 import cv2
@@ -13,7 +14,7 @@ from rockmass.imaging.extract import ExtractParams, extract
 from rockmass.imaging.labels import label_centre_lines, label_mask, labelled_pairs
 from rockmass.imaging.learned import MODEL_FILE, load_model
 from rockmass.imaging.metrics import raster_counts, render_traces
-from rockmass.imaging.train_pixel_model import main as train
+from rockmass.imaging.train_pixel_model import labelled_photo, main as train
 
 
 def _vein_photo(seed, shape=(240, 320), n=5):
@@ -94,13 +95,31 @@ def test_photos_without_labels_and_missing_folders_are_named(tmp_path):
                str(tmp_path / "labels"), "--out", str(tmp_path / "m.npz")])
 
 
-@pytest.mark.parametrize("args", [["--photos", "p"], ["--photos", "p", "--labels", "l"],
-                                  ["--faces", "0", "--plain-faces", "0"]])
-def test_training_options_that_cannot_work_are_refused(args, capsys):
+@pytest.mark.parametrize("args, message", [
+    (["--photos", "p"], "--photos and --labels go together"),
+    (["--photos", "p", "--labels", "l"], "give --out for a model trained on your photos"),
+    (["--photos", "p", "--labels", "l", "--out", "m.npz", "--stages", "2"], "use --stages 1"),
+    (["--faces", "0", "--plain-faces", "0"], "nothing to train on")])
+def test_training_options_that_cannot_work_are_refused(args, message, capsys):
     with pytest.raises(SystemExit) as stop:
-        train(args)  # no --labels; no --out (would replace the shipped model); nothing to train on
+        train(args)
     assert stop.value.code == 2
-    assert any(word in capsys.readouterr().err for word in ("--labels", "--out", "nothing to train"))
+    assert message in capsys.readouterr().err
+
+
+def test_large_photos_are_trained_on_the_grid_extraction_runs_the_model_on(tmp_path):
+    image, label = _vein_photo(3, shape=(600, 800))
+    cv2.imwrite(str(tmp_path / "big.png"), image)
+    cv2.imwrite(str(tmp_path / "big_label.png"), label)
+    grey, lines = labelled_photo(tmp_path / "big.png", tmp_path / "big_label.png", 0.12)
+    work = extract(image, m_per_px=1.0, params=ExtractParams(max_megapixels=0.12)).scale
+    assert grey.shape == lines.shape == tuple(work.work_shape_px)
+    assert work.work_factor == pytest.approx(0.5, rel=0.01)
+    # the centre lines at half the size: on the half-size label, and about half as many pixels
+    half = cv2.resize(label, grey.shape[::-1], interpolation=cv2.INTER_AREA) > 0
+    assert half[lines].all()
+    full = label_centre_lines(label).sum()
+    assert 0.4 * full < lines.sum() < 0.6 * full
 
 
 def test_pixel_model_is_for_the_learned_detector_and_must_exist(tmp_path):
@@ -111,7 +130,13 @@ def test_pixel_model_is_for_the_learned_detector_and_must_exist(tmp_path):
                 params=ExtractParams(pixel_model=str(tmp_path / "nowhere.npz")))
 
 
-@pytest.mark.parametrize("content", [b"hello", b"PK\x03\x04 not a zip"])
+def _npy_bytes():
+    buffer = io.BytesIO()
+    np.save(buffer, np.zeros(3))
+    return buffer.getvalue()
+
+
+@pytest.mark.parametrize("content", [b"hello", b"PK\x03\x04 not a zip", _npy_bytes()])
 def test_a_file_that_is_not_a_model_is_refused_by_name(content, tmp_path):
     path = tmp_path / "bad.npz"
     path.write_bytes(content)

@@ -333,6 +333,16 @@ def test_confident_table_equals_the_extract_summary(run_dir):
         assert _same(page.cell("t-confident", key, header[2]), kept[key]["value"])
 
 
+def test_confident_table_is_read_as_its_detector_allows(run_dir):
+    # the extract stage ran the default, learned, detector: its score-kept set is the conservative
+    # one (docs/imaging.md §7.1), so the page must not call it the closer to a geologist's map
+    out, _, path, _ = run_dir
+    assert _stage_json(out, "extract", "summary.json")["extraction"]["params"]["detector"] == "learned"
+    text = " ".join(path.read_text(encoding="utf-8").split())
+    assert "the more conservative reading" in text
+    assert "closer to a geologist" not in text
+
+
 def test_dfn_table_gives_every_set_of_every_realization(run_dir):
     out, _, _, page = run_dir
     rows = {(r[0], r[1]): r for r in page.tables["t-dfn"][1:]}
