@@ -8,7 +8,9 @@ failures measured on real faces name what is missing, and :func:`field_face` dra
 - **major joints** that are rough (a random walk across the face, not a gentle wiggle), often span
   the photograph, and are seen as a *dark core* of 2-12 px, often with a **shadow band** on one
   side (an overhang) and a **step edge** — the blocks either side lit differently, each shaded away
-  from the joint. The label is the core's centre line, as a geologist traces it;
+  from the joint. The label is the core's centre line, as a geologist traces it; optionally
+  (``FieldStyle.crevice_share``, :data:`CREVICE_STYLE`) a share of them is a **wide open crevice**,
+  a dark band up to 30 px across whose label is still its centre line, not its two edges;
 - **distractors that are not labelled**: minor cracks (short, thin, faint), rubble (small dark and
   bright blobs with sharp rims), **bright plates and highlights** (polygons with sharp edges, soft
   specular spots), thin bright veins, dark blotches (lichen, wet patches);
@@ -20,8 +22,9 @@ failures measured on real faces name what is missing, and :func:`field_face` dra
   hidden, so the truth is cut there.
 
 Everything is drawn from one seed (:class:`numpy.random.SeedSequence`), so the same seed gives the
-same image and truth on any machine. Half-casts and shotcrete have streams of their own, so turning
-them off gives the faces drawn before they were added. The result is a
+same image and truth on any machine. Half-casts, shotcrete and wide crevices have streams of their
+own, so turning them off gives the faces drawn before they were added (and turning the crevices on
+widens some joints of the same faces, everything else unchanged). The result is a
 :class:`~rockmass.imaging.synthetic.SyntheticFace` with ``difficulty = "field"``.
 """
 
@@ -34,7 +37,7 @@ import numpy as np
 from .frame import check_scale, rc_to_uv
 from .synthetic import SyntheticFace, _lighting, _rock_texture, _smooth_noise
 
-__all__ = ["FieldStyle", "TUNNEL_STYLE", "field_face", "centre_line_mask", "half_cast_axes",
+__all__ = ["FieldStyle", "TUNNEL_STYLE", "CREVICE_STYLE", "field_face", "centre_line_mask", "half_cast_axes",
            "minor_crack_mask", "shotcrete_mask", "shotcrete_area"]
 
 
@@ -81,11 +84,21 @@ class FieldStyle:
     # shotcrete: share of faces with any, and the covered fraction of the image
     shotcrete_share: float = 0.0
     shotcrete_cover: tuple[float, float] = (0.0, 0.35)
+    # wide open crevices: share of the major joints whose core is drawn wide and dark instead
+    # (labelled at the centre line all the same). Off by default, as the half-casts
+    crevice_share: float = 0.0
+    crevice_width_px: tuple[float, float] = (12.0, 30.0)
+    crevice_depth: tuple[float, float] = (0.6, 0.9)
+    crevice_blur: tuple[float, float] = (0.05, 0.2)  # edge softness, times the crevice's width
 
 
 #: A drill-and-blast tunnel face: the field-like faces with blast half-casts (0-2 families) and
 #: shotcrete on 40 % of the faces (up to 35 % of the image).
 TUNNEL_STYLE = FieldStyle(half_cast_families=(0, 2), shotcrete_share=0.4)
+
+#: Field-like faces where a quarter of the major joints are wide open crevices (a dark core of
+#: 12-30 px): the model is to mark such a band's centre line, not its two edges.
+CREVICE_STYLE = FieldStyle(crevice_share=0.25)
 
 
 def _rough_path(rng, start, angle, length_px, step_px=6.0, roughness=0.35):
@@ -379,12 +392,29 @@ def _shotcrete_surface(rng, shape, m_per_px, light):
 
 
 def _streams(seed):
-    """The face's random streams: network, rock, joints, clutter, camera, half-casts, shotcrete.
+    """The face's random streams: network, rock, joints, clutter, camera, half-casts, shotcrete,
+    crevices.
 
     Children of one :class:`numpy.random.SeedSequence`; spawning more children leaves the first
-    ones unchanged, so the elements added later (half-casts, shotcrete) do not alter the others.
+    ones unchanged, so the elements added later (half-casts, shotcrete, crevices) do not alter the
+    others.
     """
-    return [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(7)]
+    return [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(8)]
+
+
+def _crevice(rng, style):
+    """``(width px, relative darkening, blur sigma px)`` of a major joint drawn as a wide open
+    crevice, or None for an ordinary joint (a share ``style.crevice_share`` are crevices). Nothing
+    is drawn from ``rng`` when the share is 0, so the default faces stay those drawn before.
+
+    An open crevice seen face-on is a band in shadow: darker than most joint cores, its edges the
+    rims of the two blocks, fairly sharp; a pixel classifier sees its two edges as two thin dark
+    lines unless taught that the label lies between them.
+    """
+    if style.crevice_share <= 0 or rng.random() >= style.crevice_share:
+        return None
+    width = rng.uniform(*style.crevice_width_px)
+    return width, rng.uniform(*style.crevice_depth), max(width * rng.uniform(*style.crevice_blur), 0.6)
 
 
 def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
@@ -426,7 +456,8 @@ def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
     if h < 32 or w < 32:
         raise ValueError(f"shape_px must be at least 32 x 32 pixels, got {shape_px}")
     area = h * w / 160_000.0
-    net_rng, rock_rng, joint_rng, clutter_rng, camera_rng, cast_rng, spray_rng = _streams(seed)
+    (net_rng, rock_rng, joint_rng, clutter_rng, camera_rng, cast_rng, spray_rng,
+     crevice_rng) = _streams(seed)
 
     # rock: grain and blotches, bedding streaks, dark patches (lichen, wet rock)
     image = _rock_texture(rock_rng, (h, w), rock_rng.uniform(*style.texture))
@@ -456,6 +487,9 @@ def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
     widths = []
     for rc in paths:
         width = joint_rng.uniform(*style.core_width_px)
+        crevice = _crevice(crevice_rng, style)  # the joint stream's draws stay the same either way
+        if crevice is not None:
+            width = crevice[0]
         widths.append(width)
         if joint_rng.random() < style.step_share:  # blocks lit differently, shaded away from it
             side = _side_mask(rc, (h, w))
@@ -475,8 +509,10 @@ def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
             darkness = np.maximum(darkness, joint_rng.uniform(*style.shadow_depth) * band)
         core = np.zeros((h, w), dtype=np.float32)
         _draw(core, rc, 1.0, width)
-        core = cv2.GaussianBlur(core, (0, 0), max(width / 5, 0.6))
+        core = cv2.GaussianBlur(core, (0, 0), max(width / 5, 0.6) if crevice is None else crevice[2])
         depth = joint_rng.uniform(*style.core_depth)
+        if crevice is not None:
+            depth = crevice[1]
         if joint_rng.random() < 0.4:  # a faint stretch (rock bridge, dirt) along the joint
             t = joint_rng.uniform(0.1, 0.9)
             centre = rc[int(t * (len(rc) - 1))]

@@ -1,7 +1,7 @@
 """Train the learned joint detector's pixel model on synthetic faces only, reproducibly.
 
     OMP_NUM_THREADS=1 python -m rockmass.imaging.train_pixel_model [--out FILE] [--faces N] [--seed S]
-                      [--photos DIR --labels DIR]
+                      [--wide-crevices [SHARE] [--crevice-width LO HI]] [--photos DIR --labels DIR]
 
 Training data (docs/imaging.md §3.1): per stage, ``--faces`` field-like faces
 (:func:`rockmass.imaging.synthetic_field.field_face`, 400 x 400 px) and a quarter as many faces of
@@ -24,6 +24,11 @@ Two options change the faces, not the default recipe: ``--tunnel-style`` draws t
 that a thin dark line is not taught to be "no joint" when the plain faces teach that it is one.
 ``benchmarks/bench_pixel_training.py`` compares them; neither lifts the plain faces' F1 at the
 detector's defaults, whose loss lies in the trace filters (docs/imaging.md §3.1).
+``--wide-crevices [SHARE]`` draws a share (default 0.25, :data:`rockmass.imaging.synthetic_field.CREVICE_STYLE`)
+of the field faces' major joints as wide open crevices, dark cores ``--crevice-width LO HI`` px
+across (default 12-30) labelled at their centre line as every major joint is: on real photographs
+the model marked a wide dark crevice's two edges, not its centre. The other joints and everything
+else on the faces stay as drawn without it (the crevices have a random stream of their own).
 
 Your own photographs (docs/imaging.md §3.2): ``--photos DIR --labels DIR --out FILE`` adds the
 labelled photographs of DIR (labels of the same name and size, traces painted red or white on
@@ -47,15 +52,16 @@ import json
 import platform
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from .features import CONTEXT_NAMES, FEATURE_NAMES, context_features, pixel_features
 from .learned import MODEL_FILE, PixelModel, Stage, model_input
-from .synthetic_field import TUNNEL_STYLE
+from .synthetic_field import CREVICE_STYLE, TUNNEL_STYLE, FieldStyle
 
-__all__ = ["face_samples", "training_faces", "labelled_photo", "fit_mlp", "main"]
+__all__ = ["face_samples", "training_faces", "field_style", "labelled_photo", "fit_mlp", "main"]
 
 POSITIVE_PX = 1.0
 NEGATIVE_PX = 3.0
@@ -101,6 +107,20 @@ def training_faces(first_seed: int, n_field: int, n_plain: int, *, style=None,
                                   m_per_px=0.016)
             lines = render_traces(face.truth, face.image.shape, face.m_per_px)
         yield seed, face.image, lines, ignore
+
+
+def field_style(*, tunnel: bool = False, crevice_share: float | None = None,
+                crevice_width_px=None) -> FieldStyle | None:
+    """The style of the field training faces: :data:`TUNNEL_STYLE` with ``tunnel``, a share
+    ``crevice_share`` of the major joints drawn as wide crevices ``crevice_width_px`` (lo, hi) wide
+    when given; None (the default :class:`FieldStyle`) when neither is asked for."""
+    if not tunnel and crevice_share is None:
+        return None
+    style = TUNNEL_STYLE if tunnel else FieldStyle()
+    if crevice_share is not None:
+        width = tuple(crevice_width_px) if crevice_width_px else CREVICE_STYLE.crevice_width_px
+        style = replace(style, crevice_share=float(crevice_share), crevice_width_px=width)
+    return style
 
 
 def labelled_photo(photo, label, max_megapixels: float) -> tuple[np.ndarray, np.ndarray]:
@@ -224,6 +244,14 @@ def main(argv=None) -> int:
                         help="field faces of TUNNEL_STYLE (half-casts, shotcrete)")
     parser.add_argument("--ignore-minor-cracks", action="store_true",
                         help="leave the field faces' minor cracks out of the negatives")
+    parser.add_argument("--wide-crevices", type=float, nargs="?", metavar="SHARE",
+                        const=CREVICE_STYLE.crevice_share,
+                        help="draw this share of the field faces' major joints as wide dark "
+                             f"crevices, labelled at the centre line (default share "
+                             f"{CREVICE_STYLE.crevice_share:g})")
+    parser.add_argument("--crevice-width", type=float, nargs=2, metavar=("LO", "HI"),
+                        help="core width range of the wide crevices in pixels (default "
+                             f"{CREVICE_STYLE.crevice_width_px[0]:g} {CREVICE_STYLE.crevice_width_px[1]:g})")
     parser.add_argument("--photos", metavar="DIR",
                         help="also train on your own photographs in DIR (with --labels; needs --out)")
     parser.add_argument("--labels", metavar="DIR",
@@ -238,6 +266,12 @@ def main(argv=None) -> int:
     if args.photos is not None and args.out == str(MODEL_FILE):
         parser.error("give --out for a model trained on your photos (the default replaces the "
                      "model shipped with rockmass)")
+    if args.crevice_width is not None and args.wide_crevices is None:
+        parser.error("--crevice-width goes with --wide-crevices")
+    if args.wide_crevices is not None and not 0.0 < args.wide_crevices <= 1.0:
+        parser.error("--wide-crevices: the share must be in (0, 1]")
+    if args.crevice_width is not None and not 0 < args.crevice_width[0] <= args.crevice_width[1]:
+        parser.error("--crevice-width: give 0 < LO <= HI")
     if args.photos is not None and args.stages == 2:
         parser.error("--stages 2 trains on synthetic faces only; use --stages 1 with --photos")
     n_plain = args.plain_faces
@@ -251,8 +285,9 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     rng = np.random.default_rng(args.seed)
     xs, ys = [], []
-    faces = dict(style=TUNNEL_STYLE if args.tunnel_style else None,
-                 ignore_minor_cracks=args.ignore_minor_cracks)
+    style = field_style(tunnel=args.tunnel_style, crevice_share=args.wide_crevices,
+                        crevice_width_px=args.crevice_width)
+    faces = dict(style=style, ignore_minor_cracks=args.ignore_minor_cracks)
     synthetic = ((image.astype(np.float32) / 255.0, lines, ignore)
                  for _, image, lines, ignore in training_faces(args.seed, args.faces, n_plain, **faces))
     own = ((*labelled_photo(photo, label, args.max_megapixels), None)
@@ -310,6 +345,9 @@ def main(argv=None) -> int:
             "python": platform.python_version(), "numpy": np.__version__,
             "data": _data_note(args.faces + n_plain, photos, args.photos),
             "photos": args.photos, "labels": args.labels}
+    if args.wide_crevices is not None:
+        info["wide_crevices"] = {"share": style.crevice_share,
+                                 "width_px": list(style.crevice_width_px)}
     model = PixelModel(stages=stages, feature_names=names, info=info)
     path = model.save(args.out)
     print(json.dumps(info, indent=2))

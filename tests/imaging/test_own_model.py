@@ -99,7 +99,10 @@ def test_photos_without_labels_and_missing_folders_are_named(tmp_path):
     (["--photos", "p"], "--photos and --labels go together"),
     (["--photos", "p", "--labels", "l"], "give --out for a model trained on your photos"),
     (["--photos", "p", "--labels", "l", "--out", "m.npz", "--stages", "2"], "use --stages 1"),
-    (["--faces", "0", "--plain-faces", "0"], "nothing to train on")])
+    (["--faces", "0", "--plain-faces", "0"], "nothing to train on"),
+    (["--crevice-width", "10", "20"], "--crevice-width goes with --wide-crevices"),
+    (["--wide-crevices", "1.5"], "the share must be in (0, 1]"),
+    (["--wide-crevices", "--crevice-width", "20", "10"], "give 0 < LO <= HI")])
 def test_training_options_that_cannot_work_are_refused(args, message, capsys):
     with pytest.raises(SystemExit) as stop:
         train(args)

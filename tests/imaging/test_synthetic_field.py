@@ -6,7 +6,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from rockmass.imaging.synthetic_field import (TUNNEL_STYLE, FieldStyle, centre_line_mask, field_face,
+from rockmass.imaging.synthetic_field import (CREVICE_STYLE, TUNNEL_STYLE, FieldStyle, centre_line_mask, field_face,
                                               half_cast_axes, minor_crack_mask, shotcrete_area,
                                               shotcrete_mask)
 
@@ -149,3 +149,38 @@ def test_the_tunnel_style_draws_some_faces_without_the_new_elements_and_the_defa
     assert 0 < bare < 12
     assert all(not half_cast_axes(f) and not shotcrete_mask(f).any()
                for f in (field_face(seed=s, shape_px=(40, 40)) for s in range(12)))
+
+
+def test_wide_crevices_widen_some_joints_and_leave_the_rest_of_the_face_as_it_was():
+    # the crevices have a random stream of their own: the truth keeps its lines, only the widths
+    # of the joints drawn as crevices change; the default style draws none
+    faces = [(field_face(seed=s, **SMALL), field_face(seed=s, style=CREVICE_STYLE, **SMALL))
+             for s in range(8)]
+    assert FieldStyle().crevice_share == 0.0 and 0 < CREVICE_STYLE.crevice_share < 1
+    widened = 0
+    for plain, wide in faces:
+        assert np.array_equal(plain.truth.xy_m, wide.truth.xy_m)
+        a, b = plain.truth.attributes["width_px"], wide.truth.attributes["width_px"]
+        changed = a != b
+        widened += int(changed.sum())
+        assert np.all(b[changed] >= CREVICE_STYLE.crevice_width_px[0] - 0.5)
+        assert np.array_equal(plain.image, wide.image) == (not changed.any())
+    assert widened > 0
+
+
+def test_a_wide_crevice_is_a_dark_band_labelled_at_its_centre_line():
+    import cv2
+
+    style = replace(FieldStyle(**QUIET), step_share=0.0, shadow_share=0.0, crevice_share=1.0,
+                    crevice_width_px=(24.0, 24.0), crevice_depth=(0.8, 0.8))
+    face = field_face(seed=3, style=style, **SMALL)
+    lines = centre_line_mask(face).astype(np.uint8)
+
+    def ring(inner, outer):  # pixels between inner and outer px from the centre line
+        near = cv2.dilate(lines, np.ones((2 * outer + 1,) * 2, np.uint8)).astype(bool)
+        return near & ~cv2.dilate(lines, np.ones((2 * inner + 1,) * 2, np.uint8)).astype(bool)
+
+    centre, inside, rock = (face.image[lines > 0].mean(), face.image[ring(5, 7)].mean(),
+                            face.image[ring(20, 26)].mean())
+    assert centre < 0.5 * rock and inside < 0.6 * rock  # dark across its width, not on a line
+    assert centre <= inside + 5  # no lighter middle: the label is not on an edge
