@@ -37,8 +37,8 @@ import numpy as np
 from .frame import check_scale, rc_to_uv
 from .synthetic import SyntheticFace, _lighting, _rock_texture, _smooth_noise
 
-__all__ = ["FieldStyle", "TUNNEL_STYLE", "CREVICE_STYLE", "field_face", "centre_line_mask", "half_cast_axes",
-           "minor_crack_mask", "shotcrete_mask", "shotcrete_area"]
+__all__ = ["FieldStyle", "TUNNEL_STYLE", "CREVICE_STYLE", "field_face", "centre_line_mask",
+           "half_cast_axes", "minor_crack_mask", "shotcrete_mask", "shotcrete_area"]
 
 
 @dataclass(frozen=True)

@@ -24,11 +24,14 @@ Two options change the faces, not the default recipe: ``--tunnel-style`` draws t
 that a thin dark line is not taught to be "no joint" when the plain faces teach that it is one.
 ``benchmarks/bench_pixel_training.py`` compares them; neither lifts the plain faces' F1 at the
 detector's defaults, whose loss lies in the trace filters (docs/imaging.md §3.1).
-``--wide-crevices [SHARE]`` draws a share (default 0.25, :data:`rockmass.imaging.synthetic_field.CREVICE_STYLE`)
-of the field faces' major joints as wide open crevices, dark cores ``--crevice-width LO HI`` px
-across (default 12-30) labelled at their centre line as every major joint is: on real photographs
-the model marked a wide dark crevice's two edges, not its centre. The other joints and everything
-else on the faces stay as drawn without it (the crevices have a random stream of their own).
+``--wide-crevices [SHARE]`` draws a share (default 0.25,
+:data:`rockmass.imaging.synthetic_field.CREVICE_STYLE`) of the field faces' major joints as wide
+open crevices, dark cores ``--crevice-width LO HI`` px across (default 12-30), labelled at their
+centre line as every major joint is: on real photographs the model marked a wide dark crevice's
+two edges, not its centre. The other joints and everything else on the faces stay as drawn
+without it (the crevices have a random stream of their own). It lifts real ``train/`` F1 at every
+training seed but not ``val/`` (``bench_pixel_training.py --seed-spread``), so it is not the
+shipped recipe.
 
 Your own photographs (docs/imaging.md §3.2): ``--photos DIR --labels DIR --out FILE`` adds the
 labelled photographs of DIR (labels of the same name and size, traces painted red or white on

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Callable
 
 import numpy as np
@@ -251,6 +252,24 @@ def _auto_time_step(eng: Engine, safety: float, beta: float) -> tuple[float, flo
     return safety * limit, limit
 
 
+def _warn_stiffness_damping_step(stage: Stage, beta: float, limit: float, undamped: float) -> None:
+    """A ``UserWarning`` when the stiffness-proportional Rayleigh term β K cuts the stable step
+    below 1/:data:`~rockmass.solver.tolerances.DAMPED_STEP_WARN_FACTOR` of its undamped value.
+    By eq. (2.6) of docs/dem.md the step falls as β ω_max grows: stiff, light zones (large
+    ω_max) are overdamped at their own frequency, and the stage then takes many more steps to damp
+    vibrations of a frequency no input carries."""
+    if not (math.isfinite(limit) and math.isfinite(undamped)) or (
+            limit * T.DAMPED_STEP_WARN_FACTOR >= undamped):
+        return
+    warnings.warn(
+        f"stage {stage.name!r}: the stiffness-proportional part of the Rayleigh damping "
+        f"(beta = {beta:.3g} s, rayleigh_mode = {stage.rayleigh_mode!r}) cuts the stable time step "
+        f"from {undamped:.3g} s to {limit:.3g} s ({undamped / limit:.0f} times as many steps): "
+        f"it overdamps the stiffest contacts or zones (beta omega_max = "
+        f"{beta * 2.0 / undamped:.2g}); rayleigh_mode = \"mass\" keeps the undamped step",
+        UserWarning, stacklevel=4)
+
+
 def _monitor_displacements(points, eng: Engine, ref) -> dict:
     """Displacement (m) of each boundary point from the reference placement; a point whose block
     was taken out (failed) is left out — the stage's ``failed_blocks`` name that block."""
@@ -341,6 +360,8 @@ class _StageRun:
             dt = stage.time_step_s
         elif not math.isfinite(limit):  # no contact at all: free flight
             dt = (stage.duration_s or 1.0) / T.FREE_FLIGHT_STEPS
+        if self.beta > 0 and stage.time_step_s is None:
+            _warn_stiffness_damping_step(stage, self.beta, limit, self.eng.stable_time_step())
         return dt, limit
 
     def run(self) -> StageResult:

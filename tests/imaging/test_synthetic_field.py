@@ -6,9 +6,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from rockmass.imaging.synthetic_field import (CREVICE_STYLE, TUNNEL_STYLE, FieldStyle, centre_line_mask, field_face,
-                                              half_cast_axes, minor_crack_mask, shotcrete_area,
-                                              shotcrete_mask)
+from rockmass.imaging.synthetic_field import (CREVICE_STYLE, TUNNEL_STYLE, FieldStyle,
+                                              centre_line_mask, field_face, half_cast_axes,
+                                              minor_crack_mask, shotcrete_area, shotcrete_mask)
 
 SMALL = dict(shape_px=(160, 200), m_per_px=0.01)
 

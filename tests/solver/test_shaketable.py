@@ -9,7 +9,6 @@ slip at 15.5 mm (slow: a few minutes).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from pathlib import Path
 
@@ -113,3 +112,36 @@ def test_ahola_shaketable_threshold_between_11p7_and_15p5_mm():
     grow_15p5 = end[15.5] - end[11.7]
     assert grow_11p7 < 0.1
     assert grow_15p5 > 3 * grow_11p7
+
+
+def _resting_block_stage(mode: str):
+    """A 1 m x 0.5 m block resting on a fixed one, one dynamic stage with 5 % Rayleigh damping at
+    2 Hz in ``mode``: its contact's ω_max is near 10³ rad/s, so β = 2ξ/ω = 8 ms overdamps it."""
+    stage = Stage("rest", "dynamic", duration_s=0.02, rayleigh_ratio=0.05, rayleigh_frequency_hz=2.0,
+                  rayleigh_mode=mode, frames=0)
+    settings = Settings(joints={"default": Coulomb(1e9, 1e9, 40.0)}, material=Material(RHO),
+                        stages=(stage,), fixes=(Fix("blocks:0"),))
+    return run(incline(0.0), settings)
+
+
+def test_a_step_cut_by_stiffness_damping_warns_and_names_the_cure():
+    with pytest.warns(UserWarning, match='rayleigh_mode = "mass" keeps the undamped step') as caught:
+        _resting_block_stage("stiffness")
+    message = str(next(w.message for w in caught if "stiffness-proportional" in str(w.message)))
+    undamped, damped = (float(v) for v in
+                        message.split("from ")[1].split(" s (")[0].split(" s to "))
+    # eq. (2.6): Δt = 4 / (√(4λ + γ²) + γ), λ = (2/Δt₀)², γ = βλ, β = 2ξ/ω
+    beta = 2 * 0.05 / (2 * math.pi * 2.0)
+    lam = (2.0 / undamped) ** 2
+    assert damped == pytest.approx(4.0 / (math.sqrt(4 * lam + (beta * lam) ** 2) + beta * lam),
+                                   rel=1e-2)
+    assert undamped / damped > 4.0
+
+
+def test_mass_damping_keeps_the_step_and_does_not_warn():
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = _resting_block_stage("mass")
+    assert result.status == "ok"
