@@ -19,8 +19,7 @@ separates the two.
    that with as many plain faces as half the field faces, and that with ``--tunnel-style`` field
    faces (half-casts, shotcrete), and ``--wide-crevices`` (a quarter of the field faces' major joints
    drawn as 12-30 px dark crevices labelled at the centre), with half of them, and with 10-20 px
-   crevices. Columns: training time, model size, then
-   F1 and dP21 on each set.
+   crevices. Columns: training time, model size, then F1 and dP21 on each set.
 3. ``--seed-spread``: the default recipe and ``--wide-crevices``, each trained from five seeds
    (``--seed`` 10 000, the shipped model's, to 50 000), on the plain faces and on both real splits:
    how much the training seed alone moves the scores, and whether an option's gain outlasts it.
@@ -139,12 +138,12 @@ def spread_summary(rows, splits) -> list:
     for recipe in SPREAD_RECIPES:
         chosen = [r for r in rows if r["recipe"] == recipe]
         line = {"recipe": recipe}
+        base = {r["seed"]: r for r in rows if r["recipe"] == SPREAD_RECIPES[0]}
         for name in sets:
             f1 = np.array([r[f"{name}_F1"] for r in chosen])
             line[f"{name}_F1"] = f"{f1.mean():.3f} ({f1.min():.3f}-{f1.max():.3f})"
             if recipe != SPREAD_RECIPES[0]:
-                base = np.array([r[f"{name}_F1"] for r in rows if r["recipe"] == SPREAD_RECIPES[0]])
-                gain = f1 - base
+                gain = f1 - np.array([base[r["seed"]][f"{name}_F1"] for r in chosen])
                 line[f"{name}_gain"] = f"{gain.mean():+.3f} ({gain.min():+.3f}..{gain.max():+.3f})"
         out.append(line)
     return out
@@ -175,9 +174,6 @@ def main(argv=None) -> int:
         parser.error(f"--variants: unknown {unknown}; choose from {list(VARIANTS)}")
 
     print(header("learned detector: pixel model training against the trace filters"))
-    pairs = real_pairs("train") if (DATA / "train" / "images").is_dir() else []
-    if not pairs:
-        print("real training photographs absent: the real columns are skipped")
     if args.seed_spread:
         splits = {name: real_pairs(name) for name in ("train", "val")
                   if (DATA / name / "images").is_dir()}
@@ -195,6 +191,9 @@ def main(argv=None) -> int:
                                                  for c in ("F1", "gain")]]))
         print(f"\nrows saved to {save('bench_pixel_training_seeds', {'rows': rows, 'summary': summary})}")
         return 0
+    pairs = real_pairs("train") if (DATA / "train" / "images").is_dir() else []
+    if not pairs:
+        print("real training photographs absent: the real columns are skipped")
     payload: dict = {"seeds": list(SEEDS), "steps": [], "variants": []}
 
     if not args.no_filters_table:

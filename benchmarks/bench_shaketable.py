@@ -61,11 +61,18 @@ themselves and with the rigid rest, before the shaking (static stages only) and 
 many, their total normal force, their largest plastic slip: where the set slipped, and whether
 it ended clamped harder than it began.
 
-Table 11 — what does not unlock the wedge (``--tables 11``, 6 min): the wedge of Table 10, its
+Table 11 — what does not unlock the wedge (``--tables 11``, 5 min): the wedge of Table 10, its
 surroundings rigid, at 1.2 a_c with the sample's joints and rounding, with joints five times softer
-(kn, ks × 0.2) and with a corner rounding of 5 mm.
+(kn, ks × 0.2), with a corner rounding of 5 mm, and with the wedge's blocks kept from rotating.
 
-``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–11.
+Table 12 — deformable blocks (``--tables 12``, about 70 min): the wedge of Table 10, its
+surroundings rigid, at 1.2 a_c, in two rows: rigid blocks, and blocks meshed into elastic
+triangular zones of 1 cm with Varma et al.'s Table 1 K and G, as seed 002 §3 meshed every block
+("triangular zones of size 1 cm"; 2 cm and three cycles with ``--quick``). Both are damped by the
+mass term only, at the sample's ratio (its stiffness term overdamps the zones and shortens the
+step). Does blocks' deformation let the jammed set keep slipping, as UDEC's model did?
+
+``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–12.
 """
 
 from __future__ import annotations
@@ -82,7 +89,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import header, save, table  # noqa: E402
 
 from rockmass.solve_stage import prepare  # noqa: E402
-from rockmass.solver import Fix, TableSine, VelocityInput, run  # noqa: E402
+from rockmass.solver import Deformable, Elastic, Fix, TableSine, VelocityInput, run  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "samples" / "solve_shaketable.toml"
@@ -308,11 +315,16 @@ def moving_mass(model, settings, frequency_hz: float, a_c: float, ratios, cycles
     return rows
 
 
+def blocks(indices) -> str:
+    """The selector ``"blocks:i,j,k"`` of ``indices`` (sorted)."""
+    return "blocks:" + ",".join(str(i) for i in sorted(indices))
+
+
 def rigid_except(model, settings, free):
     """The sample's settings with every block not in ``free`` fixed and driven in x like the table
     (as its velocity inputs are): those blocks move as one with the table; the ``free`` ones alone
     can slip."""
-    driven = "blocks:" + ",".join(str(i) for i in range(model.n_blocks) if i not in free)
+    driven = blocks(i for i in range(model.n_blocks) if i not in free)
     table_motion = settings.velocity_inputs[0].history
     return dataclasses.replace(
         settings, fixes=tuple(settings.fixes) + (Fix(where=driven),),
@@ -337,22 +349,64 @@ def top_left_and_wedge(model, settings, a_c: float) -> tuple[int, set]:
 def wedge_variants(model, settings, frequency_hz: float, a_c: float, ratio: float,
                    cycles: int) -> list:
     """Table 11: the wedge of Table 10 (its blocks and the top-left one free, the rest rigid with
-    the table) with the sample's joints and rounding, with joints five times softer, and with a
-    corner rounding of 5 mm: does either let it keep slipping?"""
-    omega = 2 * math.pi * frequency_hz
-    motion = TableSine(ratio * a_c / omega ** 2, frequency_hz, cycles=cycles)
-    top_left, wedge = top_left_and_wedge(model, settings, a_c)
-    free = wedge | {top_left}
+    the table) with the sample's joints and rounding, with joints five times softer, with a corner
+    rounding of 5 mm, and with its blocks kept from rotating (does it jam by rotating blocks?):
+    does any let it keep slipping?"""
+    free = wedge_and_top_left(model, settings, a_c)
     joint = settings.joints["default"]
     soft = dataclasses.replace(joint, kn_pa_m=0.2 * joint.kn_pa_m, ks_pa_m=0.2 * joint.ks_pa_m)
+    variants = (
+        ("sample (Table 1 joints, d = 2 mm)", settings),
+        ("joints 5x softer", dataclasses.replace(settings, joints={"default": soft})),
+        ("rounding d = 5 mm", dataclasses.replace(settings, rounding_m=0.005)),
+        ("wedge blocks' rotations fixed", dataclasses.replace(
+            settings, fixes=(*settings.fixes, Fix(blocks(free), "r")))))
+    return shaken_wedge(model, free, variants, frequency_hz, a_c, ratio, cycles)
+
+
+#: Table 12: chosen blocks smaller than this stay rigid (the slivers the tunnel cuts off the wedge,
+#: whose small zones would set the time step; a whole block is 25 cm²).
+ZONED_MIN_BLOCK_AREA_M2 = 1e-4
+
+
+def wedge_zoned(model, settings, frequency_hz: float, a_c: float, ratio: float, cycles: int,
+                zone_sizes_m=(0.01,)) -> list:
+    """Table 12: the wedge of Table 10 as rigid blocks, and meshed as seed 002 §3 meshed every
+    block (elastic triangular zones of 1 cm with Varma et al.'s Table 1 K and G; slivers under
+    :data:`ZONED_MIN_BLOCK_AREA_M2` stay rigid): do blocks that deform let the jammed set keep
+    slipping? Both rows are damped by the mass term alone (``rayleigh_mode = "mass"`` at the
+    sample's ξ = 0.5 % at 100 Hz, relative to the table; α = 2ξω, twice the sample's): the
+    sample's stiffness term overdamps the zones' own vibrations and shortens the step (the run
+    warns; docs/dem.md §8.2)."""
+    free = wedge_and_top_left(model, settings, a_c)
+    material = settings.material
+    elastic = Elastic(material.bulk_modulus_pa, material.shear_modulus_pa)
+    variants = (("rigid blocks", settings), *(
+        (f"elastic zones {100 * h:g} cm", dataclasses.replace(settings, deformable=(
+            Deformable(where=blocks(free), model=elastic, zone_size_m=h,
+                       min_block_area_m2=ZONED_MIN_BLOCK_AREA_M2),))) for h in zone_sizes_m))
+    return shaken_wedge(model, free, variants, frequency_hz, a_c, ratio, cycles,
+                        rayleigh_mode="mass")
+
+
+def wedge_and_top_left(model, settings, a_c: float) -> set:
+    """The blocks of the wedge of Table 10 and the top-left block."""
+    top_left, wedge = top_left_and_wedge(model, settings, a_c)
+    return wedge | {top_left}
+
+
+def shaken_wedge(model, free: set, variants, frequency_hz: float, a_c: float, ratio: float,
+                 cycles: int, **damping) -> list:
+    """The top-left block's accumulated slip per cycle at a_max = ratio · a_c with the blocks
+    ``free`` free and the rest rigid with the table, for each (label, settings) of ``variants``
+    (the dynamic stage's damping changed by ``damping``, Stage fields)."""
+    omega = 2 * math.pi * frequency_hz
+    motion = TableSine(ratio * a_c / omega ** 2, frequency_hz, cycles=cycles)
     rows = []
-    for label, varied in (("sample (Table 1 joints, d = 2 mm)", settings),
-                          ("joints 5x softer", dataclasses.replace(settings,
-                                                                   joints={"default": soft})),
-                          ("rounding d = 5 mm", dataclasses.replace(settings, rounding_m=0.005))):
+    for label, varied in variants:
         t0 = time.perf_counter()
         result = run(model, shaken_settings(rigid_except(model, varied, free), motion,
-                                            cycles / frequency_hz))
+                                            cycles / frequency_hz, **damping))
         wall = time.perf_counter() - t0
         slips = slip_after_cycles(result, frequency_hz, cycles)
         rows.append({"variant": label, "blocks": len(free), **{f"cycle_{c}_mm": v for c, v in
@@ -512,6 +566,17 @@ def main(quick: bool = False, frequency_hz: float | None = None,
                            *[(f"cycle_{c}_mm", ".3f") for c in range(1, n + 1)],
                            ("status", "s"), ("wall_s", ".0f")]))
         results["wedge_variants"] = rows
+    if 12 in tables:
+        a_c = threshold_a_c(frequency_hz)
+        n = 3 if quick else 6
+        rows = wedge_zoned(model, settings, frequency_hz, a_c, 1.2, n,
+                           zone_sizes_m=(0.02,) if quick else (0.01,))
+        print(f"\nTable 12 — the wedge of Table 10 with deformable blocks (elastic zones, Table 1 "
+              f"moduli): 1.2 a_c, top-left block's accumulated slip after each of {n} cycles, mm")
+        print(table(rows, [("variant", "s"), ("blocks", "d"),
+                           *[(f"cycle_{c}_mm", ".3f") for c in range(1, n + 1)],
+                           ("status", "s"), ("wall_s", ".0f")]))
+        results["wedge_zoned"] = rows
     partial = "" if tables == (1, 3, 4, 5, 6, 7, 8, 9) and band is not None else "_tables" + "".join(
         map(str, tables))
     save("bench_shaketable" + ("_quick" if quick else "") + partial, results)

@@ -252,22 +252,24 @@ def _auto_time_step(eng: Engine, safety: float, beta: float) -> tuple[float, flo
     return safety * limit, limit
 
 
-def _warn_stiffness_damping_step(stage: Stage, beta: float, limit: float, undamped: float) -> None:
+def _warn_stiffness_damping_step(stage: Stage, beta: float, limit: float,
+                                 without_beta: float) -> None:
     """A ``UserWarning`` when the stiffness-proportional Rayleigh term β K cuts the stable step
-    below 1/:data:`~rockmass.solver.tolerances.DAMPED_STEP_WARN_FACTOR` of its undamped value.
-    By eq. (2.6) of docs/dem.md the step falls as β ω_max grows: stiff, light zones (large
-    ω_max) are overdamped at their own frequency, and the stage then takes many more steps to damp
-    vibrations of a frequency no input carries."""
-    if not (math.isfinite(limit) and math.isfinite(undamped)) or (
-            limit * T.DAMPED_STEP_WARN_FACTOR >= undamped):
+    ``without_beta`` to ``limit`` by more than
+    :data:`~rockmass.solver.tolerances.DAMPED_STEP_WARN_FACTOR`. By eq. (2.6) of docs/dem.md, Δt/Δt₀ = 2/(√(4 + x²) + x) with x = βω_max: the stiffest
+    contacts and the smallest zones are overdamped at their own frequency (x > 1.5 for a halving),
+    and the stage takes that many more steps to damp vibrations no input carries. Points at the
+    caller of :func:`run` (warn <- this <- _first_time_step <- _StageRun <- run <- caller)."""
+    if not (math.isfinite(limit) and math.isfinite(without_beta)) or (
+            limit * T.DAMPED_STEP_WARN_FACTOR >= without_beta):
         return
     warnings.warn(
         f"stage {stage.name!r}: the stiffness-proportional part of the Rayleigh damping "
-        f"(beta = {beta:.3g} s, rayleigh_mode = {stage.rayleigh_mode!r}) cuts the stable time step "
-        f"from {undamped:.3g} s to {limit:.3g} s ({undamped / limit:.0f} times as many steps): "
-        f"it overdamps the stiffest contacts or zones (beta omega_max = "
-        f"{beta * 2.0 / undamped:.2g}); rayleigh_mode = \"mass\" keeps the undamped step",
-        UserWarning, stacklevel=4)
+        f"(beta = {beta:.4g} s, rayleigh_mode = {stage.rayleigh_mode!r}) cuts the stable time step "
+        f"from {without_beta:.4g} s to {limit:.4g} s ({without_beta / limit:.1f} times as many "
+        f"steps): it overdamps the stiffest contacts or zones; rayleigh_mode = \"mass\" keeps the "
+        f"step without it (at the same rayleigh_ratio its mass term is twice as large)",
+        UserWarning, stacklevel=5)
 
 
 def _monitor_displacements(points, eng: Engine, ref) -> dict:
@@ -349,7 +351,8 @@ class _StageRun:
 
     def _first_time_step(self) -> tuple[float, float]:
         """(Δt, stable limit): automatic, or the stage's own (refused above the limit), or a
-        fraction of the duration when nothing is in contact (free flight)."""
+        fraction of the duration when nothing is in contact (free flight). An automatic step cut
+        sharply by the stiffness-proportional damping warns (:func:`_warn_stiffness_damping_step`)."""
         stage = self.stage
         dt, limit = _auto_time_step(self.eng, self.safety, self.beta)
         if stage.time_step_s is not None:

@@ -139,10 +139,10 @@ STEP_CUT_SLACK = 0.01
 #: Steps of a stage with no contact at all (free flight): the step only sets the record interval.
 FREE_FLIGHT_STEPS = 1000
 
-#: A dynamic stage warns when the stiffness-proportional Rayleigh term cuts its stable time step
-#: by more than this factor (docs/dem.md §8.2): the run is then that many times slower for damping
-#: a frequency no input carries.
-DAMPED_STEP_WARN_FACTOR = 4.0
+#: A dynamic stage with an automatic step warns when the stiffness-proportional Rayleigh term cuts
+#: its stable time step by more than this factor (docs/dem.md §8.2; βω_max > 1.5): the run is then
+#: that many times slower for damping frequencies no input carries.
+DAMPED_STEP_WARN_FACTOR = 2.0
 
 #: Default failure displacement of the static failure watch, in rounding lengths d: well above the
 #: elastic closure of a joint under load, well below any real fall or slide.

@@ -114,34 +114,44 @@ def test_ahola_shaketable_threshold_between_11p7_and_15p5_mm():
     assert grow_15p5 > 3 * grow_11p7
 
 
-def _resting_block_stage(mode: str):
-    """A 1 m x 0.5 m block resting on a fixed one, one dynamic stage with 5 % Rayleigh damping at
-    2 Hz in ``mode``: its contact's ω_max is near 10³ rad/s, so β = 2ξ/ω = 8 ms overdamps it."""
-    stage = Stage("rest", "dynamic", duration_s=0.02, rayleigh_ratio=0.05, rayleigh_frequency_hz=2.0,
-                  rayleigh_mode=mode, frames=0)
+def _resting_block_stage(mode: str, ratio: float = 0.05, **stage):
+    """A 1 m x 0.5 m block resting on a fixed one, one dynamic stage with Rayleigh damping
+    ``ratio`` at 2 Hz in ``mode``. Its contact's ω_max is about 2·10³ rad/s, so the stiffness
+    term's β = 2ξ/ω (8 ms at 5 %) overdamps it."""
+    stage = Stage("rest", "dynamic", duration_s=0.02, rayleigh_ratio=ratio,
+                  rayleigh_frequency_hz=2.0, rayleigh_mode=mode, frames=0, **stage)
     settings = Settings(joints={"default": Coulomb(1e9, 1e9, 40.0)}, material=Material(RHO),
                         stages=(stage,), fixes=(Fix("blocks:0"),))
     return run(incline(0.0), settings)
 
 
-def test_a_step_cut_by_stiffness_damping_warns_and_names_the_cure():
-    with pytest.warns(UserWarning, match='rayleigh_mode = "mass" keeps the undamped step') as caught:
-        _resting_block_stage("stiffness")
-    message = str(next(w.message for w in caught if "stiffness-proportional" in str(w.message)))
-    undamped, damped = (float(v) for v in
-                        message.split("from ")[1].split(" s (")[0].split(" s to "))
-    # eq. (2.6): Δt = 4 / (√(4λ + γ²) + γ), λ = (2/Δt₀)², γ = βλ, β = 2ξ/ω
+def _step_warnings(caught) -> list[str]:
+    return [str(w.message) for w in caught if "stiffness-proportional" in str(w.message)]
+
+
+def test_a_step_cut_by_stiffness_damping_warns_with_both_steps_and_the_cure():
+    with pytest.warns(UserWarning, match='rayleigh_mode = "mass" keeps the step') as caught:
+        damped = _resting_block_stage("stiffness")
+    message, = _step_warnings(caught)
+    without, cut = (float(v) for v in message.split("from ")[1].split(" s (")[0].split(" s to "))
+    # the steps named are the run's own: the stiffness run's limit, and the mass-only run's
+    undamped = _resting_block_stage("mass")
+    assert cut == pytest.approx(damped.stages[0].stable_time_step_s, rel=1e-3)
+    assert without == pytest.approx(undamped.stages[0].stable_time_step_s, rel=1e-3)
+    # eq. (2.6) with no dashpots: Δt = 4 / (√(4λ + γ²) + γ), λ = (2/Δt₀)², γ = βλ, β = 2ξ/ω
     beta = 2 * 0.05 / (2 * math.pi * 2.0)
-    lam = (2.0 / undamped) ** 2
-    assert damped == pytest.approx(4.0 / (math.sqrt(4 * lam + (beta * lam) ** 2) + beta * lam),
-                                   rel=1e-2)
-    assert undamped / damped > 4.0
+    lam = (2.0 / without) ** 2
+    assert cut == pytest.approx(4.0 / (math.sqrt(4 * lam + (beta * lam) ** 2) + beta * lam),
+                                rel=2e-3)
+    assert caught[0].filename == __file__  # points at the caller of run()
 
 
-def test_mass_damping_keeps_the_step_and_does_not_warn():
+def test_a_small_cut_or_a_given_step_does_not_warn():
     import warnings
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        result = _resting_block_stage("mass")
-    assert result.status == "ok"
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        light = _resting_block_stage("stiffness", ratio=0.001)  # βω_max ≈ 0.4: cut ≈ 1.2x
+        given = _resting_block_stage("stiffness", time_step_s=1e-5)
+    assert not _step_warnings(caught)
+    assert light.status == given.status == "ok"
