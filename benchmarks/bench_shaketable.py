@@ -68,9 +68,11 @@ surroundings rigid, at 1.2 a_c with the sample's joints and rounding, with joint
 Table 12 — deformable blocks (``--tables 12``, about 70 min): the wedge of Table 10, its
 surroundings rigid, at 1.2 a_c, in two rows: rigid blocks, and blocks meshed into elastic
 triangular zones of 1 cm with Varma et al.'s Table 1 K and G, as seed 002 §3 meshed every block
-("triangular zones of size 1 cm"; 2 cm and three cycles with ``--quick``). Both are damped by the
-mass term only, at the sample's ratio (its stiffness term overdamps the zones and shortens the
-step). Does blocks' deformation let the jammed set keep slipping, as UDEC's model did?
+("triangular zones of size 1 cm"; 2 cm and three cycles with ``--quick``). Both are damped by a
+mass term only, at the sample's ratio (α twice the sample's; the stiffness term overdamps the
+zones and shortens the step). Does
+blocks' deformation let the jammed set keep slipping, as UDEC's model did? Tables 11 and 12 give
+how long each run shook (``shaken_s``) and leave blank the cycles after a run stopped.
 
 ``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–12.
 """
@@ -374,10 +376,10 @@ def wedge_zoned(model, settings, frequency_hz: float, a_c: float, ratio: float, 
     """Table 12: the wedge of Table 10 as rigid blocks, and meshed as seed 002 §3 meshed every
     block (elastic triangular zones of 1 cm with Varma et al.'s Table 1 K and G; slivers under
     :data:`ZONED_MIN_BLOCK_AREA_M2` stay rigid): do blocks that deform let the jammed set keep
-    slipping? Both rows are damped by the mass term alone (``rayleigh_mode = "mass"`` at the
-    sample's ξ = 0.5 % at 100 Hz, relative to the table; α = 2ξω, twice the sample's): the
-    sample's stiffness term overdamps the zones' own vibrations and shortens the step (the run
-    warns; docs/dem.md §8.2)."""
+    slipping? Both rows are damped by a mass term alone (``rayleigh_mode = "mass"`` at the
+    sample's ratio ξ = 0.5 % at 100 Hz, relative to the table: α = 2ξω, twice the sample's mass
+    term, which keeps the contacts calmer without the stiffness term): the sample's stiffness term
+    overdamps the zones' own vibrations and shortens the step (it warns; docs/dem.md §8.2)."""
     free = wedge_and_top_left(model, settings, a_c)
     material = settings.material
     elastic = Elastic(material.bulk_modulus_pa, material.shear_modulus_pa)
@@ -409,9 +411,12 @@ def shaken_wedge(model, free: set, variants, frequency_hz: float, a_c: float, ra
                                             cycles / frequency_hz, **damping))
         wall = time.perf_counter() - t0
         slips = slip_after_cycles(result, frequency_hz, cycles)
-        rows.append({"variant": label, "blocks": len(free), **{f"cycle_{c}_mm": v for c, v in
-                                                               enumerate(slips, 1)},
-                     "status": result.status, "wall_s": wall})
+        shaken_s = float(top_left_against_table(result)[0][-1])
+        done = math.floor(shaken_s * frequency_hz + 1e-9)  # cycles the run completed
+        rows.append({"variant": label, "blocks": len(free),
+                     **{f"cycle_{c}_mm": v if c <= done else None for c, v in enumerate(slips, 1)},
+                     "status": result.status, "shaken_s": shaken_s, "wall_s": wall,
+                     "diagnostic": result.diagnostic})
     return rows
 
 
@@ -564,18 +569,22 @@ def main(quick: bool = False, frequency_hz: float | None = None,
               f"block's accumulated slip after each of {n} cycles, mm")
         print(table(rows, [("variant", "s"), ("blocks", "d"),
                            *[(f"cycle_{c}_mm", ".3f") for c in range(1, n + 1)],
-                           ("status", "s"), ("wall_s", ".0f")]))
+                           ("status", "s"), ("shaken_s", ".2f"), ("wall_s", ".0f")]))
         results["wedge_variants"] = rows
     if 12 in tables:
         a_c = threshold_a_c(frequency_hz)
         n = 3 if quick else 6
         rows = wedge_zoned(model, settings, frequency_hz, a_c, 1.2, n,
                            zone_sizes_m=(0.02,) if quick else (0.01,))
-        print(f"\nTable 12 — the wedge of Table 10 with deformable blocks (elastic zones, Table 1 "
-              f"moduli): 1.2 a_c, top-left block's accumulated slip after each of {n} cycles, mm")
+        print(f"\nTable 12 — the wedge of Table 10 with deformable blocks (elastic zones, Varma et "
+              f"al.'s Table 1 moduli; mass damping only): 1.2 a_c, top-left block's accumulated "
+              f"slip after each of {n} cycles, mm")
         print(table(rows, [("variant", "s"), ("blocks", "d"),
                            *[(f"cycle_{c}_mm", ".3f") for c in range(1, n + 1)],
-                           ("status", "s"), ("wall_s", ".0f")]))
+                           ("status", "s"), ("shaken_s", ".2f"), ("wall_s", ".0f")]))
+        for r in rows:
+            if r["diagnostic"]:
+                print(f"  {r['variant']}: {r['diagnostic']}")
         results["wedge_zoned"] = rows
     partial = "" if tables == (1, 3, 4, 5, 6, 7, 8, 9) and band is not None else "_tables" + "".join(
         map(str, tables))
