@@ -65,14 +65,14 @@ Table 11 — what does not unlock the wedge (``--tables 11``, 5 min): the wedge 
 surroundings rigid, at 1.2 a_c with the sample's joints and rounding, with joints five times softer
 (kn, ks × 0.2), with a corner rounding of 5 mm, and with the wedge's blocks kept from rotating.
 
-Table 12 — deformable blocks (``--tables 12``, about 70 min): the wedge of Table 10, its
+Table 12 — deformable blocks (``--tables 12``, about 45 min): the wedge of Table 10, its
 surroundings rigid, at 1.2 a_c, in two rows: rigid blocks, and blocks meshed into elastic
 triangular zones of 1 cm with Varma et al.'s Table 1 K and G, as seed 002 §3 meshed every block
 ("triangular zones of size 1 cm"; 2 cm and three cycles with ``--quick``). Both are damped by a
 mass term only, at the sample's ratio (α twice the sample's; the stiffness term overdamps the
-zones and shortens the step). Does
-blocks' deformation let the jammed set keep slipping, as UDEC's model did? Tables 11 and 12 give
-how long each run shook (``shaken_s``) and leave blank the cycles after a run stopped.
+zones and shortens the step). Does blocks' deformation let the jammed set keep slipping, as
+UDEC's model did? Tables 11 and 12 give how long each run shook (``shaken_s``), leave blank the
+cycles after a run stopped, and print why it stopped.
 
 ``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–12.
 """
@@ -214,10 +214,24 @@ def top_left_against_table(result) -> tuple[np.ndarray, np.ndarray]:
 
 def slip_after_cycles(result, frequency_hz: float, cycles: int) -> list[float]:
     """The top-left block's displacement relative to the table, mm, after each of ``cycles``
-    cycles at ``frequency_hz`` (from its place when the shaking starts)."""
-    t, rel = top_left_against_table(result)
+    cycles at ``frequency_hz`` (from its place when the shaking starts; a run that stopped early
+    gives its last value for the cycles after: see :func:`slips_of_completed_cycles`)."""
+    return _slips_at(*top_left_against_table(result), frequency_hz, cycles)
+
+
+def _slips_at(t, rel, frequency_hz: float, cycles: int) -> list[float]:
     at = [min(int(np.searchsorted(t, c / frequency_hz)), len(t) - 1) for c in range(1, cycles + 1)]
     return [1e3 * float(np.hypot(*(rel[i] - rel[0]))) for i in at]
+
+
+def slips_of_completed_cycles(result, frequency_hz: float, cycles: int) -> tuple[list, float]:
+    """(slip after each cycle, mm, None for the cycles after the run stopped; the time it shook,
+    s)."""
+    t, rel = top_left_against_table(result)
+    shaken_s = float(t[-1])
+    done = math.floor(shaken_s * frequency_hz + 1e-9)
+    slips = _slips_at(t, rel, frequency_hz, cycles)
+    return [v if c <= done else None for c, v in enumerate(slips, 1)], shaken_s
 
 
 def frequency_for(a_c: float, d_m: float) -> float:
@@ -354,7 +368,7 @@ def wedge_variants(model, settings, frequency_hz: float, a_c: float, ratio: floa
     the table) with the sample's joints and rounding, with joints five times softer, with a corner
     rounding of 5 mm, and with its blocks kept from rotating (does it jam by rotating blocks?):
     does any let it keep slipping?"""
-    free = wedge_and_top_left(model, settings, a_c)
+    free = free_wedge(model, settings, a_c)
     joint = settings.joints["default"]
     soft = dataclasses.replace(joint, kn_pa_m=0.2 * joint.kn_pa_m, ks_pa_m=0.2 * joint.ks_pa_m)
     variants = (
@@ -380,7 +394,7 @@ def wedge_zoned(model, settings, frequency_hz: float, a_c: float, ratio: float, 
     sample's ratio ξ = 0.5 % at 100 Hz, relative to the table: α = 2ξω, twice the sample's mass
     term, which keeps the contacts calmer without the stiffness term): the sample's stiffness term
     overdamps the zones' own vibrations and shortens the step (it warns; docs/dem.md §8.2)."""
-    free = wedge_and_top_left(model, settings, a_c)
+    free = free_wedge(model, settings, a_c)
     material = settings.material
     elastic = Elastic(material.bulk_modulus_pa, material.shear_modulus_pa)
     variants = (("rigid blocks", settings), *(
@@ -391,8 +405,8 @@ def wedge_zoned(model, settings, frequency_hz: float, a_c: float, ratio: float, 
                         rayleigh_mode="mass")
 
 
-def wedge_and_top_left(model, settings, a_c: float) -> set:
-    """The blocks of the wedge of Table 10 and the top-left block."""
+def free_wedge(model, settings, a_c: float) -> set:
+    """The blocks left free in Tables 10-12: the wedge and the top-left block."""
     top_left, wedge = top_left_and_wedge(model, settings, a_c)
     return wedge | {top_left}
 
@@ -410,11 +424,9 @@ def shaken_wedge(model, free: set, variants, frequency_hz: float, a_c: float, ra
         result = run(model, shaken_settings(rigid_except(model, varied, free), motion,
                                             cycles / frequency_hz, **damping))
         wall = time.perf_counter() - t0
-        slips = slip_after_cycles(result, frequency_hz, cycles)
-        shaken_s = float(top_left_against_table(result)[0][-1])
-        done = math.floor(shaken_s * frequency_hz + 1e-9)  # cycles the run completed
+        slips, shaken_s = slips_of_completed_cycles(result, frequency_hz, cycles)
         rows.append({"variant": label, "blocks": len(free),
-                     **{f"cycle_{c}_mm": v if c <= done else None for c, v in enumerate(slips, 1)},
+                     **{f"cycle_{c}_mm": v for c, v in enumerate(slips, 1)},
                      "status": result.status, "shaken_s": shaken_s, "wall_s": wall,
                      "diagnostic": result.diagnostic})
     return rows
@@ -565,30 +577,31 @@ def main(quick: bool = False, frequency_hz: float | None = None,
         a_c = threshold_a_c(frequency_hz)
         n = 3 if quick else 6
         rows = wedge_variants(model, settings, frequency_hz, a_c, 1.2, n)
-        print(f"\nTable 11 — the wedge of Table 10 with other joints and rounding: 1.2 a_c, top-left "
-              f"block's accumulated slip after each of {n} cycles, mm")
-        print(table(rows, [("variant", "s"), ("blocks", "d"),
-                           *[(f"cycle_{c}_mm", ".3f") for c in range(1, n + 1)],
-                           ("status", "s"), ("shaken_s", ".2f"), ("wall_s", ".0f")]))
+        print_wedge_rows("Table 11 — the wedge of Table 10 with other joints and rounding", rows, n)
         results["wedge_variants"] = rows
     if 12 in tables:
         a_c = threshold_a_c(frequency_hz)
         n = 3 if quick else 6
         rows = wedge_zoned(model, settings, frequency_hz, a_c, 1.2, n,
                            zone_sizes_m=(0.02,) if quick else (0.01,))
-        print(f"\nTable 12 — the wedge of Table 10 with deformable blocks (elastic zones, Varma et "
-              f"al.'s Table 1 moduli; mass damping only): 1.2 a_c, top-left block's accumulated "
-              f"slip after each of {n} cycles, mm")
-        print(table(rows, [("variant", "s"), ("blocks", "d"),
-                           *[(f"cycle_{c}_mm", ".3f") for c in range(1, n + 1)],
-                           ("status", "s"), ("shaken_s", ".2f"), ("wall_s", ".0f")]))
-        for r in rows:
-            if r["diagnostic"]:
-                print(f"  {r['variant']}: {r['diagnostic']}")
+        print_wedge_rows("Table 12 — the wedge of Table 10 with deformable blocks (elastic zones, "
+                         "Varma et al.'s Table 1 moduli; mass damping only)", rows, n)
         results["wedge_zoned"] = rows
     partial = "" if tables == (1, 3, 4, 5, 6, 7, 8, 9) and band is not None else "_tables" + "".join(
         map(str, tables))
     save("bench_shaketable" + ("_quick" if quick else "") + partial, results)
+
+
+def print_wedge_rows(title: str, rows: list, cycles: int) -> None:
+    """Tables 11 and 12: per variant the accumulated slip after each cycle ("-" after the run
+    stopped), its status, how long it shook, and the diagnostic of a run that stopped."""
+    print(f"\n{title}: 1.2 a_c, top-left block's accumulated slip after each of {cycles} cycles, mm")
+    print(table(rows, [("variant", "s"), ("blocks", "d"),
+                       *[(f"cycle_{c}_mm", ".3f") for c in range(1, cycles + 1)],
+                       ("status", "s"), ("shaken_s", ".2f"), ("wall_s", ".0f")]))
+    for r in rows:
+        if r.get("diagnostic"):
+            print(f"  {r['variant']}: {r['diagnostic']}")
 
 
 def _arguments(argv):

@@ -36,11 +36,10 @@ import numpy as np
 __all__ = ["SkeletonGraph", "skeletonize", "build_graph", "prune_spurs", "repair_crossings",
            "bridge_gaps", "chain_traces", "end_directions"]
 
-
-
 #: Branch directions are measured between these arc lengths from the branch end, pixels (past the
 #: hook a skeleton makes where it enters a junction; the defaults of every step below).
 TANGENT_SKIP_PX, TANGENT_REACH_PX = 2.0, 12.0
+
 
 @dataclass(frozen=True, eq=False)
 class SkeletonGraph:

@@ -31,6 +31,7 @@ widens some joints of the same faces, everything else unchanged). The result is 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -402,10 +403,19 @@ def _streams(seed):
     return [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(8)]
 
 
-def _crevice(rng, style):
-    """``(width px, relative darkening, blur sigma px)`` of a major joint drawn as a wide open
-    crevice, or None for an ordinary joint (a share ``style.crevice_share`` are crevices). Nothing
-    is drawn from ``rng`` when the share is 0, so the default faces stay those drawn before.
+class _Crevice(NamedTuple):
+    """A major joint drawn as a wide open crevice: core width (px), relative darkening, and the
+    Gaussian blur of its edges (px)."""
+
+    width_px: float
+    depth: float
+    blur_px: float
+
+
+def _crevice(rng, style) -> _Crevice | None:
+    """The crevice a major joint is drawn as, or None for an ordinary joint (a share
+    ``style.crevice_share`` are crevices). Nothing is drawn from ``rng`` when the share is 0, so the
+    default faces stay those drawn before.
 
     An open crevice seen face-on is a band in shadow: darker than most joint cores, its edges the
     rims of the two blocks, fairly sharp; a pixel classifier sees its two edges as two thin dark
@@ -414,7 +424,8 @@ def _crevice(rng, style):
     if style.crevice_share <= 0 or rng.random() >= style.crevice_share:
         return None
     width = rng.uniform(*style.crevice_width_px)
-    return width, rng.uniform(*style.crevice_depth), max(width * rng.uniform(*style.crevice_blur), 0.6)
+    return _Crevice(width, rng.uniform(*style.crevice_depth),
+                    max(width * rng.uniform(*style.crevice_blur), 0.6))
 
 
 def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
@@ -489,7 +500,7 @@ def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
         width = joint_rng.uniform(*style.core_width_px)
         crevice = _crevice(crevice_rng, style)  # the joint stream's draws stay the same either way
         if crevice is not None:
-            width = crevice[0]
+            width = crevice.width_px
         widths.append(width)
         if joint_rng.random() < style.step_share:  # blocks lit differently, shaded away from it
             side = _side_mask(rc, (h, w))
@@ -509,10 +520,11 @@ def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
             darkness = np.maximum(darkness, joint_rng.uniform(*style.shadow_depth) * band)
         core = np.zeros((h, w), dtype=np.float32)
         _draw(core, rc, 1.0, width)
-        core = cv2.GaussianBlur(core, (0, 0), max(width / 5, 0.6) if crevice is None else crevice[2])
+        core = cv2.GaussianBlur(core, (0, 0),
+                                max(width / 5, 0.6) if crevice is None else crevice.blur_px)
         depth = joint_rng.uniform(*style.core_depth)
         if crevice is not None:
-            depth = crevice[1]
+            depth = crevice.depth
         if joint_rng.random() < 0.4:  # a faint stretch (rock bridge, dirt) along the joint
             t = joint_rng.uniform(0.1, 0.9)
             centre = rc[int(t * (len(rc) - 1))]

@@ -256,10 +256,11 @@ def _warn_stiffness_damping_step(stage: Stage, beta: float, limit: float,
                                  without_beta: float) -> None:
     """A ``UserWarning`` when the stiffness-proportional Rayleigh term β K cuts the stable step
     ``without_beta`` to ``limit`` by more than
-    :data:`~rockmass.solver.tolerances.DAMPED_STEP_WARN_FACTOR`. By eq. (2.6) of docs/dem.md, Δt/Δt₀ = 2/(√(4 + x²) + x) with x = βω_max: the stiffest
-    contacts and the smallest zones are overdamped at their own frequency (x > 1.5 for a halving),
-    and the stage takes that many more steps to damp vibrations no input carries. Points at the
-    caller of :func:`run` (warn <- this <- _first_time_step <- _StageRun <- run <- caller)."""
+    :data:`~rockmass.solver.tolerances.DAMPED_STEP_WARN_FACTOR`. By eq. (2.6) of docs/dem.md,
+    Δt/Δt₀ = 2/(√(4 + x²) + x) with x = βω_max: the stiffest contacts and the smallest zones are
+    overdamped at their own frequency (x > 1.5 for a halving), and the stage takes that many more
+    steps to damp vibrations no input carries. Points at the caller of :func:`run` (warn <- this
+    <- _first_time_step <- _StageRun <- run <- caller)."""
     if not (math.isfinite(limit) and math.isfinite(without_beta)) or (
             limit * T.DAMPED_STEP_WARN_FACTOR >= without_beta):
         return
@@ -352,7 +353,8 @@ class _StageRun:
     def _first_time_step(self) -> tuple[float, float]:
         """(Δt, stable limit): automatic, or the stage's own (refused above the limit), or a
         fraction of the duration when nothing is in contact (free flight). An automatic step cut
-        sharply by the stiffness-proportional damping warns (:func:`_warn_stiffness_damping_step`)."""
+        sharply by the stiffness-proportional damping warns
+        (:func:`_warn_stiffness_damping_step`)."""
         stage = self.stage
         dt, limit = _auto_time_step(self.eng, self.safety, self.beta)
         if stage.time_step_s is not None:

@@ -125,14 +125,15 @@ def _resting_block_stage(mode: str, ratio: float = 0.05, **stage):
     return run(incline(0.0), settings)
 
 
-def _step_warnings(caught) -> list[str]:
-    return [str(w.message) for w in caught if "stiffness-proportional" in str(w.message)]
+def _step_warnings(caught) -> list:
+    return [w for w in caught if "stiffness-proportional" in str(w.message)]
 
 
 def test_a_step_cut_by_stiffness_damping_warns_with_both_steps_and_the_cure():
     with pytest.warns(UserWarning, match='rayleigh_mode = "mass" keeps the step') as caught:
         damped = _resting_block_stage("stiffness")
-    message, = _step_warnings(caught)
+    warning, = _step_warnings(caught)
+    message = str(warning.message)
     without, cut = (float(v) for v in message.split("from ")[1].split(" s (")[0].split(" s to "))
     # the steps named are the run's own: the stiffness run's limit, and the mass-only run's
     undamped = _resting_block_stage("mass")
@@ -143,7 +144,7 @@ def test_a_step_cut_by_stiffness_damping_warns_with_both_steps_and_the_cure():
     lam = (2.0 / without) ** 2
     assert cut == pytest.approx(4.0 / (math.sqrt(4 * lam + (beta * lam) ** 2) + beta * lam),
                                 rel=2e-3)
-    assert caught[0].filename == __file__  # points at the caller of run()
+    assert warning.filename == __file__  # points at the caller of run()
 
 
 def test_a_small_cut_or_a_given_step_does_not_warn():
