@@ -1,7 +1,7 @@
 """Whole-process extraction: ``rockmass extract PHOTO --out DIR``, one face at 3-24 MP (issue 20).
 
     python benchmarks/bench_extract_process.py [--quick] [--sizes 3,6,12,16,24]
-                                               [--detectors ridge,learned] [--no-full-resolution]
+                                               [--detectors ridge,learned,auto] [--no-full-resolution]
 
 One synthetic face, 12 m x 8 m, with exact ground truth (:func:`rockmass.imaging.synthetic_face`,
 "moderate" spoiling, seed 1), is photographed at several resolutions: it is rendered once at the
@@ -164,7 +164,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="the smallest two sizes (3 and 6 MP)")
     parser.add_argument("--sizes", default="3,6,12,16,24", help="photo sizes, MP (default 3,6,12,16,24)")
-    parser.add_argument("--detectors", default="ridge,learned", help="--detector values (default both)")
+    parser.add_argument("--detectors", default="ridge,learned,auto",
+                        help="--detector values (default all three)")
     parser.add_argument("--no-full-resolution", action="store_true",
                         help="skip the max_megapixels = 1000 row at 12 MP")
     args = parser.parse_args(argv)

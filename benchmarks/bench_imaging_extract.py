@@ -10,13 +10,15 @@
    remove shows in dP20 and the node-count error.
 2. Throughput at 2, 12 and 24 MP (moderate faces; the 12 and 24 MP faces are the same network at a
    finer pixel), with accuracy and peak memory (ru_maxrss of a fresh process per size); the learned
-   detector (``detector="learned"``) at 12 and 24 MP too. Target >= 1 MP/s on 2 cores (issue 22:
+   detector (``detector="learned"``) and the default, "auto" (both detectors, the ridge traces kept
+   on a clean face such as these), at 12 and 24 MP too. Target >= 1 MP/s on 2 cores (issue 22:
    >= 2 MP/s whole process at 12-24 MP), <= 2 GB at 24 MP.
 3. Run time against error for the main knobs: down-sampling (max_megapixels) and filter scales.
 
-Every row but the learned throughput ones runs the ridge filter (``detector="ridge"``): the chain
-these targets and knobs were set for (the default detector is the learned one, whose accuracy on
-these plain faces is in bench_imaging_real.py and docs/imaging.md §3.1).
+Every row but the learned and auto throughput ones runs the ridge filter (``detector="ridge"``):
+the chain these targets and knobs were set for (the learned detector's accuracy on these plain
+faces is in bench_imaging_real.py and docs/imaging.md §3.1; the default detector, "auto", keeps the
+ridge traces on them, docs/imaging.md §3.3).
 Rows also go to benchmarks/results/bench_imaging_extract.json.
 """
 
@@ -100,7 +102,7 @@ def main(quick: bool = False) -> None:
 
     throughput = []
     for detector, size in [("ridge", 2.0), ("ridge", 12.0), ("ridge", 24.0), ("learned", 12.0),
-                           ("learned", 24.0)]:
+                           ("learned", 24.0), ("auto", 12.0), ("auto", 24.0)]:
         out = subprocess.run([sys.executable, __file__, "--child", str(size), detector],
                              capture_output=True, text=True, check=True)
         row = json.loads(out.stdout.strip().splitlines()[-1])

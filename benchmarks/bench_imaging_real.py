@@ -1,8 +1,9 @@
 """Photo -> traces on real labelled photographs (validation only), and on synthetic faces.
 
-    python benchmarks/bench_imaging_real.py [--quick] [--detectors ridge,learned] [--splits val,train]
-                                            [--no-synthetic] [--no-settings]
+    python benchmarks/bench_imaging_real.py [--quick] [--detectors ridge,learned,auto]
+                                            [--splits val,train] [--no-synthetic] [--no-settings]
                                             [--face-masks full,border,off] [--upsampled 2,4]
+                                            [--agreement-only]
 
 1. Real faces: ``../shared/data/rock-face-fractures`` (natural rock faces, 300-400 px, with
    hand-traced major fractures painted red about 5 px wide; AGPL-3.0, read from the shared data
@@ -33,7 +34,8 @@
    Section 4 then times the mask by itself.
 
 3. Throughput (not with ``--quick``): one 12 MP moderate face (4000 x 3000 px, processed
-   down-sampled to the default 4 MP), whole ``extract`` call per detector, MP/s of the input.
+   down-sampled to the default 4 MP), whole ``extract`` call per detector, MP/s of the input
+   ("auto" runs the ridge chain on a second thread beside the learned one).
 
 4. Face mask alone (with ``--face-masks``): :func:`rockmass.imaging.face_mask.face_mask` on a
    12 MP (3000 x 4000) RGB photo (the moderate face of section 3 in colour), best of 5, one core.
@@ -42,6 +44,17 @@
    (bicubic) with their labels, scored at the tolerance times the enlargement, at the defaults with
    the joint width not given and given as 3 px times the enlargement. The same scenes at more
    pixels: how far the chain's pixel-valued settings tie it to the photos' size.
+
+6. The two detectors' agreement (with the "auto" detector among ``--detectors``; alone with
+   ``--agreement-only``): :func:`rockmass.imaging.extract.detector_agreement`, the share of the
+   ridge filter's trace length within 5 px of the learned detector's traces, by which
+   ``detector = "auto"`` keeps the ridge traces (above ``ExtractParams.auto_agreement``) or the
+   learned ones. Its smallest, median and largest value and the share of photos on which the
+   ridge traces are kept, on the real ``train/`` photos (where ``auto_agreement`` was chosen, with
+   the synthetic faces), the real ``val/`` photos (measured only), and synthetic faces: plain
+   easy / moderate / hard faces at 1000 x 1500 px (seeds 1-10) and moderate at 400 x 600 px
+   (0.02 m/px, seeds 1-5), field-like and tunnel-style faces (seeds 1-10); and both detectors'
+   F1 and dP21 on the field-like and tunnel-style faces on which the ridge traces are kept.
 
 Each photo is extracted once per setting: the joint-score rows and section 1b reuse the traces
 (and report the time of that one extraction).
@@ -134,7 +147,13 @@ _EXTRACTIONS: dict = {}
 
 
 def _extract_real(image_path: Path, shape, params, joint_width_px, upsample: float):
-    """(traces, seconds) of one real photo (enlarged to ``shape`` when ``upsample`` != 1); each
+    """(traces, seconds) of one real photo; see :func:`_extraction_real`."""
+    result, seconds = _extraction_real(image_path, shape, params, joint_width_px, upsample)
+    return result.traces, seconds
+
+
+def _extraction_real(image_path: Path, shape, params, joint_width_px, upsample: float):
+    """(Extraction, seconds) of one real photo (enlarged to ``shape`` when ``upsample`` != 1); each
     (photo, settings, model) is extracted once per run and its first time reported again. The key
     holds the model file the learned detector would read (``params.pixel_model``, else the
     module's ``MODEL_FILE`` at call time), so another model never gets cached traces."""
@@ -152,7 +171,7 @@ def _extract_real(image_path: Path, shape, params, joint_width_px, upsample: flo
         t0 = time.perf_counter()
         result = extract(np.ascontiguousarray(image), m_per_px=1.0, joint_width_px=joint_width_px,
                          params=params)
-        _EXTRACTIONS[key] = (result.traces, time.perf_counter() - t0)
+        _EXTRACTIONS[key] = (result, time.perf_counter() - t0)
     return _EXTRACTIONS[key]
 
 
@@ -191,6 +210,65 @@ def score_real(pairs, params, joint_width_px: float | None, min_joint_score=None
                 s_per_image=elapsed / max(len(pairs), 1), MP_per_s=megapixels / max(elapsed, 1e-9),
                 band_px=_weighted_median(np.concatenate(bands), np.concatenate(lengths))
                 if bands else float("nan"))
+
+
+def agreement_row(name: str, agreements, auto_agreement: float) -> dict:
+    """Smallest, median and largest detector agreement over a set of photos, and the share of them
+    on which "auto" keeps the ridge traces."""
+    values = np.asarray(agreements, dtype=float)
+    return {"photos": name, "n": int(values.size), "min": float(values.min()),
+            "median": float(np.median(values)), "max": float(values.max()),
+            "ridge_kept": float(np.mean(values > auto_agreement))}
+
+
+def agreement_section(splits, quick: bool) -> tuple[list[dict], list[dict]]:
+    """Section 6: the detector agreement on the real photos of ``splits`` and on synthetic faces;
+    and, for each field-like or tunnel-style face on which "auto" keeps the ridge traces, both
+    detectors' buffered F1 (3 px) and dP21 there."""
+    from rockmass.imaging.extract import ExtractParams, extract
+    from rockmass.imaging.metrics import trace_accuracy
+    from rockmass.imaging.synthetic import synthetic_face
+    from rockmass.imaging.synthetic_field import TUNNEL_STYLE, field_face
+
+    auto = ExtractParams(detector="auto")
+    rows = []
+    for split in splits:
+        if not (DATA / split / "images").is_dir():
+            continue
+        pairs = real_pairs(split)[:12] if quick else real_pairs(split)
+        choices = [_extraction_real(image_path, label_skeleton(label_path).shape, auto, 3.0,
+                                    1.0)[0].detector_choice for image_path, label_path in pairs]
+        role = "chosen on" if split == "train" else "measured only"
+        rows.append(agreement_row(f"real {split}/ ({role})", [c["agreement"] for c in choices],
+                                  auto.auto_agreement))
+    n = 2 if quick else 10
+    makers = [(f"{level}, 1000 x 1500 px", lambda s, level=level: synthetic_face(
+                   level, seed=s, shape_px=(1000, 1500), m_per_px=0.008), n)
+              for level in ("easy", "moderate", "hard")]
+    makers += [("moderate, 400 x 600 px", lambda s: synthetic_face(
+                    "moderate", seed=s, shape_px=(400, 600), m_per_px=0.02), min(n, 5)),
+               ("field-like, 1000 x 1500 px", lambda s: field_face(
+                    seed=s, shape_px=(1000, 1500), m_per_px=0.008), n),
+               ("tunnel-style, 1000 x 1500 px", lambda s: field_face(
+                    seed=s, shape_px=(1000, 1500), m_per_px=0.008, style=TUNNEL_STYLE), n)]
+    crossed = []
+    for name, make, count in makers:
+        values = []
+        for seed in range(1, count + 1):
+            face = make(seed)
+            values.append(extract(face.image, m_per_px=face.m_per_px,
+                                  params=auto).detector_choice["agreement"])
+            if values[-1] > auto.auto_agreement and not name.startswith(("easy", "moderate")):
+                row = {"faces": name, "seed": seed, "agreement": values[-1]}
+                for detector in ("learned", "ridge"):
+                    result = extract(face.image, m_per_px=face.m_per_px,
+                                     params=ExtractParams(detector=detector))
+                    acc = trace_accuracy(result.traces, face.truth,
+                                         m_per_px=face.m_per_px / result.scale.work_factor)
+                    row.update({f"F1_{detector}": acc.f1, f"dP21_{detector}_%": 100 * acc.p21_rel_error})
+                crossed.append(row)
+        rows.append(agreement_row(f"synthetic {name}, seeds 1-{count}", values, auto.auto_agreement))
+    return rows, crossed
 
 
 def _weighted_median(values, weights) -> float:
@@ -267,8 +345,10 @@ def main(argv=None) -> int:
     cv2.setNumThreads(1)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="12 real images, one synthetic seed")
-    parser.add_argument("--detectors", default="ridge,learned",
-                        help="comma-separated ExtractParams.detector values (default both)")
+    parser.add_argument("--detectors", default="ridge,learned,auto",
+                        help="comma-separated ExtractParams.detector values (default all three)")
+    parser.add_argument("--agreement-only", action="store_true",
+                        help="section 6 only: the two detectors' agreement, by which 'auto' keeps one")
     parser.add_argument("--splits", default="val,train",
                         help="comma-separated folders of the labelled set (default val,train)")
     parser.add_argument("--no-synthetic", action="store_true", help="real images only")
@@ -284,6 +364,14 @@ def main(argv=None) -> int:
     detectors = [d.strip() for d in args.detectors.split(",") if d.strip()]
     splits = [d.strip() for d in args.splits.split(",") if d.strip()]
     masks = [m.strip() for m in args.face_masks.split(",") if m.strip()]
+    if args.agreement_only:
+        print(header("the ridge and learned detectors' agreement (ExtractParams.detector = 'auto')"))
+        rows, crossed = agreement_section(splits, args.quick)
+        _print_agreement(rows, crossed)
+        path = save("bench_imaging_real_agreement" + ("_quick" if args.quick else ""),
+                    {"data": str(DATA), "agreement": rows, "ridge_kept_on_field_faces": crossed})
+        print(f"\nrows saved to {path}")
+        return 0
 
     print(header("photo -> traces on real labelled faces and synthetic faces"))
     print(f"learned model: {MODEL_FILE.name}, {MODEL_FILE.stat().st_size} bytes")
@@ -362,7 +450,8 @@ def main(argv=None) -> int:
             elapsed = time.perf_counter() - t0
             rows.append({"detector": detector, "MP": face.image.size / 1e6, "time_s": elapsed,
                          "MP_per_s": face.image.size / 1e6 / elapsed})
-        print("\n3. throughput (12 MP moderate face, down-sampled to 4 MP; one core)")
+        print("\n3. throughput (12 MP moderate face, down-sampled to 4 MP; one core, and for "
+              "auto a second thread running the ridge chain beside the learned one)")
         print(table(rows, [("detector", "s"), ("MP", ".1f"), ("time_s", ".2f"), ("MP_per_s", ".2f")]))
         payload["throughput"] = rows
     if masks:
@@ -398,10 +487,29 @@ def main(argv=None) -> int:
                            ("F1", ".3f"), ("P", ".3f"), ("R", ".3f"), ("dP21_pct", "+.0f"),
                            ("band_px", ".1f"), ("s_per_image", ".2f")]))
         payload["enlarged"] = rows
+    if "auto" in detectors:
+        payload["agreement"], payload["ridge_kept_on_field_faces"] = agreement_section(splits, args.quick)
+        _print_agreement(payload["agreement"], payload["ridge_kept_on_field_faces"])
     suffix = "_face_mask" if masks else ""
     path = save(("bench_imaging_real_quick" if args.quick else "bench_imaging_real") + suffix, payload)
     print(f"\nrows saved to {path}")
     return 0
+
+
+def _print_agreement(rows, crossed) -> None:
+    from rockmass.imaging.extract import ExtractParams
+
+    print(f"\n6. agreement of the two detectors: share of the ridge traces' length within 5 px of "
+          f"the learned traces; 'auto' keeps the ridge traces above "
+          f"{ExtractParams().auto_agreement:g}")
+    print(table(rows, [("photos", "s"), ("n", "d"), ("min", ".2f"), ("median", ".2f"),
+                       ("max", ".2f"), ("ridge_kept", ".2f")]))
+    if crossed:
+        print("\n6b. field-like and tunnel-style faces on which 'auto' keeps the ridge traces: both "
+              "detectors there (buffered F1 at 3 px, dP21)")
+        print(table(crossed, [("faces", "s"), ("seed", "d"), ("agreement", ".2f"),
+                              ("F1_learned", ".3f"), ("dP21_learned_%", "+.1f"), ("F1_ridge", ".3f"),
+                              ("dP21_ridge_%", "+.1f")]))
 
 
 if __name__ == "__main__":

@@ -42,7 +42,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -55,6 +55,12 @@ __all__ = ["ExtractParams", "ScaleInfo", "Extraction", "extract", "scale_from_co
 MIN_SIDE_PX = 16
 #: Line detectors in front of the threshold (``ExtractParams.detector``).
 DETECTORS = ("ridge", "learned")
+#: ``ExtractParams.detector`` that runs both and keeps one per photo (:func:`detector_agreement`).
+AUTO = "auto"
+#: Distance (pixels of a working grid of :data:`REFERENCE_MEGAPIXELS`) within which a ridge trace
+#: pixel counts as found by the learned detector too (:func:`detector_agreement`): the
+#: tolerance the real labelled photographs are scored at.
+AGREEMENT_RADIUS_PX = 5.0
 #: Size of the working grid, megapixels, that the pixel-valued defaults were chosen for (the
 #: default ``max_megapixels``). A larger working grid scales them by :func:`grid_scale`.
 REFERENCE_MEGAPIXELS = 4.0
@@ -94,9 +100,14 @@ class ExtractParams:
     max_megapixels : float, default 4.0
         Larger images are down-sampled (area averaging) to this many pixels before anything else;
         24 MP then runs in a few seconds and < 1 GB. ``inf`` processes at full resolution.
-    detector : {"learned", "ridge"} or None, default None
-        What finds the joint pixels. None: "learned", or "ridge" when ``line_polarity`` is
-        "bright". "learned": the shipped pixel classifier (:mod:`rockmass.imaging.learned`,
+    detector : {"auto", "learned", "ridge"} or None, default None
+        What finds the joint pixels. None: "auto"; "ridge" when ``line_polarity`` is "bright";
+        "learned" when a ``pixel_model`` is given (a model trained on the user's own photographs
+        is trusted as it is).
+        "auto": both detectors run and one is kept per photo: the ridge filter's traces when the
+        photo is clean, i.e. when at least ``auto_agreement`` of their length lies within 5 px
+        of the learned detector's traces, else the learned detector's (:func:`detector_agreement`,
+        docs/imaging.md §3.3). "learned": the shipped pixel classifier (:mod:`rockmass.imaging.learned`,
         docs/imaging.md §3.1), trained on synthetic faces only, whose probability of "joint centre
         line" is thresholded by ``prob_low`` / ``prob_high`` and whose traces are then filtered by
         length, contrast and width (``min_trace_length_px``, ``min_trace_contrast``,
@@ -108,6 +119,13 @@ class ExtractParams:
         labelled photographs the learned detector scores F1 0.895 against the ridge filter's
         0.338; on the plain synthetic faces, whose truth includes every faint line, 0.831 against
         0.970 (``benchmarks/bench_imaging_real.py``, docs/imaging.md §8.1).
+    auto_agreement : float, default 0.55
+        With ``detector = "auto"``: the share of the ridge filter's trace length that must lie
+        within 5 px of the learned detector's traces for its traces to be kept. Chosen between
+        the largest share among the 99 real training photographs of rock-face-fractures (0.42;
+        the ridge filter draws several times their labelled length there) and the smallest on
+        plain synthetic faces (0.61), whose thin faint lines the learned detector misses
+        (``benchmarks/bench_imaging_real.py``, section 6). 1 keeps the learned traces always.
     line_polarity : {"dark", "bright"}, default "dark"
         Joints to look for: dark lines (open joints, shadowed traces) or bright ones (calcite- or
         clay-filled joints, veins, mortar). On ``skimage.data.brick()`` "dark" traces the brick
@@ -229,6 +247,7 @@ class ExtractParams:
 
     max_megapixels: float = 4.0
     detector: str | None = None
+    auto_agreement: float = 0.55
     line_polarity: str = "dark"
     flatten_method: str = "divide"
     background_sigma_px: float = 40.0
@@ -264,19 +283,24 @@ class ExtractParams:
     pixel_model: str | None = None
 
     def __post_init__(self) -> None:
-        if self.detector is None:  # the default: learned, except for bright joints
-            object.__setattr__(self, "detector", "ridge" if self.line_polarity == "bright" else "learned")
-        if self.detector not in DETECTORS:
-            raise ValueError(f"params.detector must be one of {', '.join(DETECTORS)}, got {self.detector!r}")
-        if self.detector == "learned" and self.line_polarity == "bright":
-            raise ValueError("params.line_polarity = 'bright' needs params.detector = 'ridge': the "
-                             "learned detector finds dark joints only")
+        if self.detector is None:  # the default: auto, except for bright joints and own models
+            object.__setattr__(self, "detector", "ridge" if self.line_polarity == "bright"
+                               else "learned" if self.pixel_model is not None else AUTO)
+        if self.detector not in (AUTO, *DETECTORS):
+            raise ValueError(f"params.detector must be one of {', '.join((AUTO, *DETECTORS))}, "
+                             f"got {self.detector!r}")
+        if self.detector != "ridge" and self.line_polarity == "bright":
+            raise ValueError(f"params.line_polarity = 'bright' needs params.detector = 'ridge': the "
+                             f"{self.detector} detector finds dark joints with the learned one")
+        value = self.auto_agreement
+        if not (isinstance(value, (int, float)) and 0 <= value <= 1):
+            raise ValueError(f"params.auto_agreement must be a share in 0-1, got {value!r}")
         from .face_mask import FACE_MASK_MODES
 
         if self.face_mask not in FACE_MASK_MODES:
             raise ValueError(f"params.face_mask must be one of {', '.join(FACE_MASK_MODES)}, "
                              f"got {self.face_mask!r}")
-        if self.pixel_model is not None and self.detector != "learned":
+        if self.pixel_model is not None and self.detector == "ridge":
             raise ValueError(f"params.pixel_model ({self.pixel_model!r}) is the learned detector's "
                              f"model; params.detector is {self.detector!r}")
         if self.line_polarity not in ("dark", "bright"):
@@ -334,13 +358,29 @@ class ExtractParams:
 
         Examples
         --------
-        >>> ExtractParams().resolved("min_trace_length_px")
+        >>> ExtractParams(detector="learned").resolved("min_trace_length_px")
         70.0
         >>> ExtractParams(detector="ridge").resolved("min_trace_contrast") is None
         True
         """
+        if self.detector == AUTO:
+            raise ValueError(f"{name}: the auto detector has no settings of its own; resolve it "
+                             f"on ExtractParams.for_detector('learned') or ('ridge')")
         value = getattr(self, name)
         return DETECTOR_DEFAULTS[name][self.detector] if value is None else value
+
+    def for_detector(self, detector: str) -> ExtractParams:
+        """These settings with ``detector`` (one of :data:`DETECTORS`): what ``"auto"`` runs.
+
+        Examples
+        --------
+        >>> ExtractParams().for_detector("ridge").detector
+        'ridge'
+        """
+        if detector not in DETECTORS:
+            raise ValueError(f"detector must be one of {', '.join(DETECTORS)}, got {detector!r}")
+        return replace(self, detector=detector,
+                       pixel_model=self.pixel_model if detector == "learned" else None)
 
     @property
     def trace_length_floor_px(self) -> float:
@@ -362,6 +402,9 @@ class ExtractParams:
             raise ValueError(f"grid scale must be a finite number > 0, got {scale!r}")
         if scale == 1.0:
             return self
+        if self.detector == AUTO:
+            raise ValueError("the auto detector's settings go on a grid per detector: "
+                             "for_detector(name).on_grid(scale)")
         changes: dict[str, Any] = {}
         for name in PIXEL_LENGTHS:
             value = self.resolved(name) if name in DETECTOR_DEFAULTS else getattr(self, name)
@@ -490,16 +533,22 @@ class Extraction:
     warnings : tuple of str
     debug : mapping of str to ndarray
         With ``debug=True``: ``flattened``, ``ridge_response`` (``joint_probability`` with the
-        learned detector), ``binary``, ``skeleton`` and ``pruned`` on the working grid, and
-        ``face_mask`` when one was used; else empty.
+        learned detector, both with "auto"), ``binary``, ``skeleton`` and ``pruned`` (of the
+        detector whose traces were kept) on the working grid, and ``face_mask`` when one was used;
+        else empty.
     face_mask : mapping
         How candidates were limited: ``used`` (bool), ``source`` ("face mask", "roi" or "none"),
         ``mode`` (``params.face_mask``), ``masked_fraction`` (share of the working grid outside
         the mask or ROI, 0 without), ``excluded_fraction`` per cue (face mask only) and ``window``
         ("image", "roi" or "face outline").
     detector_model : mapping or None
-        With the learned detector, the model used (:func:`rockmass.imaging.learned.model_record`:
-        file, shipped or not, sha256, what it was trained on); None with the ridge detector.
+        When the learned detector ran (detector "learned" or "auto"), the model used
+        (:func:`rockmass.imaging.learned.model_record`: file, shipped or not, sha256, what it was
+        trained on); None with the ridge detector.
+    detector_choice : mapping or None
+        With ``detector = "auto"``: the detector whose traces were kept (``kept``), the
+        :func:`detector_agreement` measured (``agreement``), the ``auto_agreement`` it was compared
+        with, and how many traces each detector found (``traces``); None otherwise.
     """
 
     traces: Any
@@ -513,6 +562,7 @@ class Extraction:
     face_mask: Mapping[str, Any] = field(default_factory=dict)
     joint_width_source: str = "joint_width_px"
     detector_model: Mapping[str, Any] | None = None
+    detector_choice: Mapping[str, Any] | None = None
 
     def summary(self) -> dict:
         """A JSON-ready dict of the scale, parameters, timings and warnings (no arrays)."""
@@ -523,6 +573,8 @@ class Extraction:
                 "face_orientation": self.face_orientation,
                 "face_mask": dict(self.face_mask),
                 "detector_model": None if self.detector_model is None else dict(self.detector_model),
+                "detector_choice": None if self.detector_choice is None
+                else {**self.detector_choice, "traces": dict(self.detector_choice["traces"])},
                 "timings_s": dict(self.timings_s), "warnings": list(self.warnings)}
 
 
@@ -613,7 +665,8 @@ STEPS = ("read", "grey", "downsample", "roi", "face_mask", "flatten", "ridges", 
 
 
 class _Clock:
-    """Time per step; calls ``progress(step)`` as each step ends."""
+    """Time per step (summed when a step runs again, as the detection steps do for "auto");
+    calls ``progress(step)`` as each step first ends."""
 
     def __init__(self, progress: Callable[[str], None] | None = None):
         self.timings: dict[str, float] = {}
@@ -622,10 +675,16 @@ class _Clock:
 
     def lap(self, name: str) -> None:
         now = time.perf_counter()
+        first = name not in self.timings
         self.timings[name] = self.timings.get(name, 0.0) + now - self._t
         self._t = now
-        if self.progress is not None:
+        if self.progress is not None and first:
             self.progress(name)
+
+    def add(self, other: _Clock) -> None:
+        """Add the step times of a chain timed apart (the ridge chain of "auto", run beside)."""
+        for name, seconds in other.timings.items():
+            self.timings[name] = self.timings.get(name, 0.0) + seconds
 
 
 def _render(graph, shape) -> np.ndarray:
@@ -817,6 +876,91 @@ def _trace_chains(binary, params: ExtractParams, work_shape, width_work: float, 
     return chains, skeleton, pruned
 
 
+class _Found(NamedTuple):
+    """One detector's traces on the working grid, with what the debug output shows."""
+
+    chains: list
+    contrast: np.ndarray
+    band_px: np.ndarray
+    flat: np.ndarray
+    response: np.ndarray
+    binary: np.ndarray
+    skeleton: np.ndarray
+    pruned: Any
+
+
+def _detect(grey, params: ExtractParams, width_work: float, mask, band_px: float, work_shape,
+            clock: _Clock) -> _Found:
+    """The chain of one detector (``params`` on the grid, not "auto"), from the working grey image
+    to filtered traces: joint pixels, traces, the contrast and width filters."""
+    from . import vectorize
+
+    flat, response, binary = _joint_pixels(grey, params, width_work, mask, clock)
+    chains, skeleton, pruned = _trace_chains(binary, params, work_shape, width_work, band_px, clock)
+    contrast = vectorize.trace_contrast(chains, flat, mask=mask)
+    band = vectorize.band_width_px(chains, binary)
+    keep = np.ones(len(chains), dtype=bool)
+    if params.resolved("min_trace_contrast") is not None:
+        keep &= contrast >= params.resolved("min_trace_contrast")
+    if params.resolved("min_trace_width") is not None:
+        keep &= band >= params.resolved("min_trace_width") * width_work
+    clock.lap("link")
+    return _Found([c for c, k in zip(chains, keep) if k], contrast[keep], band[keep], flat,
+                  response, binary, skeleton, pruned)
+
+
+def detector_agreement(ridge_chains, learned_chains, shape_px, *,
+                       radius_px: float = AGREEMENT_RADIUS_PX) -> float:
+    r"""Share of the ridge filter's trace length that the learned detector found too.
+
+    The ridge filter (§3) marks every thin dark line, the learned detector (§3.1) only those that
+    look like joints on real rock. On a clean photo, whose dark lines are joints, they agree but
+    for the faint lines the learned detector leaves out; on rough rock the ridge filter draws
+    several times the joints' length in texture, grain and block edges, which the learned
+    detector does not follow. The share
+
+    .. math:: A = \frac{\#\{x \in R : d(x, L) \le r\}}{\#R},
+
+    with R the ridge traces' pixels and L the learned traces' (both drawn 1 px wide on the
+    working grid) and d the Euclidean distance, tells the two apart (docs/imaging.md §3.3).
+
+    Parameters
+    ----------
+    ridge_chains, learned_chains : sequence of (n, 2) arrays
+        Traces as (row, col) pixel polylines on one grid.
+    shape_px : (rows, cols)
+    radius_px : float, default AGREEMENT_RADIUS_PX
+
+    Returns
+    -------
+    float
+        A in [0, 1]; 0 when the ridge filter found nothing.
+
+    Examples
+    --------
+    >>> line = [np.array([[10.0, 5.0], [10.0, 95.0]])]
+    >>> detector_agreement(line, line, (40, 100))
+    1.0
+    >>> detector_agreement(line, [np.array([[30.0, 5.0], [30.0, 95.0]])], (40, 100))
+    0.0
+    """
+    import cv2
+
+    def drawn(chains):
+        canvas = np.zeros(tuple(int(v) for v in shape_px), dtype=np.uint8)
+        for rc in chains:
+            xy = np.round(np.asarray(rc, dtype=float)[:, ::-1] * 16).astype(np.int32)
+            cv2.polylines(canvas, [xy], False, 1, thickness=1, lineType=cv2.LINE_8, shift=4)
+        return canvas.astype(bool)
+
+    ridge = drawn(ridge_chains)
+    if not ridge.any():
+        return 0.0
+    distance = cv2.distanceTransform(np.where(drawn(learned_chains), 0, 1).astype(np.uint8),
+                                     cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    return float(np.mean(distance[ridge] <= radius_px))
+
+
 def extract(image_or_path, *, m_per_px: float | None = None, control_points=None,
             joint_width_px: float | None = None, joint_width_m: float | None = None, roi=None,
             face_dip_deg: float | None = None, face_dip_direction_deg: float | None = None,
@@ -909,7 +1053,6 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     row_factor, col_factor = work_shape[0] / h, work_shape[1] / w
     factor = float(np.sqrt(row_factor * col_factor))
     given_params, scale_of_grid = params, grid_scale(work_shape[0] * work_shape[1] / 1e6)
-    params = params.on_grid(scale_of_grid)
     width_work, width_source = joint_width_on_grid(
         joint_width_px, joint_width_m, work_factor=factor, m_per_px=scale if units == "m" else None,
         scale=scale_of_grid)
@@ -919,14 +1062,11 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         raise ValueError(f"{given} is not narrower than the {h} x {w} pixel image; give the "
                          "width of one joint (default 3 px of the working grid)")
     learned_width = DEFAULT_JOINT_WIDTH_PX * scale_of_grid  # the width its bands keep
-    if params.detector == "learned" and width_work > learned_width:
-        notes.append(f"the joint width given ({width_work / factor:.4g} px, "
-                     f"{width_work:.4g} px of the working grid) is wider than the learned detector "
-                     f"uses: its probability bands do not widen with the joints (docs/imaging.md "
-                     f"§3.1), so its width filter, linking and joint scores use {learned_width:g} px "
-                     f"of the working grid; --detector ridge sets its filter scales from the width "
-                     f"given")
-        width_work, width_source = learned_width, f"{width_source}, capped"
+    capped_note = (f"the joint width given ({width_work / factor:.4g} px, {width_work:.4g} px of the "
+                   f"working grid) is wider than the learned detector uses: its probability bands "
+                   f"do not widen with the joints (docs/imaging.md §3.1), so its width filter, "
+                   f"linking and joint scores use {learned_width:g} px of the working grid; "
+                   f"--detector ridge sets its filter scales from the width given")
     if scale_of_grid > 1.0:
         notes.append(f"working grid {work_shape[0] * work_shape[1] / 1e6:.1f} MP, above the "
                      f"{REFERENCE_MEGAPIXELS:g} MP the pixel settings are given for: pixel lengths "
@@ -935,18 +1075,37 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
 
     mask, window, face_info, band_px = _candidate_area(
         raw, roi, params.face_mask, (h, w), work_shape, scale, units, name, clock)
-    flat, response, binary = _joint_pixels(grey, params, width_work, mask, clock)
+    def detect(detector, image, detector_clock):
+        width = min(width_work, learned_width) if detector == "learned" else width_work
+        return _detect(image, params.for_detector(detector).on_grid(scale_of_grid), width, mask,
+                       band_px, work_shape, detector_clock)
+
+    if params.detector == AUTO:  # the ridge chain beside the learned one, on the other core
+        from concurrent.futures import ThreadPoolExecutor
+
+        ridge_clock = _Clock()
+        with ThreadPoolExecutor(max_workers=1) as pool:
+            ridge = pool.submit(detect, "ridge", grey, ridge_clock)
+            found = {"learned": detect("learned", grey, clock)}
+            found["ridge"] = ridge.result()
+        clock.add(ridge_clock)
+    else:
+        found = {params.detector: detect(params.detector, grey, clock)}
     del grey
-    chains, skeleton, pruned = _trace_chains(binary, params, work_shape, width_work, band_px, clock)
-    contrast = vectorize.trace_contrast(chains, flat, mask=mask)
-    band = vectorize.band_width_px(chains, binary)
-    keep = np.ones(len(chains), dtype=bool)
-    if params.resolved("min_trace_contrast") is not None:
-        keep &= contrast >= params.resolved("min_trace_contrast")
-    if params.resolved("min_trace_width") is not None:
-        keep &= band >= params.resolved("min_trace_width") * width_work
-    chains, contrast, band = [c for c, k in zip(chains, keep) if k], contrast[keep], band[keep]
-    clock.lap("link")
+    choice = None
+    if params.detector == AUTO:
+        agreement = detector_agreement(found["ridge"].chains, found["learned"].chains, work_shape,
+                                       radius_px=AGREEMENT_RADIUS_PX * scale_of_grid)
+        kept = "ridge" if agreement > params.auto_agreement else "learned"
+        choice = {"kept": kept, "agreement": agreement, "auto_agreement": params.auto_agreement,
+                  "traces": {d: len(found[d].chains) for d in DETECTORS}}
+    else:
+        kept = params.detector
+    if kept == "learned" and width_work > learned_width:
+        notes.append(capped_note)
+        width_work, width_source = learned_width, f"{width_source}, capped"
+    params = given_params.for_detector(kept).on_grid(scale_of_grid)
+    chains, contrast, band, flat, response, binary, skeleton, pruned = found[kept]
     confidence = vectorize.mean_along(chains, response)
     chains_in = [np.column_stack([(c[:, 0] + 0.5) / row_factor - 0.5,
                                   (c[:, 1] + 0.5) / col_factor - 0.5]) for c in chains]
@@ -955,15 +1114,17 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
                                     frame="face",
                                     attributes={"confidence": confidence, "contrast": contrast,
                                                 "band_width_px": band / factor})
-    traces = _with_joint_score(traces, params.detector, m_per_px=scale,
+    traces = _with_joint_score(traces, kept, m_per_px=scale,
                                joint_width_px=width_work / factor)
     clock.lap("vectorize")
 
     debug_images = {}
     if debug:
-        detector_key = "joint_probability" if params.detector == "learned" else "ridge_response"
-        debug_images = {"flattened": flat, detector_key: response, "binary": binary,
-                        "skeleton": skeleton, "pruned": _render(pruned, work_shape)}
+        debug_images = {"flattened": flat, "binary": binary, "skeleton": skeleton,
+                        "pruned": _render(pruned, work_shape)}
+        for detector, run in found.items():  # "auto": both responses, the rest of the kept one
+            debug_images["joint_probability" if detector == "learned" else "ridge_response"] = \
+                run.response
         if face_info["source"] == "face mask":
             debug_images["face_mask"] = mask
     for note in notes:
@@ -978,5 +1139,6 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         joint_width_source=width_source, face_orientation=orientation,
         timings_s=MappingProxyType(dict(clock.timings)), warnings=tuple(notes),
         debug=MappingProxyType(debug_images), face_mask=MappingProxyType(face_info),
-        detector_model=None if params.detector != "learned"
-        else MappingProxyType(learned.model_record(params.pixel_model)))
+        detector_model=None if "learned" not in found
+        else MappingProxyType(learned.model_record(given_params.pixel_model)),
+        detector_choice=None if choice is None else MappingProxyType(choice))

@@ -7,8 +7,9 @@ When the traces carry a ``joint_score`` (:func:`rockmass.imaging.extract`, docs/
 or else a ``confidence`` attribute (§7), each is drawn with opacity 0.25 + 0.75 · that value, so
 doubtful traces fade.
 
-matplotlib is imported inside the function (Agg backend). Large photographs are shown down-sampled
-to at most ``max_side_px`` pixels on their longer side; the traces are scaled with them.
+matplotlib is imported inside the function (Agg backend). Large photographs are shown area-averaged
+down to at most ``max_side_px`` pixels on their longer side (1100: the figure's width at its 110
+dpi, so nothing visible is lost); the traces keep their coordinates.
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ def _shade_key(trace_map) -> str | None:
 
 
 def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title: str | None = None,
-                 max_side_px: int = 2000) -> None:
+                 max_side_px: int = 1100) -> None:
     """Write the photograph (grey) with the traces on top, coloured by set (grey: unassigned).
 
     Parameters
@@ -46,12 +47,17 @@ def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title
     from matplotlib.colors import to_rgba
     from matplotlib.collections import LineCollection
 
+    import cv2
+
     img = np.asarray(image)
-    if img.ndim == 3:
-        img = img[..., :3].mean(axis=2)
-    h, w = img.shape
-    step = max(1, int(np.ceil(max(h, w) / max_side_px)))
-    shown = img[::step, ::step]
+    if img.dtype not in (np.uint8, np.uint16, np.float32, np.float64):
+        img = img.astype(np.float32)  # what cv2.resize takes
+    h, w = img.shape[:2]
+    factor = min(1.0, max_side_px / max(h, w))
+    shown = img if factor == 1.0 else cv2.resize(  # area average: no aliasing, a fraction of the cost
+        img, (max(round(w * factor), 1), max(round(h * factor), 1)), interpolation=cv2.INTER_AREA)
+    if shown.ndim == 3:
+        shown = shown[..., :3].mean(axis=2)
     fig = _figure((10.0, 10.0 * h / w + 0.6))
     ax = fig.add_subplot()
     ax.imshow(shown, cmap="gray", extent=(-0.5, w - 0.5, h - 0.5, -0.5), interpolation="antialiased")

@@ -67,11 +67,13 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                    help="look for bright joints (filled joints, veins, mortar) instead of dark ones; "
                         "set --joint-width to their full width (about 8 px for the mortar of "
                         "skimage's brick photo), or recessed joints split into their two bright rims")
-    p.add_argument("--detector", choices=("learned", "ridge"), dest="detector",
-                   help="joint detector: 'learned' (the shipped pixel classifier, default; "
-                        "docs/imaging.md §3.1) or 'ridge' (multi-scale ridge filter: bright joints, "
-                        "and clean images whose faint hairlines count as joints; the default with "
-                        "--bright-lines)")
+    p.add_argument("--detector", choices=("auto", "learned", "ridge"), dest="detector",
+                   help="joint detector: 'learned' (the shipped pixel classifier; docs/imaging.md "
+                        "§3.1), 'ridge' (multi-scale ridge filter: bright joints, and clean images "
+                        "whose faint hairlines count as joints; the default with --bright-lines) "
+                        "or 'auto' (the default: runs both and keeps the ridge filter's traces "
+                        "when the learned detector confirms most of them, i.e. on a clean photo; "
+                        "summary.json says which, docs/imaging.md §3.3)")
     p.add_argument("--pixel-model", dest="pixel_model", metavar="FILE.npz",
                    help="the learned detector's model: one trained on your own labelled photos by "
                         "python -m rockmass.imaging.train_pixel_model --photos DIR --labels DIR "

@@ -60,7 +60,9 @@ def _confident_table(run: _Run) -> str:
             "Box-counting Dimension")
     rows = [[key, fmt(_value(every.get(key) or {})), fmt(_value(kept.get(key) or {}))] for key in keys]
     threshold = confident.get("min_joint_score")
-    detector = ((summary.get("extraction") or {}).get("params") or {}).get("detector")
+    extraction = summary.get("extraction") or {}
+    detector = ((extraction.get("detector_choice") or {}).get("kept")  # "auto" kept one of them
+                or (extraction.get("params") or {}).get("detector"))
     text = (f"{confident.get('traces_left_out')} of the {_value(every.get('Number of Traces') or {})} "
             f"extracted traces score under {fmt(threshold)}. The per-trace joint score "
             "(docs/imaging.md §7.1) says how likely each is a joint. " + _CONFIDENT_READING.get(

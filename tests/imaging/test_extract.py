@@ -110,8 +110,8 @@ def test_file_input_and_debug_images(tmp_path):
     cv2.imwrite(str(path), img)
     result = extract(path, m_per_px=0.01, debug=True)
     assert result.traces.n_traces == 1
-    assert set(result.debug) == {"flattened", "joint_probability", "binary", "skeleton", "pruned",
-                                 "face_mask"}  # the default detector is the learned one
+    assert set(result.debug) == {"flattened", "joint_probability", "ridge_response", "binary",
+                                 "skeleton", "pruned", "face_mask"}  # "auto": both responses
     assert result.debug["binary"].shape == img.shape
     assert list(result.timings_s)[0] == "read"
 

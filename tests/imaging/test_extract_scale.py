@@ -77,8 +77,9 @@ def test_the_learned_detector_caps_a_wide_joint_width_and_says_so():
     # its probability bands do not widen with the joints, so a width filter in a wide given joint
     # width removed nearly every trace of a large photo (benchmarks/bench_imaging_real.py section 5)
     face = synthetic_face("easy", seed=5, shape_px=(300, 450), m_per_px=0.02)
-    plain = extract(face.image, m_per_px=0.02)
-    wide = extract(face.image, m_per_px=0.02, joint_width_px=12.0)
+    learned = ExtractParams(detector="learned")
+    plain = extract(face.image, m_per_px=0.02, params=learned)
+    wide = extract(face.image, m_per_px=0.02, joint_width_px=12.0, params=learned)
     assert (wide.joint_width_px, wide.joint_width_source) == (plain.joint_width_px,
                                                               "joint_width_px, capped")
     assert any("joint width given (12 px, 12 px of the working grid) is wider" in w
@@ -86,7 +87,7 @@ def test_the_learned_detector_caps_a_wide_joint_width_and_says_so():
     assert wide.traces.n_traces == plain.traces.n_traces > 0
     for i in range(plain.traces.n_traces):
         np.testing.assert_array_equal(wide.traces.polyline(i), plain.traces.polyline(i))
-    narrow = extract(face.image, m_per_px=0.02, joint_width_px=2.0)  # a narrower one is used
+    narrow = extract(face.image, m_per_px=0.02, joint_width_px=2.0, params=learned)  # used
     assert (narrow.joint_width_px, narrow.joint_width_source) == (2.0, "joint_width_px")
     assert not any("wider" in w for w in narrow.warnings)
 

@@ -150,9 +150,10 @@ def test_training_samples_keep_ignored_pixels_out_of_the_negatives():
 
 
 def test_trace_filters_default_per_detector_and_are_checked():
-    learned, ridge = ExtractParams(), ExtractParams(detector="ridge")
-    assert learned.detector == "learned"  # the default, except for bright joints:
+    learned, ridge = ExtractParams(detector="learned"), ExtractParams(detector="ridge")
+    assert ExtractParams().detector == "auto"  # the default, except for bright joints
     assert ExtractParams(line_polarity="bright").detector == "ridge"
+    assert ExtractParams(pixel_model="own.npz").detector == "learned"  # and own models
     with pytest.raises(ValueError, match="needs params.detector = 'ridge'"):
         ExtractParams(detector="learned", line_polarity="bright")
     assert [learned.resolved(n) for n in ("fill_holes_px", "min_trace_length_px",

@@ -19,3 +19,18 @@ def test_overlay_draws_a_confident_trace_stronger_than_a_doubtful_one(tmp_path):
     rows = np.flatnonzero(blue.any(axis=1))
     middle = rgb.shape[0] / 2
     assert rows.size and np.all(rows < middle)  # only the confident (upper) trace is strong
+
+
+
+def test_a_large_photo_is_shown_area_averaged_not_strided(tmp_path):
+    # 1-px black and white columns, 4000 px wide: area averaging to the figure's width shows them
+    # as mid grey; taking every second column (as the overlay once did) showed black only
+    image = np.zeros((2000, 4000), dtype=np.uint8)
+    image[:, 1::2] = 255
+    traces = TraceMap.from_segments([[100, 1000, 3900, 1000]], {"confidence": [1.0]})
+    path = tmp_path / "overlay.png"
+    plot_overlay(image, traces, path, m_per_px=1.0)
+    grey = matplotlib.image.imread(path)[..., :3].mean(axis=2)
+    h, w = grey.shape
+    inside = grey[int(0.25 * h):int(0.4 * h), int(0.3 * w):int(0.7 * w)]  # above the trace
+    assert abs(float(np.median(inside)) - 0.5) < 0.1

@@ -334,13 +334,16 @@ def test_confident_table_equals_the_extract_summary(run_dir):
 
 
 def test_confident_table_is_read_as_its_detector_allows(run_dir):
-    # the extract stage ran the default, learned, detector: its score-kept set is the conservative
-    # one (docs/imaging.md §7.1), so the page must not call it the closer to a geologist's map
+    # the learned detector's score-kept set is the conservative one (docs/imaging.md §7.1), the
+    # ridge filter's the closer to a geologist's map: the page reads the detector "auto" kept
     out, _, path, _ = run_dir
-    assert _stage_json(out, "extract", "summary.json")["extraction"]["params"]["detector"] == "learned"
+    extraction = _stage_json(out, "extract", "summary.json")["extraction"]
+    assert extraction["params"]["detector"] == "auto"
+    kept = extraction["detector_choice"]["kept"]
+    assert kept == ("ridge" if extraction["detector_choice"]["agreement"] > 0.55 else "learned")
     text = " ".join(path.read_text(encoding="utf-8").split())
-    assert "the more conservative reading" in text
-    assert "closer to a geologist" not in text
+    assert ("the more conservative reading" in text) == (kept == "learned")
+    assert ("closer to a geologist" in text) == (kept == "ridge")
 
 
 def test_dfn_table_gives_every_set_of_every_realization(run_dir):
