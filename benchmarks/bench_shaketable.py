@@ -74,7 +74,21 @@ zones and shortens the step). Does blocks' deformation let the jammed set keep s
 UDEC's model did? Tables 11 and 12 give how long each run shook (``shaken_s``), leave blank the
 cycles after a run stopped, and print why it stopped.
 
-``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–12.
+Table 13 — joints that yield gradually and wear (``--tables 13``): the wedge of Table 11 at
+1.2 a_c with the sample's Coulomb joints, and with continuously yielding joints (Cundall & Hart
+1984; docs/dem.md §6) of the same stiffness: without wear (φ_m = φ_b = the sample's 25.56°: the
+shear stiffness falls as the stress nears the strength, and part of every shear increment is
+plastic, so slip can ratchet below the strength), and wearing from 25.56° towards 20° with a
+roughness R of 1 and 5 mm of plastic slip. Seed 002's UDEC model had Coulomb joints; the
+experiment's ingots were real material whose contacts may wear: can either let the jammed wedge
+keep slipping?
+
+Table 14 — the full model with continuously yielding joints without wear (``--tables 14``): the
+threshold staircase of Table 3 and the 15 cycles at 15.5 mm of Table 4, with the joints of Table
+13's second row everywhere. Does the experiment's threshold (no slip at 11.7 mm) survive joints
+that yield gradually, and how far does the top-left block slip in 15 cycles?
+
+``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–14.
 """
 
 from __future__ import annotations
@@ -91,7 +105,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import header, save, table  # noqa: E402
 
 from rockmass.solve_stage import prepare  # noqa: E402
-from rockmass.solver import Deformable, Elastic, Fix, TableSine, VelocityInput, run  # noqa: E402
+from rockmass.solver import (ContinuouslyYielding, Deformable, Elastic, Fix, TableSine,  # noqa: E402
+                             VelocityInput, run)
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "samples" / "solve_shaketable.toml"
@@ -405,6 +420,37 @@ def wedge_zoned(model, settings, frequency_hz: float, a_c: float, ratio: float, 
                         rayleigh_mode="mass")
 
 
+def wedge_joint_models(model, settings, frequency_hz: float, a_c: float, ratio: float,
+                       cycles: int) -> list:
+    """Table 13: the wedge of Table 11 with the sample's Coulomb joints, and with continuously
+    yielding joints of the same stiffness (a_n = k_n, a_s = k_s, e_n = e_s = 0): without wear
+    (φ_m = φ_b = the sample's φ) and wearing from φ to 20° with roughness 1 and 5 mm. Does a joint
+    that yields gradually, or wears, let the jammed wedge keep slipping?"""
+    free = free_wedge(model, settings, a_c)
+    phi = settings.joints["default"].friction_deg
+    variants = (
+        (f"Coulomb, phi {phi:g} deg (sample)", settings),
+        (f"continuously yielding, phi_m = phi_b = {phi:g} deg", yielding_joints(settings)),
+        (f"continuously yielding, {phi:g} -> 20 deg, R = 1 mm",
+         yielding_joints(settings, 20.0, 1e-3)),
+        (f"continuously yielding, {phi:g} -> 20 deg, R = 5 mm",
+         yielding_joints(settings, 20.0, 5e-3)))
+    return shaken_wedge(model, free, variants, frequency_hz, a_c, ratio, cycles)
+
+
+def yielding_joints(settings, basic_deg: float | None = None, roughness_m: float = 1e-3):
+    """The sample's settings with its Coulomb joints replaced by continuously yielding ones of the
+    same stiffness (a_n = k_n, a_s = k_s, e_n = e_s = 0) and initial friction, wearing towards
+    ``basic_deg`` (None: no wear, φ_b = φ) over the roughness ``roughness_m``."""
+    joint = settings.joints["default"]
+    phi = joint.friction_deg
+    law = ContinuouslyYielding(an_pa_m=joint.kn_pa_m, as_pa_m=joint.ks_pa_m,
+                               initial_friction_deg=phi,
+                               basic_friction_deg=phi if basic_deg is None else basic_deg,
+                               roughness_m=roughness_m)
+    return dataclasses.replace(settings, joints={"default": law})
+
+
 def free_wedge(model, settings, a_c: float) -> set:
     """The blocks left free in Tables 10-12: the wedge and the top-left block."""
     top_left, wedge = top_left_and_wedge(model, settings, a_c)
@@ -587,6 +633,26 @@ def main(quick: bool = False, frequency_hz: float | None = None,
         print_wedge_rows("Table 12 — the wedge of Table 10 with deformable blocks (elastic zones, "
                          "Varma et al.'s Table 1 moduli; mass damping only)", rows, n)
         results["wedge_zoned"] = rows
+    if 13 in tables:
+        a_c = threshold_a_c(frequency_hz)
+        n = 3 if quick else 6
+        rows = wedge_joint_models(model, settings, frequency_hz, a_c, 1.2, n)
+        print_wedge_rows("Table 13 — the wedge of Table 11 with joints that yield gradually and "
+                         "wear (continuously yielding, same stiffness)", rows, n)
+        results["wedge_joint_models"] = rows
+    if 14 in tables:
+        yielding = yielding_joints(settings)
+        cycles_stair = 2 if quick else 4
+        out, wall = shaking(model, yielding, LEVELS_M, frequency_hz, cycles_stair)
+        last = [r for r in out["rows"] if r["cycle"] == cycles_stair]
+        print(f"\nTable 14a — threshold with continuously yielding joints (phi_m = phi_b): "
+              f"{cycles_stair} cycles per level at {frequency_hz:.2f} Hz ({wall:.0f} s, status "
+              f"{out['status']})")
+        print(table(last, [("level_mm", ".1f"), ("slip_mm", ".3f"), ("down_mm", "+.3f")]))
+        results["yielding_threshold"] = out
+        results["yielding_fifteen_cycles"] = fifteen_cycles(
+            model, yielding, "Table 14b — continuously yielding joints (phi_m = phi_b = 25.56 deg, "
+            "same stiffness), the full model", frequency_hz, 3 if quick else 15)
     partial = "" if tables == (1, 3, 4, 5, 6, 7, 8, 9) and band is not None else "_tables" + "".join(
         map(str, tables))
     save("bench_shaketable" + ("_quick" if quick else "") + partial, results)
