@@ -249,6 +249,17 @@ def slips_of_completed_cycles(result, frequency_hz: float, cycles: int) -> tuple
     return [v if c <= done else None for c, v in enumerate(slips, 1)], shaken_s
 
 
+def staircase(model, settings, title: str, frequency_hz: float, cycles: int) -> dict:
+    """Tables 3 and 14a: ``cycles`` cycles at each level of :data:`LEVELS_M` in turn, as the
+    experiment found its threshold; prints the slip at the end of each level."""
+    out, wall = shaking(model, settings, LEVELS_M, frequency_hz, cycles)
+    last = [r for r in out["rows"] if r["cycle"] == cycles]
+    print(f"\n{title}: {cycles} cycles per level at {frequency_hz:.2f} Hz ({wall:.0f} s, status "
+          f"{out['status']})")
+    print(table(last, [("level_mm", ".1f"), ("slip_mm", ".3f"), ("down_mm", "+.3f")]))
+    return out
+
+
 def frequency_for(a_c: float, d_m: float) -> float:
     """f at which a table swinging ± d has the peak acceleration a_c: √(a_c/d)/(2π)."""
     return math.sqrt(a_c / d_m) / (2 * math.pi)
@@ -547,13 +558,8 @@ def main(quick: bool = False, frequency_hz: float | None = None,
     results["frequency_hz"] = frequency_hz
 
     if 3 in tables:
-        cycles_stair = 2 if quick else 4
-        out, wall = shaking(model, settings, LEVELS_M, frequency_hz, cycles_stair)
-        last = [r for r in out["rows"] if r["cycle"] == cycles_stair]
-        print(f"\nTable 3 — threshold: {cycles_stair} cycles per level at {frequency_hz:.2f} Hz "
-              f"({wall:.0f} s, status {out['status']})")
-        print(table(last, [("level_mm", ".1f"), ("slip_mm", ".3f"), ("down_mm", "+.3f")]))
-        results["threshold"] = out
+        results["threshold"] = staircase(model, settings, "Table 3 — threshold", frequency_hz,
+                                         2 if quick else 4)
 
     cycles = 5 if quick else 15
     if 4 in tables:
@@ -642,14 +648,9 @@ def main(quick: bool = False, frequency_hz: float | None = None,
         results["wedge_joint_models"] = rows
     if 14 in tables:
         yielding = yielding_joints(settings)
-        cycles_stair = 2 if quick else 4
-        out, wall = shaking(model, yielding, LEVELS_M, frequency_hz, cycles_stair)
-        last = [r for r in out["rows"] if r["cycle"] == cycles_stair]
-        print(f"\nTable 14a — threshold with continuously yielding joints (phi_m = phi_b): "
-              f"{cycles_stair} cycles per level at {frequency_hz:.2f} Hz ({wall:.0f} s, status "
-              f"{out['status']})")
-        print(table(last, [("level_mm", ".1f"), ("slip_mm", ".3f"), ("down_mm", "+.3f")]))
-        results["yielding_threshold"] = out
+        results["yielding_threshold"] = staircase(
+            model, yielding, "Table 14a — threshold with continuously yielding joints (phi_m = "
+            "phi_b)", frequency_hz, 2 if quick else 4)
         results["yielding_fifteen_cycles"] = fifteen_cycles(
             model, yielding, "Table 14b — continuously yielding joints (phi_m = phi_b = 25.56 deg, "
             "same stiffness), the full model", frequency_hz, 3 if quick else 15)
