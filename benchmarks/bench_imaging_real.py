@@ -3,7 +3,7 @@
     python benchmarks/bench_imaging_real.py [--quick] [--detectors ridge,learned,auto]
                                             [--splits val,train] [--no-synthetic] [--no-settings]
                                             [--face-masks full,border,off] [--upsampled 2,4]
-                                            [--agreement-only]
+                                            [--agreement-only] [--stages-only]
 
 1. Real faces: ``../shared/data/rock-face-fractures`` (natural rock faces, 300-400 px, with
    hand-traced major fractures painted red about 5 px wide; AGPL-3.0, read from the shared data
@@ -55,6 +55,14 @@
    easy / moderate / hard faces at 1000 x 1500 px (seeds 1-10) and moderate at 400 x 600 px
    (0.02 m/px, seeds 1-5), field-like and tunnel-style faces (seeds 1-10); and both detectors'
    F1 and dP21 on the field-like and tunnel-style faces on which the ridge traces are kept.
+
+7. Where the learned detector loses the joints (``--stages-only``): on plain moderate faces (seeds
+   1-3) and field-like and tunnel-style faces (seeds 1-6), 1000 x 1500 px, the share of the true
+   centre lines' length lying within 3 px of what each stage of the chain keeps: the pixels of
+   probability >= ``prob_low``, the hysteresis mask (seeds >= ``prob_high``, small objects removed,
+   holes filled), its skeleton, the pruned skeleton graph, and the traces after linking and the
+   length, contrast and width filters; and the traces' precision at 3 px. Rows in
+   ``results/bench_imaging_real_stages.json``.
 
 Each photo is extracted once per setting: the joint-score rows and section 1b reuse the traces
 (and report the time of that one extraction).
@@ -271,6 +279,56 @@ def agreement_section(splits, quick: bool) -> tuple[list[dict], list[dict]]:
     return rows, crossed
 
 
+def stages_section() -> list[dict]:
+    """Section 7 on plain moderate (seeds 1-3), field-like and tunnel-style faces (seeds 1-6)."""
+    from rockmass.imaging.synthetic import synthetic_face
+    from rockmass.imaging.synthetic_field import TUNNEL_STYLE, field_face
+
+    makers = (("moderate (synthetic_face)", lambda s: synthetic_face(
+                   "moderate", seed=s, shape_px=(1000, 1500), m_per_px=0.008), [1, 2, 3]),
+              ("field-like (field_face)", lambda s: field_face(
+                   seed=s, shape_px=(1000, 1500), m_per_px=0.008), list(range(1, 7))),
+              ("tunnel-style (TUNNEL_STYLE)", lambda s: field_face(
+                   seed=s, shape_px=(1000, 1500), m_per_px=0.008, style=TUNNEL_STYLE),
+               list(range(1, 7))))
+    return [{"faces": f"{name}, seeds {seeds[0]}-{seeds[-1]}", **stage_recall(make, seeds)}
+            for name, make, seeds in makers]
+
+
+def stage_recall(make, seeds) -> dict:
+    """Section 7: the share of the truth's centre-line length within 3 px of each stage's pixels
+    (learned detector, defaults), summed over ``seeds``; and the final traces' precision."""
+    import cv2
+
+    from rockmass.imaging.extract import ExtractParams, extract
+    from rockmass.imaging.metrics import render_traces
+
+    params = ExtractParams(detector="learned")
+    stages = ("probability >= prob_low", "hysteresis mask", "skeleton", "pruned graph", "traces")
+    near, total, kept, drawn_total = np.zeros(len(stages)), 0, 0, 0
+    for seed in seeds:
+        face = make(seed)
+        result = extract(face.image, m_per_px=face.m_per_px, params=params, debug=True)
+        truth = render_traces(face.truth, face.image.shape, face.m_per_px)
+        drawn = render_traces(result.traces, face.image.shape, face.m_per_px)
+        masks = (result.debug["joint_probability"] >= params.prob_low, result.debug["binary"],
+                 result.debug["skeleton"], result.debug["pruned"], drawn)
+        for k, mask in enumerate(masks):
+            mask = np.asarray(mask, dtype=np.uint8)
+            if mask.shape != truth.shape:  # the working grid, when the face was down-sampled
+                mask = cv2.resize(mask, truth.shape[::-1], interpolation=cv2.INTER_NEAREST)
+            distance = cv2.distanceTransform(np.where(mask > 0, 0, 1).astype(np.uint8),
+                                             cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+            near[k] += np.count_nonzero(distance[truth] <= 3.0)
+        total += np.count_nonzero(truth)
+        to_truth = cv2.distanceTransform(np.where(truth, 0, 1).astype(np.uint8), cv2.DIST_L2,
+                                         cv2.DIST_MASK_PRECISE)
+        kept += np.count_nonzero(to_truth[drawn] <= 3.0)
+        drawn_total += np.count_nonzero(drawn)
+    return {**{name: float(n / max(total, 1)) for name, n in zip(stages, near)},
+            "precision": float(kept / max(drawn_total, 1))}
+
+
 def _weighted_median(values, weights) -> float:
     """The value below which half the total weight lies."""
     order = np.argsort(values)
@@ -347,6 +405,8 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="12 real images, one synthetic seed")
     parser.add_argument("--detectors", default="ridge,learned,auto",
                         help="comma-separated ExtractParams.detector values (default all three)")
+    parser.add_argument("--stages-only", action="store_true",
+                        help="section 7 only: the joints' length each stage of the learned chain keeps")
     parser.add_argument("--agreement-only", action="store_true",
                         help="section 6 only: the two detectors' agreement, by which 'auto' keeps one")
     parser.add_argument("--splits", default="val,train",
@@ -364,6 +424,17 @@ def main(argv=None) -> int:
     detectors = [d.strip() for d in args.detectors.split(",") if d.strip()]
     splits = [d.strip() for d in args.splits.split(",") if d.strip()]
     masks = [m.strip() for m in args.face_masks.split(",") if m.strip()]
+    if args.stages_only:
+        print(header("where the learned detector loses the joints, stage by stage"))
+        rows = stages_section()
+        print("\n7. share of the true centre lines' length within 3 px of each stage (learned "
+              "detector, defaults), and the traces' precision at 3 px")
+        print(table(rows, [("faces", "s"), ("probability >= prob_low", ".2f"),
+                           ("hysteresis mask", ".2f"), ("skeleton", ".2f"), ("pruned graph", ".2f"),
+                           ("traces", ".2f"), ("precision", ".2f")]))
+        path = save("bench_imaging_real_stages", {"stages": rows})
+        print(f"\nrows saved to {path}")
+        return 0
     if args.agreement_only:
         print(header("the ridge and learned detectors' agreement (ExtractParams.detector = 'auto')"))
         rows, crossed = agreement_section(splits, args.quick)
