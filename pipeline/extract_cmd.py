@@ -107,6 +107,11 @@ def run(args) -> int:
                   f"{confident['min_joint_score']:g}:")
             print(summary_text(confident["statistics"]) if confident["statistics"]
                   else "  no trace left")
+        choice = summary["extraction"].get("detector_choice")
+        if choice:  # "auto": which detector's traces these are, and why
+            print(f"detector: auto kept the {choice['kept']} detector's traces (agreement "
+                  f"{choice['agreement']:.2f} {'>' if choice['kept'] == 'ridge' else '<='} "
+                  f"{choice['auto_agreement']:g}; docs/imaging.md §3.3)")
         for warning in summary["extraction"]["warnings"]:
             print(f"  warning: {warning}", file=sys.stderr)
     return 0

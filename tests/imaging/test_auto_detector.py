@@ -91,11 +91,12 @@ def test_auto_settings_resolve_only_per_detector():
     assert ExtractParams(pixel_model="own.npz").for_detector("ridge").pixel_model is None
 
 
-def test_cli_summary_names_the_detector_kept(tmp_path):
+def test_cli_summary_names_the_detector_kept(tmp_path, capsys):
     face = synthetic_face("easy", seed=4, shape_px=(300, 450), m_per_px=0.02)
     photo = save_synthetic_face(face, tmp_path / "face")["image"]
     assert main(["extract", str(photo), "--m-per-px", "0.02", "--out", str(tmp_path / "out"),
                  "--detector", "auto"]) == 0
+    assert "detector: auto kept the ridge detector's traces (agreement" in capsys.readouterr().out
     extraction = json.loads((tmp_path / "out" / "summary.json").read_text())["extraction"]
     assert extraction["params"]["detector"] == "auto"
     assert extraction["detector_choice"]["kept"] == "ridge"
