@@ -244,8 +244,8 @@ def agreement_section(splits, quick: bool) -> tuple[list[dict], list[dict]]:
         if not (DATA / split / "images").is_dir():
             continue
         pairs = real_pairs(split)[:12] if quick else real_pairs(split)
-        choices = [_extraction_real(image_path, label_skeleton(label_path).shape, auto, 3.0,
-                                    1.0)[0].detector_choice for image_path, label_path in pairs]
+        choices = [_extraction_real(image_path, None, auto, 3.0, 1.0)[0].detector_choice
+                   for image_path, _ in pairs]  # the photo as it is: no shape to enlarge to
         role = "chosen on" if split == "train" else "measured only"
         rows.append(agreement_row(f"real {split}/ ({role})", [c["agreement"] for c in choices],
                                   auto.auto_agreement))
@@ -301,32 +301,26 @@ def stage_recall(make, seeds) -> dict:
     import cv2
 
     from rockmass.imaging.extract import ExtractParams, extract
-    from rockmass.imaging.metrics import render_traces
+    from rockmass.imaging.metrics import raster_counts, render_traces
 
     params = ExtractParams(detector="learned")
     stages = ("probability >= prob_low", "hysteresis mask", "skeleton", "pruned graph", "traces")
-    near, total, kept, drawn_total = np.zeros(len(stages)), 0, 0, 0
+    counts = np.zeros((len(stages), 4))  # raster_counts of each stage against the truth
     for seed in seeds:
         face = make(seed)
         result = extract(face.image, m_per_px=face.m_per_px, params=params, debug=True)
         truth = render_traces(face.truth, face.image.shape, face.m_per_px)
-        drawn = render_traces(result.traces, face.image.shape, face.m_per_px)
         masks = (result.debug["joint_probability"] >= params.prob_low, result.debug["binary"],
-                 result.debug["skeleton"], result.debug["pruned"], drawn)
+                 result.debug["skeleton"], result.debug["pruned"],
+                 render_traces(result.traces, face.image.shape, face.m_per_px))
         for k, mask in enumerate(masks):
             mask = np.asarray(mask, dtype=np.uint8)
             if mask.shape != truth.shape:  # the working grid, when the face was down-sampled
                 mask = cv2.resize(mask, truth.shape[::-1], interpolation=cv2.INTER_NEAREST)
-            distance = cv2.distanceTransform(np.where(mask > 0, 0, 1).astype(np.uint8),
-                                             cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
-            near[k] += np.count_nonzero(distance[truth] <= 3.0)
-        total += np.count_nonzero(truth)
-        to_truth = cv2.distanceTransform(np.where(truth, 0, 1).astype(np.uint8), cv2.DIST_L2,
-                                         cv2.DIST_MASK_PRECISE)
-        kept += np.count_nonzero(to_truth[drawn] <= 3.0)
-        drawn_total += np.count_nonzero(drawn)
-    return {**{name: float(n / max(total, 1)) for name, n in zip(stages, near)},
-            "precision": float(kept / max(drawn_total, 1))}
+            counts[k] += raster_counts(mask, truth, tolerance_px=3.0)
+    recall = counts[:, 2] / np.maximum(counts[:, 3], 1)
+    return {**{name: float(r) for name, r in zip(stages, recall)},
+            "precision": float(counts[-1, 0] / max(counts[-1, 1], 1))}
 
 
 def _weighted_median(values, weights) -> float:

@@ -944,21 +944,13 @@ def detector_agreement(ridge_chains, learned_chains, shape_px, *,
     >>> detector_agreement(line, [np.array([[30.0, 5.0], [30.0, 95.0]])], (40, 100))
     0.0
     """
-    import cv2
+    from .metrics import raster_counts, render_chains
 
-    def drawn(chains):
-        canvas = np.zeros(tuple(int(v) for v in shape_px), dtype=np.uint8)
-        for rc in chains:
-            xy = np.round(np.asarray(rc, dtype=float)[:, ::-1] * 16).astype(np.int32)
-            cv2.polylines(canvas, [xy], False, 1, thickness=1, lineType=cv2.LINE_8, shift=4)
-        return canvas.astype(bool)
-
-    ridge = drawn(ridge_chains)
-    if not ridge.any():
-        return 0.0
-    distance = cv2.distanceTransform(np.where(drawn(learned_chains), 0, 1).astype(np.uint8),
-                                     cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
-    return float(np.mean(distance[ridge] <= radius_px))
+    # the ridge pixels play the truth of the raster scores (8.5)-(8.6): A is their "recall"
+    _, _, confirmed, ridge = raster_counts(render_chains(learned_chains, shape_px),
+                                           render_chains(ridge_chains, shape_px),
+                                           tolerance_px=radius_px)
+    return confirmed / ridge if ridge else 0.0
 
 
 def extract(image_or_path, *, m_per_px: float | None = None, control_points=None,

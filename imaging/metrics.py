@@ -21,7 +21,7 @@ import numpy as np
 from .frame import check_scale, uv_to_rc
 
 __all__ = ["Accuracy", "trace_accuracy", "buffered_match", "raster_match", "raster_counts",
-           "render_traces", "count_nodes", "set_mean_angles"]
+           "render_chains", "render_traces", "count_nodes", "set_mean_angles"]
 
 
 @dataclass(frozen=True)
@@ -70,13 +70,19 @@ class Accuracy:
 
 def render_traces(trace_map, shape_px, m_per_px) -> np.ndarray:
     """The traces drawn as 1-px 8-connected lines on a (rows, cols) grid: a bool mask."""
+    h = int(shape_px[0])
+    return render_chains((uv_to_rc(trace_map.polyline(i), h, m_per_px)
+                          for i in range(trace_map.n_traces)), shape_px)
+
+
+def render_chains(chains_rc, shape_px) -> np.ndarray:
+    """Polylines in (row, col) pixels drawn as 1-px 8-connected lines on a (rows, cols) grid (to
+    1/16 px): a bool mask."""
     import cv2
 
-    h, w = (int(v) for v in shape_px)
-    canvas = np.zeros((h, w), dtype=np.uint8)
-    for i in range(trace_map.n_traces):
-        rc = uv_to_rc(trace_map.polyline(i), h, m_per_px)
-        xy = np.round(rc[:, ::-1] * 16).astype(np.int32)
+    canvas = np.zeros(tuple(int(v) for v in shape_px), dtype=np.uint8)
+    for rc in chains_rc:
+        xy = np.round(np.asarray(rc, dtype=float)[:, ::-1] * 16).astype(np.int32)
         cv2.polylines(canvas, [xy], False, 1, thickness=1, lineType=cv2.LINE_8, shift=4)
     return canvas.astype(bool)
 

@@ -63,9 +63,9 @@ def make_field_sample(folder: Path) -> None:
 
 
 def _same_numbers(written, bundled, tolerance: float, where: str) -> None:
-    """The same JSON structure, numbers within ``tolerance``: numpy's vectorised trigonometry
-    differs in the last bit between CPUs (AVX2 and AVX-512 code paths), so the bundled files are
-    compared by value, not byte for byte."""
+    """The same JSON structure, numbers within ``tolerance``: the generator's floating-point
+    results differ in the last bit between machines (numpy picks its SIMD code by CPU), so the
+    bundled files are compared by value, not byte for byte."""
     if isinstance(bundled, dict):
         assert isinstance(written, dict) and written.keys() == bundled.keys(), where
         for key in bundled:

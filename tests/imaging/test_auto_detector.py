@@ -62,7 +62,7 @@ def test_auto_keeps_the_learned_traces_of_a_cluttered_face_and_a_threshold_of_on
     assert never.detector_choice["kept"] == "learned"
 
 
-def test_auto_reports_each_step_once_and_sums_the_two_runs_times():
+def test_auto_reports_each_step_once_in_chain_order():
     face = synthetic_face("easy", seed=3, shape_px=(200, 300), m_per_px=0.02)
     steps = []
     result = extract(face.image, m_per_px=0.02, progress=steps.append)
