@@ -55,8 +55,11 @@ def test_shipped_model_is_package_data_and_loads():
 def test_stage_forward_pass_matches_a_naive_loop():
     rng = np.random.default_rng(0)  # fixed: random weights and inputs
     stage = _random_stage(rng, 4)
-    x = rng.normal(size=(6, 4)).astype(np.float32) * 3
-    assert np.allclose(stage.predict(x.T), _naive_forward(stage, x), atol=1e-5)
+    x = rng.normal(size=(40, 4)).astype(np.float32) * 8
+    assert (np.abs((x - stage.mean) / stage.std) > 6).sum() >= 10  # the ±6 sd clip is exercised
+    expected = _naive_forward(stage, x)
+    assert np.allclose(stage.predict(x.T), expected, atol=1e-5)
+    assert np.allclose(stage.predict(x.T, block=16), expected, atol=1e-5)  # blocks of 16, 16, 8
 
 
 def test_model_file_round_trip_keeps_every_prediction(tmp_path):
@@ -120,6 +123,26 @@ def test_line_support_is_largest_along_the_line():
     dot = np.zeros((61, 61), np.float32)
     dot[30, 30] = 1.0
     assert line_support(dot, 21)[0][30, 30] < 0.1  # a point is 1 of about 21 samples
+
+
+def test_smoothed_features_of_a_ramp_match_their_closed_forms_on_both_grids():
+    """On a linear ramp I = 1 + a·col + b·row (gradient g = (b, a)), the Gaussian mean is the ramp
+    itself, so the contrast is 0; the local standard deviation at σ is |g|·σ; the structure tensor
+    is g gᵀ everywhere, so the coherence is |g|² / (|g|² + 1e-6) (its regulariser). σ 3 runs on
+    the full grid, σ 4 and more on the coarsened one (COARSE_FROM_SIGMA)."""
+    from rockmass.imaging.features import pixel_features
+
+    r, c = np.mgrid[0:240, 0:240].astype(np.float32)
+    a, b = 0.01, 0.004
+    features = pixel_features(1.0 + a * c + b * r)
+    at = {name: float(features[k][120, 120]) for k, name in enumerate(FEATURE_NAMES)}
+    g2 = a * a + b * b
+    for sigma in (3, 8, 20):
+        assert abs(at[f"contrast_{sigma}"]) < 1e-5
+    for sigma in (4, 16):
+        assert at[f"std_{sigma}"] == pytest.approx(np.sqrt(g2) * sigma, rel=0.01)
+    for sigma in (4, 12):
+        assert at[f"coherence_{sigma}"] == pytest.approx(g2 / (g2 + 1e-6), rel=1e-3)
 
 
 def test_fit_mlp_separates_two_linearly_separable_classes():

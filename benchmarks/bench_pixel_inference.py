@@ -1,0 +1,90 @@
+"""The learned detector's pixel model at run time: features and classifier, time per 4 MP map.
+
+    python benchmarks/bench_pixel_inference.py [--repeat 3]
+
+One "moderate" synthetic face of 1633 x 2449 px (4 MP, the working grid a 12-24 MP photo is
+processed on) is flattened as extraction does (:func:`rockmass.imaging.learned.model_input`); then,
+each the best of ``--repeat`` runs in this process:
+
+- ``features``: :func:`rockmass.imaging.features.pixel_features` (27 maps);
+- ``classifier, block B``: the shipped model's forward pass (eq. (3.2)) over the 4 M columns in
+  blocks of B, the default 8192 and, for comparison, 262 144 (the default before session 15),
+  and the largest difference of its probabilities from the default's (float32 rounding: the
+  block size must not change the answer);
+- ``classifier + chain beside it``: the default forward pass while a second thread runs the
+  ridge detector's whole chain on the same face, as ``detector = "auto"`` does (wall time of
+  the forward pass alone).
+
+Also the model file's size. Rows go to benchmarks/results/bench_pixel_inference.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import threading
+import time
+
+import numpy as np
+
+from _common import header, save, table
+
+SHAPE_PX = (1633, 2449)
+
+
+def best_of(fn, repeat: int) -> float:
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return min(times)
+
+
+def main(argv=None) -> int:
+    from rockmass.imaging.extract import ExtractParams, extract
+    from rockmass.imaging.features import pixel_features
+    from rockmass.imaging.learned import MODEL_FILE, load_model, model_input
+    from rockmass.imaging.synthetic import synthetic_face
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=3)
+    args = parser.parse_args(argv)
+    print(header("the learned detector's pixel model: features and classifier on a 4 MP map"))
+    face = synthetic_face("moderate", seed=1, shape_px=SHAPE_PX, m_per_px=0.005)
+    flat = model_input(face.image.astype(np.float32) / 255.0)
+    stage = load_model().stages[0]
+    features = pixel_features(flat)
+    columns = features.reshape(features.shape[0], -1)
+    reference = stage.predict(columns)
+    rows = [{"step": "features", "time_s": best_of(lambda: pixel_features(flat), args.repeat)}]
+    for block in (8192, 262144):
+        rows.append({"step": f"classifier, block {block}",
+                     "time_s": best_of(lambda: stage.predict(columns, block=block), args.repeat),
+                     "max_diff": float(np.abs(stage.predict(columns, block=block) - reference).max())})
+    for block in (8192, 262144):
+        times = []
+        for _ in range(args.repeat):
+            side = threading.Thread(target=extract, args=(face.image,),
+                                    kwargs=dict(m_per_px=face.m_per_px,
+                                                params=ExtractParams(detector="ridge")))
+            side.start()
+            t0 = time.perf_counter()
+            stage.predict(columns, block=block)
+            times.append(time.perf_counter() - t0)
+            side.join()
+        rows.append({"step": f"classifier, block {block}, ridge chain beside it",
+                     "time_s": min(times)})
+    for row in rows:
+        row["MP_per_s"] = columns.shape[1] / 1e6 / row["time_s"]
+    print(f"\nmodel {MODEL_FILE.name}: {MODEL_FILE.stat().st_size} bytes; map {SHAPE_PX[0]} x "
+          f"{SHAPE_PX[1]} px ({columns.shape[1] / 1e6:.1f} MP), best of {args.repeat}")
+    print(table(rows, [("step", "s"), ("time_s", ".3f"), ("MP_per_s", ".1f"),
+                       ("max_diff", ".1e")]))
+    path = save("bench_pixel_inference", {"model_bytes": MODEL_FILE.stat().st_size,
+                                          "shape_px": SHAPE_PX, "rows": rows})
+    print(f"\nrows saved to {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
