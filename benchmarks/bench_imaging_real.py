@@ -183,6 +183,21 @@ def _extraction_real(image_path: Path, shape, params, joint_width_px, upsample: 
     return _EXTRACTIONS[key]
 
 
+def summarise_counts(counts) -> dict:
+    """Scores of a set of images from their :func:`~rockmass.imaging.metrics.raster_counts`
+    (matched drawn, drawn, matched true, true pixels per image): the means over images of F1,
+    precision and recall (F1 = 0 for an image with nothing drawn), the pooled F1 over all pixels,
+    and dP21 = drawn / true line length - 1 over all images, %."""
+    c = np.array(counts, dtype=float).reshape(-1, 4)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        p, r = c[:, 0] / c[:, 1], c[:, 2] / c[:, 3]
+        f = np.where(p + r > 0, 2 * p * r / (p + r), 0.0)
+    pp, pr = c[:, 0].sum() / max(c[:, 1].sum(), 1), c[:, 2].sum() / max(c[:, 3].sum(), 1)
+    return dict(F1=float(np.nanmean(f)), P=float(np.nanmean(p)), R=float(np.nanmean(r)),
+                F1_pooled=float(2 * pp * pr / max(pp + pr, 1e-12)),
+                dP21_pct=float(100 * (c[:, 1].sum() / max(c[:, 3].sum(), 1) - 1)))
+
+
 def score_real(pairs, params, joint_width_px: float | None, min_joint_score=None,
                upsample: float = 1.0) -> dict:
     """Mean and pooled scores of one setting over the labelled images (of the traces whose joint
@@ -206,14 +221,7 @@ def score_real(pairs, params, joint_width_px: float | None, min_joint_score=None
         if traces.n_traces:
             bands.append(np.asarray(traces.attributes["band_width_px"], dtype=float))
             lengths.append(traces.lengths_m())
-    c = np.array(counts, dtype=float).reshape(-1, 4)  # matched drawn, drawn, matched true, true
-    with np.errstate(invalid="ignore", divide="ignore"):
-        p, r = c[:, 0] / c[:, 1], c[:, 2] / c[:, 3]
-        f = np.where(p + r > 0, 2 * p * r / (p + r), 0.0)
-    pp, pr = c[:, 0].sum() / max(c[:, 1].sum(), 1), c[:, 2].sum() / max(c[:, 3].sum(), 1)
-    return dict(images=len(pairs), F1=float(np.nanmean(f)), P=float(np.nanmean(p)),
-                R=float(np.nanmean(r)), F1_pooled=float(2 * pp * pr / max(pp + pr, 1e-12)),
-                dP21_pct=float(100 * (c[:, 1].sum() / max(c[:, 3].sum(), 1) - 1)),
+    return dict(images=len(pairs), **summarise_counts(counts),
                 dP20_pct=float(100 * (n_traces[0] / max(n_traces[1], 1) - 1)),
                 s_per_image=elapsed / max(len(pairs), 1), MP_per_s=megapixels / max(elapsed, 1e-9),
                 band_px=_weighted_median(np.concatenate(bands), np.concatenate(lengths))

@@ -7,13 +7,16 @@ processed on) is flattened as extraction does (:func:`rockmass.imaging.learned.m
 each the best of ``--repeat`` runs in this process:
 
 - ``features``: :func:`rockmass.imaging.features.pixel_features` (27 maps);
-- ``classifier, block B``: the shipped model's forward pass (eq. (3.2)) over the 4 M columns in
-  blocks of B, the default 8192 and, for comparison, 262 144 (the default before session 15),
-  and the largest difference of its probabilities from the default's (float32 rounding: the
-  block size must not change the answer);
-- ``classifier + chain beside it``: the default forward pass while a second thread runs the
-  ridge detector's whole chain on the same face, as ``detector = "auto"`` does (wall time of
-  the forward pass alone).
+- ``classifier, block B``: the shipped model's forward pass (eq. (3.2), the standardisation's
+  division folded into the first layer) over the 4 M columns in blocks of B, the default 8192
+  and 262 144, and the largest difference of its probabilities from the default's (float32
+  rounding: the block size must not change the answer);
+- ``unfolded, block 262 144``: the forward pass as it was before session 15 (standardise, clip,
+  then the layers, in blocks of 262 144), written out here, with its largest difference from
+  the default;
+- ``classifier, block B, ridge chain beside it``: the forward pass at each block size while a
+  second thread runs the ridge detector's whole chain on the same face, as
+  ``detector = "auto"`` does (wall time of the forward pass alone).
 
 Also the model file's size. Rows go to benchmarks/results/bench_pixel_inference.json.
 """
@@ -40,6 +43,23 @@ def best_of(fn, repeat: int) -> float:
     return min(times)
 
 
+def unfolded_predict(stage, columns, block: int = 262144) -> np.ndarray:
+    """Eq. (3.2) as :meth:`~rockmass.imaging.learned.Stage.predict` computed it before session 15:
+    z = clip((x - m) / s, ±6), then each layer as Wᵀz + b, ReLU between, logistic at the end."""
+    from rockmass.imaging.learned import CLIP_SD
+
+    mean, std = stage.mean[:, None], stage.std[:, None]
+    out = np.empty(columns.shape[1], dtype=np.float32)
+    for start in range(0, columns.shape[1], block):
+        z = np.clip((columns[:, start:start + block] - mean) / std, -CLIP_SD, CLIP_SD)
+        for k, (w, b) in enumerate(zip(stage.weights, stage.biases)):
+            z = w.T @ z + b[:, None]
+            if k < len(stage.weights) - 1:
+                np.maximum(z, 0.0, out=z)
+        out[start:start + block] = 1.0 / (1.0 + np.exp(-np.clip(z[0], -30, 30)))
+    return out
+
+
 def main(argv=None) -> int:
     from rockmass.imaging.extract import ExtractParams, extract
     from rockmass.imaging.features import pixel_features
@@ -61,6 +81,9 @@ def main(argv=None) -> int:
         rows.append({"step": f"classifier, block {block}",
                      "time_s": best_of(lambda: stage.predict(columns, block=block), args.repeat),
                      "max_diff": float(np.abs(stage.predict(columns, block=block) - reference).max())})
+    rows.append({"step": "unfolded, block 262144",
+                 "time_s": best_of(lambda: unfolded_predict(stage, columns), args.repeat),
+                 "max_diff": float(np.abs(unfolded_predict(stage, columns) - reference).max())})
     for block in (8192, 262144):
         times = []
         for _ in range(args.repeat):

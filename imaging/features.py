@@ -124,14 +124,14 @@ class _Pyramid:
     (an eighth for the blur, whose kernel is half as long)."""
 
     def __init__(self, *maps, coarse=None):
-        self.maps, self._coarse = maps, coarse
+        self.maps, self._halves = maps, coarse
 
     def at(self, sigma, combine):
         if sigma < COARSE_FROM_SIGMA:
             return combine(*(_blur(m, sigma) for m in self.maps))
-        if self._coarse is None:
-            self._coarse = [_coarse(m) for m in self.maps]
-        return _fine(combine(*(_blur(m, sigma / 2) for m in self._coarse)), self.maps[0].shape)
+        if self._halves is None:
+            self._halves = [_coarse(m) for m in self.maps]
+        return _fine(combine(*(_blur(m, sigma / 2) for m in self._halves)), self.maps[0].shape)
 
 
 def _gradient(image, sigma):

@@ -13,8 +13,9 @@ and a logistic output,
 The stages are trained by :mod:`rockmass.imaging.train_pixel_model` on synthetic faces only
 (:func:`rockmass.imaging.synthetic_field.field_face` and
 :func:`rockmass.imaging.synthetic.synthetic_face`). The weights ship inside the package as a NumPy
-``.npz`` file (:data:`MODEL_FILE`, about 20 kB) read with ``allow_pickle=False``; nothing is
-downloaded. Inference is NumPy matrix products, in row blocks to bound memory.
+``.npz`` file (:data:`MODEL_FILE`, about 8 kB) read with ``allow_pickle=False``; nothing is
+downloaded. Inference is NumPy matrix products over blocks of pixels small enough to stay in the
+processor's cache (:meth:`Stage.predict`).
 """
 
 from __future__ import annotations
@@ -55,6 +56,10 @@ class Stage:
     weights: tuple
     biases: tuple
 
+    def __post_init__(self):
+        if not np.all(np.asarray(self.std) > 0):  # also refuses NaN
+            raise ValueError("a stage's input standard deviations must all be > 0")
+
     def predict(self, columns: np.ndarray, *, block: int = 8192) -> np.ndarray:
         """Probability (float32, shape (N,)) for each column of (F, N) inputs.
 
@@ -62,15 +67,17 @@ class Stage:
         ``features.reshape(F, -1)`` is then a view; a (N, F) row array is passed as ``x.T``.
         The columns go through in blocks of ``block``: 8192 keeps a block's hidden layers (32 x
         8192 float32, 1 MB) in the processor's cache (``benchmarks/bench_pixel_inference.py``
-        times block sizes, alone and beside the ridge chain that "auto" runs).
+        times block sizes, alone and beside the ridge chain that "auto" runs, and the forward
+        pass as it was before the standardisation was folded in).
         """
         x = np.asarray(columns, dtype=np.float32)
         if x.ndim != 2 or x.shape[0] != self.mean.size:
             raise ValueError(f"inputs must be ({self.mean.size}, N) columns, got shape {x.shape}")
-        low, high, weights, biases = self._folded
+        low, high, mean, weights, biases = self._folded
         out = np.empty(x.shape[1], dtype=np.float32)
         for start in range(0, x.shape[1], block):
             z = np.clip(x[:, start:start + block], low, high)
+            z -= mean
             for k, (w, b) in enumerate(zip(weights, biases)):
                 z = w @ z
                 z += b
@@ -81,17 +88,19 @@ class Stage:
 
     @cached_property
     def _folded(self):
-        """Eq. (3.2) with the standardisation folded into the first layer: clipping z = (x − m) / s
-        to ±CLIP_SD is clipping x to m ± CLIP_SD·s, and W₁ᵀz + b₁ = (W₁ / s)ᵀx + b₁ − (W₁ / s)ᵀm.
-        Returns (low, high, transposed weights, bias columns), float32."""
+        """Eq. (3.2) with the division by s folded into the first layer: clipping z = (x − m) / s
+        to ±CLIP_SD is clipping x to m ± CLIP_SD·s, and W₁ᵀz = (W₁ / s)ᵀ(x − m). (The mean is
+        still subtracted from the inputs, not folded into the bias, which would cancel digits
+        when |m| ≫ s.) Returns (low, high, mean column, transposed weights, bias columns),
+        float32."""
         mean, std = self.mean.astype(np.float64), self.std.astype(np.float64)
         first = self.weights[0].astype(np.float64) / std[:, None]
         weights = [first.T] + [w.T for w in self.weights[1:]]
-        biases = [self.biases[0] - first.T @ mean] + list(self.biases[1:])
         return ((mean - CLIP_SD * std).astype(np.float32)[:, None],
                 (mean + CLIP_SD * std).astype(np.float32)[:, None],
+                mean.astype(np.float32)[:, None],
                 tuple(np.ascontiguousarray(w, dtype=np.float32) for w in weights),
-                tuple(np.asarray(b, dtype=np.float32)[:, None] for b in biases))
+                tuple(np.asarray(b, dtype=np.float32)[:, None] for b in self.biases))
 
 
 @dataclass(frozen=True, eq=False)

@@ -62,6 +62,25 @@ def test_stage_forward_pass_matches_a_naive_loop():
     assert np.allclose(stage.predict(x.T, block=16), expected, atol=1e-5)  # blocks of 16, 16, 8
 
 
+def test_forward_pass_keeps_its_digits_for_inputs_far_from_zero():
+    """Features whose mean is 10⁴ standard deviations from zero (a grey level in raw units, say):
+    the folded first layer must not cancel the digits that distinguish one input from another."""
+    rng = np.random.default_rng(4)
+    stage = _random_stage(rng, 3)
+    stage = Stage(mean=np.full(3, 1e4, np.float32), std=np.ones(3, np.float32),
+                  weights=stage.weights, biases=stage.biases)
+    x = (1e4 + rng.normal(size=(30, 3)) * 3).astype(np.float32)
+    assert np.allclose(stage.predict(x.T), _naive_forward(stage, x), atol=1e-5)
+
+
+def test_a_stage_with_a_zero_standard_deviation_is_refused():
+    rng = np.random.default_rng(5)
+    stage = _random_stage(rng, 2)
+    with pytest.raises(ValueError, match="standard deviations"):
+        Stage(mean=stage.mean, std=np.array([1.0, 0.0], np.float32), weights=stage.weights,
+              biases=stage.biases)
+
+
 def test_model_file_round_trip_keeps_every_prediction(tmp_path):
     rng = np.random.default_rng(1)
     n1, n2 = len(FEATURE_NAMES), len(FEATURE_NAMES) + len(CONTEXT_NAMES)
