@@ -9,8 +9,10 @@ the share of the photo it left out), ``overlay.png`` (traces by set over the pho
 sampling window's outline when it is not the photo's edge), ``rose.png``, ``manifest.json``
 and, with ``--debug``, the intermediate images ``debug_*.png`` — all of them or none.
 
-Without a scale (``--m-per-px``, ``--control-points`` or ``[imaging] m_per_px``) everything is in
-pixels and labelled so, with a warning.
+Without a scale (``--m-per-px``, ``--control-points`` or ``[imaging] m_per_px``) a GeoTIFF's pixel
+size is the scale (a north-up, projected grid in metres: :mod:`rockmass.imaging.georef`; recorded
+as ``input.georeference`` in summary.json); otherwise everything is in pixels and labelled so,
+with a warning.
 """
 
 from __future__ import annotations
@@ -112,6 +114,10 @@ def run(args) -> int:
             print(f"detector: auto kept the {choice['kept']} detector's traces (agreement "
                   f"{choice['agreement']:.2f} {'>' if choice['kept'] == 'ridge' else '<='} "
                   f"{choice['auto_agreement']:g}; docs/imaging.md §3.3)")
+        georeference = summary["input"].get("georeference")
+        if georeference:  # the scale came from the photo's GeoTIFF tags
+            print(f"scale: {georeference['m_per_px']:.6g} m/px from the GeoTIFF tags "
+                  f"({georeference['crs']}; docs/imaging.md §1.1)")
         for warning in summary["extraction"]["warnings"]:
             print(f"  warning: {warning}", file=sys.stderr)
     return 0

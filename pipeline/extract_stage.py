@@ -106,6 +106,13 @@ def compute(args, document=None):
     if args.control_points:
         r1, c1, r2, c2, distance = args.control_points
         control = {"rc_px": [(r1, c1), (r2, c2)], "distance_m": distance}
+    georeference = None
+    if settings["m_per_px"] is None and control is None:  # a GeoTIFF's pixel size is its scale
+        from .imaging.georef import read_georeference
+
+        georeference = read_georeference(path)
+        if georeference is not None:
+            settings = {**settings, "m_per_px": georeference.m_per_px}
     t1 = time.perf_counter()
     with warnings.catch_warnings(), step_bar("extract", STEPS) as bar:
         warnings.simplefilter("ignore", UserWarning)  # recorded in the result's warnings instead
@@ -127,6 +134,8 @@ def compute(args, document=None):
     unit = result.scale.units
     summary = {"input": {"path": str(path), "shape_px": list(image.shape[:2])},
                "extraction": result.summary()}
+    if georeference is not None:  # docs/imaging.md §1.1
+        summary["input"]["georeference"] = georeference.to_dict()
     set_ids = np.full(traces.n_traces, -1, dtype=np.int64)
     validation = np.full(traces.n_traces, "", dtype=str)
     if traces.n_traces >= 1:
