@@ -20,10 +20,12 @@ GDAL is needed.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
-__all__ = ["GeoReference", "read_georeference"]
+import numpy as np
+
+__all__ = ["GeoReference", "read_georeference", "to_map"]
 
 _PIXEL_SCALE, _TIEPOINT, _TRANSFORMATION, _GEOKEYS = 33550, 33922, 34264, 34735
 _MODEL_TYPE, _RASTER_TYPE, _PROJECTED_CRS, _LINEAR_UNITS = 1024, 1025, 3072, 3076
@@ -58,6 +60,12 @@ class GeoReference:
     def to_dict(self) -> dict:
         return {"crs": self.crs, "pixel_size_m": list(self.pixel_size_m),
                 "corner_xy_m": list(self.corner_xy_m), "m_per_px": self.m_per_px}
+
+    @classmethod
+    def from_dict(cls, record) -> GeoReference:
+        """The inverse of :meth:`to_dict` (``m_per_px`` follows from the pixel size)."""
+        return cls(pixel_size_m=tuple(map(float, record["pixel_size_m"])),
+                   corner_xy_m=tuple(map(float, record["corner_xy_m"])), crs=str(record["crs"]))
 
 
 def _geokeys(directory) -> dict[int, int]:
@@ -109,3 +117,36 @@ def read_georeference(path) -> GeoReference | None:
         i, j = i + 0.5, j + 0.5
     return GeoReference(pixel_size_m=(s_x, s_y), corner_xy_m=(x0 - i * s_x, y0 + j * s_y),
                         crs=f"EPSG:{code}")
+
+
+def to_map(trace_map, reference: GeoReference, height_px: int):
+    """The traces of a photo ``height_px`` rows high, extracted at the scale s =
+    ``reference.m_per_px``, in the map coordinates of its georeference.
+
+    A face-frame point (u, v) (docs/imaging.md eq. (1.1)) is the pixel position ((u/s) − ½ along a
+    row, H − (v/s) − ½ down the columns), which eq. (1.3) puts at
+
+        X = X_c + u · S_x / s,     Y = Y_c − H · S_y + v · S_y / s
+
+    with (X_c, Y_c) the photo's top-left corner on the map (``corner_xy_m``). The result is in
+    frame "map" with the reference's CRS; its ``angle_deg`` attribute is the azimuth of each trace
+    (clockwise from North, 0–180°, of the map geometry) and ``length_m`` its map length, so that
+    the file reads as a map's traces do (docs/fractures.md, frames). The sampling window moves
+    with the traces.
+    """
+    from ..dfn.frames import MAP_FRAME, to_convention
+    from .vectorize import axial_angle_deg
+
+    s = reference.m_per_px
+    stretch = np.array(reference.pixel_size_m) / s
+    shift = np.array([reference.corner_xy_m[0],
+                      reference.corner_xy_m[1] - height_px * reference.pixel_size_m[1]])
+    window = trace_map.window_xy_m
+    mapped = replace(trace_map, xy_m=trace_map.xy_m * stretch + shift, frame=MAP_FRAME,
+                     crs=reference.crs, window_xy_m=None if window is None else window * stretch + shift)
+    attributes = dict(mapped.attributes)
+    if "angle_deg" in attributes:
+        attributes["angle_deg"] = to_convention(axial_angle_deg(mapped), "azimuth")
+    if "length_m" in attributes:
+        attributes["length_m"] = mapped.lengths_m()
+    return replace(mapped, attributes=attributes)

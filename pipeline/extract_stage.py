@@ -25,7 +25,7 @@ from .traces_stage import dimension_entry
 __all__ = ["compute", "produce"]
 
 #: names ``rockmass extract`` may write besides those of the new set (``--debug-images``).
-_OWNED = (r"debug_.+\.png",)
+_OWNED = (r"debug_.+\.png", r"traces_map\.geojson")
 
 
 def _settings(args, document=None):
@@ -214,8 +214,15 @@ def produce(args, out_dir, document=None):
     with output_set(out_dir, owns=_OWNED) as out, ExitStack() as stack:
         files = ["traces.geojson", "summary.json", "overlay.png", "rose.png", "manifest.json"]
         files += [f"debug_{key}.png" for key in result.debug]
+        georeference = summary["input"].get("georeference")
+        files += ["traces_map.geojson"] if georeference else []
         paths = {f: stack.enter_context(atomic_path(out / f)) for f in files}
         write_traces(traces, paths["traces.geojson"])
+        if georeference:  # the same traces on the GeoTIFF's map (docs/imaging.md §1.1)
+            from .imaging.georef import GeoReference, to_map
+
+            write_traces(to_map(traces, GeoReference.from_dict(georeference), image.shape[0]),
+                         paths["traces_map.geojson"])
         plot_overlay(image, traces, paths["overlay.png"], m_per_px=result.scale.m_per_px,
                      set_ids=set_ids, title=f"{name}: {traces.n_traces} traces")
         stats = summary["statistics"]

@@ -10,6 +10,7 @@ import pytest
 from PIL import Image, TiffImagePlugin
 
 from rockmass.cli import main
+from rockmass.dfn import read_traces
 from rockmass.imaging.georef import read_georeference
 
 DOUBLE, SHORT = 12, 3
@@ -84,12 +85,23 @@ def test_extract_takes_the_scale_from_a_geotiff_and_records_it(tmp_path, capsys)
     assert summary["extraction"]["scale"]["units"] == "m"
     assert summary["input"]["georeference"]["crs"] == "EPSG:31984"
     assert "from the GeoTIFF tags (EPSG:31984" in capsys.readouterr().out
-    # a scale given by the user wins over the tags
-    assert main(["extract", str(photo), "--out", str(tmp_path / "out2"), "--detector", "ridge",
+    # the same traces on the map: eq. (1.3) through the corner, azimuths, the CRS
+    face_traces = read_traces(tmp_path / "out" / "traces.geojson")
+    map_traces = read_traces(tmp_path / "out" / "traces_map.geojson")
+    assert map_traces.crs == "EPSG:31984" and map_traces.frame == "map"
+    assert face_traces.n_traces == map_traces.n_traces >= 3
+    corner = np.array([648185.0, 9385159.0 - 240 * 0.02])
+    assert np.allclose(map_traces.xy_m, face_traces.xy_m + corner, atol=1e-6)
+    assert np.allclose(map_traces.attributes["angle_deg"],
+                       np.mod(90.0 - face_traces.attributes["angle_deg"], 180.0), atol=1e-6)
+    assert np.allclose(map_traces.lengths_m(), face_traces.lengths_m())
+    # a scale given by the user wins over the tags, and the map file of the last run goes
+    assert main(["extract", str(photo), "--out", str(tmp_path / "out"), "--detector", "ridge",
                  "--m-per-px", "0.03"]) == 0
-    summary = json.loads((tmp_path / "out2" / "summary.json").read_text())
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["extraction"]["scale"]["m_per_px"] == pytest.approx(0.03)
     assert "georeference" not in summary["input"]
+    assert not (tmp_path / "out" / "traces_map.geojson").exists()
 
 
 def test_a_face_frame_point_lies_on_the_map_where_the_docs_say(tmp_path):
