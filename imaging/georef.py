@@ -95,8 +95,16 @@ def read_georeference(path) -> GeoReference | None:
     try:
         with Image.open(path) as image:
             tags = dict(getattr(image, "tag_v2", {}))
-    except OSError:
-        return None  # the photo reader says what is wrong with the file
+    except (OSError, Image.DecompressionBombError):
+        return None  # the photo reader says what is wrong with the file, and checks its size
+    try:
+        return _from_tags(tags)
+    except (IndexError, TypeError, ValueError):  # malformed tags: not a usable georeference
+        return None
+
+
+def _from_tags(tags) -> GeoReference | None:
+    """:func:`read_georeference` of the tags of an opened TIFF (tag number -> value)."""
     scale, tiepoint, directory = tags.get(_PIXEL_SCALE), tags.get(_TIEPOINT), tags.get(_GEOKEYS)
     if scale is None or tiepoint is None or directory is None or len(tiepoint) < 6:
         return None

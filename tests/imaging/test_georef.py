@@ -66,6 +66,18 @@ def test_grids_that_are_not_north_up_metres_are_not_read(tmp_path, change):
     assert read_georeference(_geotiff(tmp_path / "tile.tif", **change)) is None
 
 
+def test_malformed_tags_are_no_georeference_not_a_crash(tmp_path):
+    """A key directory that claims more keys than it holds, and a tiepoint too short."""
+    info = TiffImagePlugin.ImageFileDirectory_v2()
+    info[33550], info.tagtype[33550] = (0.05, 0.05, 0.0), DOUBLE
+    info[33922], info.tagtype[33922] = (0.0, 0.0, 0.0, 1.0, 2.0, 0.0), DOUBLE
+    info[34735], info.tagtype[34735] = (1, 1, 0, 9, 1024, 0, 1, 1), SHORT
+    path = tmp_path / "bad.tif"
+    Image.fromarray(np.zeros((8, 8, 3), np.uint8)).save(path, tiffinfo=info)
+    assert read_georeference(path) is None
+    assert read_georeference(_geotiff(tmp_path / "short.tif", tiepoint=(0.0, 0.0, 0.0))) is None
+
+
 def test_a_plain_tiff_and_other_photos_have_no_georeference(tmp_path):
     plain = tmp_path / "plain.tif"
     Image.fromarray(np.zeros((8, 8, 3), np.uint8)).save(plain)
