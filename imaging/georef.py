@@ -6,13 +6,13 @@ A GeoTIFF ties its raster to a map by tags: ``ModelPixelScaleTag`` (33550) holds
 map point (X, Y, Z) it lies on, and ``GeoKeyDirectoryTag`` (34735) the keys that name the model:
 ``GTModelTypeGeoKey`` (1024; 1 projected, 2 geographic), ``GTRasterTypeGeoKey`` (1025; 1 a pixel
 is an area, 2 a point), ``ProjectedCSTypeGeoKey`` (3072; the EPSG code) and
-``ProjLinearUnitsGeoKey`` (3076; 9001 metre). For a north-up grid the map position of raster point
-(column c, row r) is
+``ProjLinearUnitsGeoKey`` (3076; 9001 metre). For a north-up grid the map position of the raster
+position (row r, column c) is
 
     X = X₀ + (c − i) S_x,   Y = Y₀ − (r − j) S_y                                        (1.3)
 
-with the raster point of a pixel-is-area grid at the pixel's corner and of a pixel-is-point grid
-at its centre. A grid is read only when it is north up (no ``ModelTransformationTag``, 34264, with
+with raster positions counted from the grid's corner in a pixel-is-area grid and from the first
+pixel's centre in a pixel-is-point grid. A grid is read only when it is north up (no ``ModelTransformationTag``, 34264, with
 rotation), projected, in metres, and its pixels are square within 1 %: then its pixel size is a
 scale ``rockmass extract`` can use. The tags are read with Pillow (a matplotlib dependency); no
 GDAL is needed.
