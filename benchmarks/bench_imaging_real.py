@@ -161,8 +161,9 @@ def _extract_real(image_path: Path, shape, params, joint_width_px, upsample: flo
 
 
 def _extraction_real(image_path: Path, shape, params, joint_width_px, upsample: float):
-    """(Extraction, seconds) of one real photo (enlarged to ``shape`` when ``upsample`` != 1); each
-    (photo, settings, model) is extracted once per run and its first time reported again. The key
+    """(Extraction, seconds) of one real photo (enlarged to ``shape`` when ``upsample`` != 1;
+    ``shape`` is not used otherwise); each (photo, settings, model) is extracted once per run and
+    its first time reported again. The key
     holds the model file the learned detector would read (``params.pixel_model``, else the
     module's ``MODEL_FILE`` at call time), so another model never gets cached traces."""
     import cv2

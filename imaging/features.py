@@ -230,7 +230,8 @@ def pixel_features(flat) -> np.ndarray:
     tensor = _Pyramid(g_r * g_r, g_c * g_c, g_r * g_c)
     for s in _COHERENCE_SIGMAS:
         put(tensor.at(s, _coherence))
-    moments = _Pyramid(image, image * image)
+    square = image * image
+    moments = _Pyramid(image, square, coarse=[half, _coarse(square)])  # both σ on the coarse grid
     for s in _STD_SIGMAS:
         put(moments.at(s, _local_sd))
     ridge = np.max(dark[1:4], axis=0)  # σ 2-8: the joints' widths

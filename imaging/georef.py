@@ -79,9 +79,13 @@ def _geokeys(directory) -> dict[int, int]:
     return keys
 
 
-def read_georeference(path) -> GeoReference | None:
+def read_georeference(path, max_pixels: int | None = None) -> GeoReference | None:
     """The :class:`GeoReference` of a GeoTIFF, or None for a file that is not one or whose grid is
     not a north-up, projected, metre grid of square pixels (see the module notes).
+
+    Only the header is read. ``max_pixels`` raises Pillow's decompression-bomb guard for it as
+    :func:`rockmass.imaging.enhance.read_photo` does, so that a large orthophoto the photo reader
+    accepts keeps its georeference.
 
     Examples
     --------
@@ -92,11 +96,13 @@ def read_georeference(path) -> GeoReference | None:
         return None
     from PIL import Image
 
+    from .enhance import _pillow_pixel_limit
+
     try:
-        with Image.open(path) as image:
+        with _pillow_pixel_limit(Image, max_pixels), Image.open(path) as image:
             tags = dict(getattr(image, "tag_v2", {}))
-    except (OSError, Image.DecompressionBombError):
-        return None  # the photo reader says what is wrong with the file, and checks its size
+    except OSError:
+        return None  # the photo reader says what is wrong with the file
     try:
         return _from_tags(tags)
     except (IndexError, TypeError, ValueError):  # malformed tags: not a usable georeference
@@ -131,8 +137,9 @@ def to_map(trace_map, reference: GeoReference, height_px: int):
     """The traces of a photo ``height_px`` rows high, extracted at the scale s =
     ``reference.m_per_px``, in the map coordinates of its georeference.
 
-    A face-frame point (u, v) (docs/imaging.md eq. (1.1)) is the pixel position ((u/s) − ½ along a
-    row, H − (v/s) − ½ down the columns), which eq. (1.3) puts at
+    A face-frame point (u, v) (docs/imaging.md eq. (1.1)) is at column c = u/s − ½ and row
+    r = H − v/s − ½ of the photo, the centre of pixel (r, c) at raster position (r + ½, c + ½),
+    which eq. (1.3) puts at
 
         X = X_c + u · S_x / s,     Y = Y_c − H · S_y + v · S_y / s
 

@@ -86,7 +86,7 @@ def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title
     ax.set_axis_off()
     shading = f", opacity = {shade_key.replace('_', ' ')}" if shade_key else ""
     ax.set_title(title or f"{trace_map.n_traces} traces{shading}", fontsize=10)
-    # a PNG (the format of a path without suffix too) at zlib level 3 rather than Pillow's 6: a
-    # few per cent larger, faster to write
+    # a PNG (the format of a path without suffix too) at zlib level 3 rather than Pillow's 6: less
+    # compression work for a slightly larger file
     png = Path(path).suffix.lower() in ("", ".png")
     fig.savefig(path, dpi=110, **({"pil_kwargs": {"compress_level": 3}} if png else {}))

@@ -89,8 +89,9 @@ def compute(args, document=None):
     path = Path(args.photo)
     t0 = time.perf_counter()
     check_image_pixels(path, getattr(args, "max_pixels", None))  # from the header, before decoding
+    pixel_limit = max_pixels(getattr(args, "max_pixels", None))
     try:
-        image = read_photo(path, max_pixels(getattr(args, "max_pixels", None)))
+        image = read_photo(path, pixel_limit)
     except OSError as exc:
         raise InputError(f"{path}: cannot read the photograph: {exc.strerror or exc}") from exc
     except ValueError as exc:
@@ -110,7 +111,7 @@ def compute(args, document=None):
     if settings["m_per_px"] is None and control is None:  # a GeoTIFF's pixel size is its scale
         from .imaging.georef import read_georeference
 
-        georeference = read_georeference(path)
+        georeference = read_georeference(path, pixel_limit)
         if georeference is not None:
             settings = {**settings, "m_per_px": georeference.m_per_px}
     t1 = time.perf_counter()

@@ -25,10 +25,11 @@ def _keys(*entries):
 
 
 def _geotiff(path, *, scale=(0.05, 0.05, 0.0), tiepoint=(0.0, 0.0, 0.0, 648185.0, 9385159.0, 0.0),
-             keys=((1024, 1), (1025, 1), (3072, 31984), (3076, 9001)), image=None):
+             keys=((1024, 1), (1025, 1), (3072, 31984), (3076, 9001)), image=None,
+             transformation=None):
     info = TiffImagePlugin.ImageFileDirectory_v2()
     for tag, value, kind in ((33550, scale, DOUBLE), (33922, tiepoint, DOUBLE),
-                             (34735, _keys(*keys), SHORT)):
+                             (34735, _keys(*keys), SHORT), (34264, transformation, DOUBLE)):
         if value is not None:
             info[tag] = value
             info.tagtype[tag] = kind
@@ -61,6 +62,8 @@ def test_the_tiepoint_and_pixel_is_point_move_the_corner_by_eq_1_3(tmp_path):
     dict(keys=((1024, 1), (1025, 1), (3072, 31984))),                  # units not stated
     dict(scale=(0.05, 0.06, 0.0)),                                     # pixels not square
     dict(scale=None),                                                  # no pixel size
+    dict(transformation=(0.0433, 0.025, 0, 648185.0, 0.025, -0.0433, 0, 9385159.0,
+                         0, 0, 0, 0, 0, 0, 0, 1)),                     # rotated by 30°
 ])
 def test_grids_that_are_not_north_up_metres_are_not_read(tmp_path, change):
     assert read_georeference(_geotiff(tmp_path / "tile.tif", **change)) is None
@@ -76,6 +79,17 @@ def test_malformed_tags_are_no_georeference_not_a_crash(tmp_path):
     Image.fromarray(np.zeros((8, 8, 3), np.uint8)).save(path, tiffinfo=info)
     assert read_georeference(path) is None
     assert read_georeference(_geotiff(tmp_path / "short.tif", tiepoint=(0.0, 0.0, 0.0))) is None
+
+
+def test_an_orthophoto_beyond_pillows_guard_keeps_its_georeference(tmp_path, monkeypatch):
+    """Pillow refuses to open an image of more than twice ``Image.MAX_IMAGE_PIXELS``; a photo the
+    reader accepts (``max_pixels``, as ``rockmass extract --max-pixels`` passes it) must keep its
+    scale. The guard is lowered here so that a 40 x 60 tile lies beyond it."""
+    photo = _geotiff(tmp_path / "big.tif")
+    monkeypatch.setattr(Image, "MAX_IMAGE_PIXELS", 500)
+    with pytest.raises(Image.DecompressionBombError):
+        read_georeference(photo)  # Pillow's own guard, when no limit is passed
+    assert read_georeference(photo, max_pixels=10_000).m_per_px == pytest.approx(0.05)
 
 
 def test_a_plain_tiff_and_other_photos_have_no_georeference(tmp_path):
