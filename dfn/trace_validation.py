@@ -38,7 +38,13 @@ fractopo reports a slightly overlapping trace.
 
 ``SHARP TURNS`` follows fractopo's ``SharpCornerValidator``: its thresholds (135° from the chord,
 100° from the previous segment) apply only after a test that fails any pair of directions more than
-90° apart, so with its defaults both limits are 90°, the default of ``sharp_turn_deg`` here.
+90° apart, so with its defaults both limits are 90°, the default of ``sharp_turn_deg`` here. A turn
+of exactly the limit is not beyond it (fractopo's ``deg_angle > threshold_angle``), wherever the
+traces lie: a turn counts only if it passes the limit by more than the rounding of the coordinates
+can turn it (:func:`_sharp_turns`), so the exact 90° turns of a pixel staircase get the same label in
+the face frame and on a UTM map. fractopo's own arithmetic decides such turns by rounding (it flags a
+diagonal zig-zag of pixel steps (1, 1), (1, -1) and not an axis-aligned staircase), so on pixel
+staircases its count can exceed this one.
 
 Not checked: ``NULL GEOMETRY`` (the readers refuse it), ``TRACE UNDERLAPS TARGET AREA``,
 ``EMPTY TARGET AREA``, and the buffered part of ``STACKED TRACES`` (fractopo also flags stretches
@@ -80,6 +86,11 @@ SHARP_TURN_DEG = 90.0
 #: fractopo's fixed distances of ``determine_general_nodes`` (the ``atol`` of its ``np.isclose``
 #: tests), in the map's unit: two trace ends touch, and an end lies on a crossing point.
 _ENDS_TOUCH, _ON_CROSSING = 1e-4, 1e-3
+#: SHARP TURNS: a turn within the rounding of the coordinates of the limit is at the limit
+#: (:func:`_sharp_turns`): the rounding bound's factor, and the least and largest tolerance in
+#: degrees (the least covers the arithmetic of the angle, the largest keeps fractopo's label for any
+#: turn farther from the limit, however short its segments).
+_TURN_ROUNDING, _TURN_TOLERANCE_DEG, _TURN_TOLERANCE_MAX_DEG = 4.0, 1e-6, 1e-3
 
 
 def errors_text(errors) -> np.ndarray:
@@ -193,25 +204,45 @@ def validate_traces(trace_map: TraceMap, *, snap_tolerance_m: float,
 def _sharp_turns(trace_map: TraceMap, limit_deg: float) -> np.ndarray:
     """(n_traces,) bool: a trace of three or more vertices where a segment turns more than
     ``limit_deg`` from the previous segment or from the chord, or where a segment or the chord has
-    zero length (fractopo's SharpCornerValidator; a trace of two vertices has no corner)."""
+    zero length (fractopo's SharpCornerValidator; a trace of two vertices has no corner).
+
+    A turn within the rounding of the coordinates of the limit is at the limit, so not beyond it:
+    fractopo's ``deg_angle > threshold_angle`` with the turn it would have in exact arithmetic. The
+    coordinates of a trace whose largest is X are rounded to about eps·X (eps the float64 machine
+    epsilon), which turns a segment of length L by up to about eps·X/L radians; a turn between
+    segments of lengths L1 and L2 is taken as beyond the limit only if it exceeds it by more than
+    :data:`_TURN_ROUNDING` · eps · X · (1/L1 + 1/L2), at least :data:`_TURN_TOLERANCE_DEG` and at
+    most :data:`_TURN_TOLERANCE_MAX_DEG`. The exact 90° turns of a pixel staircase are then at the
+    limit wherever the traces lie (at x ≈ 5e5 m, y ≈ 9e6 m on a UTM map they compute up to a few
+    1e-6 degrees either side of 90°), and a turn more than 1e-3° from the limit gets fractopo's
+    label. Subtracting a vertex of the trace first would not help: differences of nearby float64
+    numbers are exact already; the rounding is in the coordinates themselves.
+    """
     xy, offsets, n = trace_map.xy_m, trace_map.offsets, trace_map.n_traces
     counts = np.diff(offsets)
     vertex_owner = np.repeat(np.arange(n, dtype=np.int64), counts)
     inside = vertex_owner[1:] == vertex_owner[:-1]  # step k joins vertices k and k + 1 of one trace
     segment, owner = np.diff(xy, axis=0)[inside], vertex_owner[:-1][inside]
     chord = xy[offsets[1:] - 1] - xy[offsets[:-1]]
+    length, chord_length = np.hypot(*segment.T), np.hypot(*chord.T)
+    largest = np.maximum.reduceat(np.abs(xy).max(axis=1), offsets[:-1])  # X of each trace (>= 2 vertices)
     with np.errstate(invalid="ignore", divide="ignore"):  # zero lengths give NaN directions
-        unit = segment / np.hypot(*segment.T)[:, None]
-        chord_unit = chord / np.hypot(*chord.T)[:, None]
+        unit = segment / length[:, None]
+        chord_unit = chord / chord_length[:, None]
+        wobble = _TURN_ROUNDING * np.finfo(np.float64).eps * largest[owner] / length  # radians
 
-    def beyond(u, v):  # angle between unit vectors above the limit, or undefined (NaN)
-        cosine = np.clip(np.einsum("ij,ij->i", u, v), -1.0, 1.0)
-        return ~(np.degrees(np.arccos(cosine)) <= limit_deg)
+    def beyond(u, v, slack):  # angle between unit vectors above the limit, or undefined (NaN)
+        cross = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+        angle = np.degrees(np.arctan2(np.abs(cross), np.einsum("ij,ij->i", u, v)))  # NaN stays NaN
+        tolerance = np.clip(np.degrees(slack), _TURN_TOLERANCE_DEG, _TURN_TOLERANCE_MAX_DEG)
+        return ~(angle <= limit_deg + tolerance)
 
+    with np.errstate(invalid="ignore", divide="ignore"):
+        chord_wobble = _TURN_ROUNDING * np.finfo(np.float64).eps * largest / chord_length
     bad = np.zeros(n, dtype=bool)
-    bad[owner[beyond(unit, chord_unit[owner])]] = True
+    bad[owner[beyond(unit, chord_unit[owner], wobble + chord_wobble[owner])]] = True
     consecutive = owner[1:] == owner[:-1]
-    bad[owner[1:][consecutive & beyond(unit[1:], unit[:-1])]] = True
+    bad[owner[1:][consecutive & beyond(unit[1:], unit[:-1], wobble[1:] + wobble[:-1])]] = True
     return bad & (counts > 2)
 
 
