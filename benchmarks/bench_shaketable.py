@@ -88,7 +88,25 @@ threshold staircase of Table 3 and the 15 cycles at 15.5 mm of Table 4, with the
 13's second row everywhere. Does the experiment's threshold (no slip at 11.7 mm) survive joints
 that yield gradually, and how far does the top-left block slip in 15 cycles?
 
-``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–14.
+Table 15 — the input the paper describes (``--tables 15``). The record is not in the paper, but
+its band is: Fourier amplitude concentrated between 0.2 and 2 Hz (Fig. 5b), 30 s of it compressed
+into a 10 s pass (§4) "according to a similar ratio for 1 g by Iai (1989)". Iai's similitude for
+1 g model tests keeps accelerations unchanged and scales displacements by λ^1.5 when time scales
+by λ^0.75, so a pass is a record of 0.6–6 Hz whose peak table displacement is the 15.5 mm the
+experiment reports. Table 15a builds such passes (:class:`BandRecord`: flat acceleration spectrum
+on 0.6–6 Hz, one octave of roll-off, 10 s, Tukey window; seeds 0–4) and prints their peak
+acceleration at 15.5 mm against the model's a_c, the displacement at which they would reach a_c,
+and how much faster they would have to be. Table 15b shakes the sample (Coulomb joints) with one
+pass of seed 0 at 15.5 mm: the top-left block's slip, beside Newmark's rigid block at a_c under
+the same motion.
+
+Table 16 — many uneven exceedances per cycle (``--tables 16``): two passes of the seed-0 record
+scaled so that its peak acceleration is that of the sine of Table 4 at 15.5 mm (1.14 a_c), with
+the continuously yielding joints of Table 14 — one experiment "cycle" as a 10 s pass, not one
+period of a sine. Does the slip per pass hold, as the experiment's did (4.5 mm in 15 passes, about
+0.3 mm a pass)?
+
+``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–16.
 """
 
 from __future__ import annotations
@@ -105,8 +123,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import header, save, table  # noqa: E402
 
 from rockmass.solve_stage import prepare  # noqa: E402
-from rockmass.solver import (ContinuouslyYielding, Deformable, Elastic, Fix, TableSine,  # noqa: E402
-                             VelocityInput, run)
+from rockmass.solver import (BandRecord, ContinuouslyYielding, Deformable, Elastic, Fix,  # noqa: E402
+                             TableSine, VelocityInput, run)
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "samples" / "solve_shaketable.toml"
@@ -115,6 +133,8 @@ EXPERIMENT_SLIP_M = 4.5e-3  # Varma et al. (2019) §3, Fig. 8b: the top-left ing
 UDEC_SLIP_M = EXPERIMENT_SLIP_M * (1 - 0.13)  # "underestimated by 13 %"
 NO_SLIP_D_M, SLIP_D_M = 11.7e-3, 15.5e-3  # the threshold levels of §3
 LEVELS_M = (3.8e-3, 7.6e-3, 11.7e-3, 15.5e-3)
+RECORD_BAND_HZ = (0.6, 6.0)  # Fig. 5b: 0.2-2 Hz; compressed 3x in time (30 s in 10 s, §4)
+PASS_S = 10.0  # "a single cycle of the scaled Mexico earthquake loading lasting 10 s" (§5, studies)
 
 
 def load():
@@ -297,6 +317,70 @@ def newmark_slip(acceleration, dt: float, a_c: float) -> np.ndarray:
         d += v * dt
         slip[i] = d
     return slip
+
+
+def mexico_like(peak: str, value: float, passes: int, seed: int = 0) -> BandRecord:
+    """Passes of a band-limited record with the band of the scaled Mexico record (Tables 15-16)."""
+    return BandRecord(band_hz=RECORD_BAND_HZ, duration_s=PASS_S, peak=peak, peak_value=value,
+                      passes=passes, seed=seed)
+
+
+def record_input_check(a_c: float, seeds=range(5)) -> list:
+    """Table 15a: per seed, one pass at 15.5 mm peak displacement: its peak acceleration (g and
+    against a_c), the peak displacement at which it would reach a_c (mm), the factor c by which
+    its time would have to be compressed further to reach a_c at 15.5 mm (acceleration grows as
+    c² at a fixed displacement: c = √(a_c/a_peak)), and Newmark's one-way slip at a_c in the pass."""
+    rows = []
+    t = np.linspace(0.0, PASS_S, 200_001)
+    for seed in seeds:
+        h = mexico_like("displacement", SLIP_D_M, 1, seed)
+        a = h.acceleration(t)
+        a_peak = float(np.abs(a).max())
+        c = math.sqrt(a_c / a_peak)
+        rows.append({"seed": seed, "a_peak_g": a_peak / G, "a_peak_over_a_c": a_peak / a_c,
+                     "D_at_a_c_mm": 1e3 * SLIP_D_M * a_c / a_peak, "compression_needed": c,
+                     "band_needed_hz": f"{RECORD_BAND_HZ[0] * c:.1f}-{RECORD_BAND_HZ[1] * c:.1f}",
+                     "newmark_mm": 1e3 * max(newmark_slip(a, t[1], a_c)[-1],
+                                             newmark_slip(-a, t[1], a_c)[-1])})
+    return rows
+
+
+def record_passes(model, settings, history: BandRecord, a_c: float) -> dict:
+    """Tables 15b and 16: the static stages, then ``history.passes`` passes of ``history`` on every
+    velocity input; the top-left block's displacement relative to the table after each pass (from
+    its place when the shaking starts), Newmark's one-way slip at a_c under the same motion (the
+    worse of the two directions), the energy ledger, the status and the wall time."""
+    t0 = time.perf_counter()
+    result = run(model, shaken_settings(settings, history, history.passes * PASS_S))
+    wall = time.perf_counter() - t0
+    t, rel = top_left_against_table(result)
+    tn = np.linspace(0.0, history.passes * PASS_S, 100_001 * history.passes)
+    a = history.acceleration(tn)
+    newmark = np.maximum(newmark_slip(a, tn[1], a_c), newmark_slip(-a, tn[1], a_c))
+    rows = []
+    for k in range(1, history.passes + 1):
+        when = k * PASS_S
+        reached = t[-1] >= when - 0.5
+        i = min(int(np.searchsorted(t, when)), len(t) - 1)
+        rows.append({"pass": k, "slip_mm": 1e3 * float(np.hypot(*(rel[i] - rel[0])))
+                     if reached else None,
+                     "down_mm": -1e3 * float(rel[i, 1] - rel[0, 1]) if reached else None,
+                     "newmark_mm": 1e3 * float(newmark[min(np.searchsorted(tn, when), len(tn) - 1)])})
+    return {"rows": rows, "status": result.status, "shaken_s": float(t[-1]), "wall_s": wall,
+            "a_peak_g": float(np.abs(a).max()) / G, "energy": dict(result.stages[-1].energy)}
+
+
+def print_record_rows(title: str, out: dict) -> None:
+    """Tables 15b and 16: slip after each pass against the experiment and UDEC."""
+    print(f"\n{title} (peak table acceleration {out['a_peak_g']:.3f} g; {out['wall_s']:.0f} s "
+          f"wall, status {out['status']}, shook {out['shaken_s']:.1f} s)")
+    print(table(out["rows"], [("pass", "d"), ("slip_mm", ".3f"), ("down_mm", "+.3f"),
+                              ("newmark_mm", ".3f")]))
+    last = [r for r in out["rows"] if r["slip_mm"] is not None]
+    if last:
+        slip = last[-1]["slip_mm"] * 1e-3
+        print(f"slip after {len(last)} passes {slip * 1e3:.3f} mm; the experiment: 4.5 mm after 15 "
+              f"passes ({EXPERIMENT_SLIP_M * 1e3 / 15:.2f} mm a pass on average), UDEC 3.9 mm")
 
 
 def newmark_check() -> float:
@@ -655,6 +739,27 @@ def main(quick: bool = False, frequency_hz: float | None = None,
         results["yielding_fifteen_cycles"] = fifteen_cycles(
             model, yielding, f"Table 14b — continuously yielding joints (phi_m = phi_b = {phi:g} "
             "deg, same stiffness), the full model", frequency_hz, 3 if quick else 15)
+    if 15 in tables:
+        a_c = threshold_a_c(frequency_hz)
+        rows = record_input_check(a_c)
+        print(f"\nTable 15a — passes of a 0.6-6 Hz record (10 s) at 15.5 mm peak table displacement "
+              f"against the model's a_c = {a_c / G:.3f} g")
+        print(table(rows, [("seed", "d"), ("a_peak_g", ".3f"), ("a_peak_over_a_c", ".2f"),
+                           ("D_at_a_c_mm", ".0f"), ("compression_needed", ".2f"),
+                           ("band_needed_hz", "s"), ("newmark_mm", ".3f")]))
+        out = record_passes(model, settings, mexico_like("displacement", SLIP_D_M, 1), a_c)
+        print_record_rows("Table 15b — one pass of the seed-0 record at 15.5 mm, the sample "
+                          "(Coulomb joints)", out)
+        results["record_input"], results["record_at_15p5mm"] = rows, out
+    if 16 in tables:
+        a_c = threshold_a_c(frequency_hz)
+        ratio = SLIP_D_M * (2 * math.pi * frequency_hz) ** 2 / a_c  # the sine at 15.5 mm
+        phi = settings.joints["default"].friction_deg
+        out = record_passes(model, yielding_joints(settings),
+                            mexico_like("acceleration", ratio * a_c, 1 if quick else 2), a_c)
+        print_record_rows(f"Table 16 — passes of the seed-0 record at {ratio:.2f} a_c, continuously "
+                          f"yielding joints (phi_m = phi_b = {phi:g} deg)", out)
+        results["record_passes_yielding"] = out
     partial = "" if tables == (1, 3, 4, 5, 6, 7, 8, 9) and band is not None else "_tables" + "".join(
         map(str, tables))
     save("bench_shaketable" + ("_quick" if quick else "") + partial, results)

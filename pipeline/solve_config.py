@@ -77,7 +77,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, Strict
 
-from .solver.settings import (BoundaryStress, ContinuouslyYielding, Coulomb, Fix, InSituStress,
+from .solver.settings import (BandRecord, BoundaryStress, ContinuouslyYielding, Coulomb, Fix, InSituStress,
                               Material, Monitor, QuietBoundary, Ricker, Settings, Sine, Stage,
                               TableSine, VelocityInput)
 from .strict import ConfigFile, StrictModel, config_file, in_folder, library_section
@@ -126,7 +126,7 @@ class CsvHistoryConfig(StrictModel):
         return self.read(self.path(base), where)
 
 
-HistoryConfig = Annotated[Sine | TableSine | Ricker | CsvHistoryConfig, Field(discriminator="type")]
+HistoryConfig = Annotated[Sine | TableSine | BandRecord | Ricker | CsvHistoryConfig, Field(discriminator="type")]
 
 
 def read_history_csv(path: Path, kind: str, scale: float, where: str | None = None):
@@ -165,8 +165,8 @@ def read_history_csv(path: Path, kind: str, scale: float, where: str | None = No
 
 
 class VelocityInputConfig(library_section(VelocityInput, history=(HistoryConfig, Field(
-        description="velocity history: a table with type = \"sine\", \"table_sine\", \"ricker\" or "
-                    "\"csv\"")))):
+        description="velocity history: a table with type = \"sine\", \"table_sine\", "
+                    "\"band_record\", \"ricker\" or \"csv\"")))):
     """``[[solve.velocity_inputs]]``: :class:`rockmass.solver.VelocityInput` (dynamic stages) whose
     history is a sine (of velocity, or of the table's displacement), a Ricker wavelet or a CSV
     file."""

@@ -7,7 +7,7 @@ Public names
     ``run(model, settings) -> Result``: the stages of a run (:mod:`rockmass.solver.runner`).
 :class:`Settings`, :class:`Stage`, :class:`Material`, :class:`Coulomb`,
 :class:`ContinuouslyYielding`, :class:`InSituStress`, :class:`Fix`, :class:`BoundaryStress`,
-:class:`VelocityInput`, :class:`Sine`, :class:`TableSine`, :class:`Ricker`,
+:class:`VelocityInput`, :class:`Sine`, :class:`TableSine`, :class:`BandRecord`, :class:`Ricker`,
 :class:`TableHistory`,
 :class:`QuietBoundary`, :class:`FreeField`, :class:`Monitor`, :class:`Bolt`,
 :class:`BoltPattern`, :class:`BoltProperties`, :class:`Deformable`
@@ -33,14 +33,15 @@ The numba kernels (:mod:`rockmass.solver._kernels`) load on first use of :func:`
 """
 
 from .result import Frame, Result, StageResult
-from .settings import (Bolt, BoltPattern, BoltProperties, BoundaryStress, ContinuouslyYielding,
+from .settings import (BandRecord, Bolt, BoltPattern, BoltProperties, BoundaryStress, ContinuouslyYielding,
                        Coulomb, Deformable, Fix, FreeField, InSituStress, Material, Monitor,
                        QuietBoundary, Ricker, Settings, Sine, Stage, TableHistory, TableSine,
                        VelocityInput)
 from .zones import Elastic, HoekBrown, MohrCoulomb
 
 __all__ = ["run", "Engine", "Settings", "Stage", "Material", "Coulomb", "ContinuouslyYielding",
-           "InSituStress", "Fix", "BoundaryStress", "VelocityInput", "Sine", "TableSine", "Ricker",
+           "InSituStress", "Fix", "BoundaryStress", "VelocityInput", "Sine", "TableSine", "BandRecord",
+           "Ricker",
            "TableHistory", "QuietBoundary", "FreeField", "Monitor", "Bolt", "BoltPattern",
            "BoltProperties", "Deformable", "Elastic", "MohrCoulomb", "HoekBrown", "Result",
            "StageResult", "Frame"]

@@ -38,7 +38,7 @@ from . import tolerances as T
 from .zones import ZoneModel
 
 __all__ = ["Coulomb", "ContinuouslyYielding", "JointModel", "Material", "InSituStress",
-           "Fix", "BoundaryStress", "Sine", "Ricker", "TableHistory", "History", "VelocityInput",
+           "Fix", "BoundaryStress", "Sine", "BandRecord", "Ricker", "TableHistory", "History", "VelocityInput",
            "QuietBoundary", "FreeField", "Monitor", "BoltProperties", "Bolt", "BoltPattern",
            "Deformable", "Stage", "Settings", "SIDES"]
 
@@ -285,6 +285,73 @@ class TableSine:
 
 
 @spec
+class BandRecord:
+    """A band-limited synthetic table motion, for a dynamic stage whose earthquake record is not
+    at hand (docs/dem.md §9.2, eqs. (9.2a)–(9.2c); :mod:`rockmass.solver.records`): a pass of
+    ``duration_s`` whose acceleration has a flat Fourier amplitude on ``band_hz`` (cos² roll-off
+    over ``rolloff_octaves`` octaves beyond each end), random phases from ``seed``, a Tukey window
+    (tapers of ``taper_fraction`` of the pass at each end, so the table starts and ends each pass
+    at rest at its origin), scaled so that its largest displacement (``peak = "displacement"``) or
+    acceleration (``"acceleration"``) over the pass is ``peak_value`` (m or m/s²); ``passes`` passes
+    of the same record back to back, as a shake table replays one scaled record cycle after cycle.
+    It returns the velocity (the exact derivative); :meth:`displacement` and :meth:`acceleration`
+    give the other two.
+
+    >>> h = BandRecord(band_hz=(0.6, 6.0), duration_s=10.0, peak="displacement",
+    ...                peak_value=0.0155, passes=2, seed=1)
+    >>> t = np.linspace(0.0, 20.0, 400_001)
+    >>> u = h.displacement(t)
+    >>> round(float(np.abs(u).max()), 6), float(u[0]), abs(float(u[-1])) < 1e-12
+    (0.0155, 0.0, True)
+    """
+
+    band_hz: Annotated[tuple[Float, Float], Field(description=(
+        "[f_lo, f_hi]: the band where the acceleration's Fourier amplitude is flat (Hz)"))]
+    duration_s: Annotated[Float, Field(gt=0, le=1e5, description="duration of one pass (s)")]
+    peak_value: Annotated[Float, Field(gt=0, le=1e6, description=(
+        "largest displacement (m) or acceleration (m/s²) of a pass, by peak"))]
+    peak: Annotated[Literal["displacement", "acceleration"], Field(
+        description="what peak_value fixes")] = "displacement"
+    passes: Annotated[Int, Field(ge=1, le=100_000, description="passes of the record, back to back")] = 1
+    seed: Annotated[Int, Field(ge=0, le=2 ** 63 - 1, description="seed of the phases")] = 0
+    rolloff_octaves: Annotated[Float, Field(ge=0, le=10, description=(
+        "octaves over which the amplitude falls to 0 beyond each end of the band"))] = 1.0
+    taper_fraction: Annotated[Float, Field(gt=0, le=0.5, description=(
+        "fraction of a pass tapered (Tukey window) at each end"))] = 0.1
+    type: Annotated[Literal["band_record"], Field(description="history kind: \"band_record\"")] = \
+        "band_record"
+
+    @model_validator(mode="after")
+    def _band_holds_a_component(self):
+        f_lo, f_hi = self.band_hz
+        if not 0 < f_lo < f_hi:
+            raise field_error(self, "band_hz", "expected 0 < f_lo < f_hi", self.band_hz)
+        if f_hi * self.duration_s < 1.0:
+            raise field_error(self, "band_hz", f"the band must reach the lowest frequency of a pass, "
+                              f"1/duration_s = {1 / self.duration_s:g} Hz", self.band_hz)
+        return self
+
+    def _motion(self, t, order: int):
+        from .records import record_motion
+        f_lo, f_hi = self.band_hz
+        return record_motion(t, f_lo=f_lo, f_hi=f_hi, rolloff_octaves=self.rolloff_octaves,
+                             duration_s=self.duration_s, taper_fraction=self.taper_fraction,
+                             seed=self.seed, passes=self.passes, peak=self.peak,
+                             peak_value=self.peak_value, order=order)
+
+    def __call__(self, t):
+        return self._motion(t, 1)
+
+    def displacement(self, t):
+        """The table's displacement u(t) (m), eq. (9.2a)."""
+        return self._motion(t, 0)
+
+    def acceleration(self, t):
+        """The table's acceleration a(t) (m/s²), eq. (9.2c)."""
+        return self._motion(t, 2)
+
+
+@spec
 class Ricker:
     """Ricker wavelet a(1 − 2π²f²τ²) exp(−π²f²τ²), τ = t − t0 (t0 = 1.5/f when None)."""
 
@@ -336,7 +403,7 @@ class TableHistory:
         return TableHistory(tuple(t), tuple(out), source=f"{self.source} (integrated)")
 
 
-History = Union[Sine, TableSine, Ricker, TableHistory]
+History = Union[Sine, TableSine, BandRecord, Ricker, TableHistory]
 
 
 @spec

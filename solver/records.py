@@ -1,0 +1,159 @@
+"""Band-limited synthetic table motions: an earthquake-like input when the record itself is missing
+(docs/dem.md §9.2, eq. (9.2a)–(9.2c)).
+
+A pass of duration T is the table displacement
+
+    u(t) = s w(t) g(t),   g(t) = Σ_k A_k/(2π f_k)² sin(2π f_k t + φ_k),   0 ≤ t ≤ T,        (9.2a)
+
+on the frequencies f_k = k/T of the pass. A_k is the Fourier amplitude of the acceleration g″:
+1 inside the band [f_lo, f_hi], falling as cos²(π x/2) over x = log₂(f_lo/f) or log₂(f/f_hi)
+octaves of a roll-off outside it, 0 beyond (a flat acceleration spectrum inside the band, the shape
+a record's Fourier amplitude takes between its corner frequencies). The phases φ_k are uniform on
+[0, 2π) from ``numpy.random.default_rng(seed)``: the same seed gives the same record. The window
+w is a Tukey window: 1 in the middle, ½(1 − cos(π t/τ)) over the first and last τ = r T, so the
+table starts and ends each pass at rest at its origin,
+
+    u(0) = u(T) = 0,   v(0) = v(T) = 0   (w and w′ vanish at both ends).                       (9.2b)
+
+The scale s makes the largest |u| over the pass D (``peak="displacement"``) or the largest
+|a| = |u″| over the pass a_max (``peak="acceleration"``), both found on a grid of 64 points per
+period of f_max (the largest f_k) refined by a parabola through the peak sample. The velocity
+and acceleration are the exact derivatives,
+
+    v = s (w′g + w g′),   a = s (w″g + 2w′g′ + w g″).                                         (9.2c)
+
+Passes repeat the same record back to back (each starts and ends at rest), as a shake-table test
+replays one scaled record cycle after cycle (Varma et al. 2019 §4: "a single cycle of the scaled
+Mexico earthquake loading lasting 10 s").
+
+The sum is evaluated directly (no FFT): exact at any time, so the solver can sample it at its own
+half steps. Its cost is one sine and one cosine per component and time; a 10 s pass with a band
+of 0.6–6 Hz and one octave of roll-off has 170 components.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+__all__ = ["band_amplitudes", "record_components", "tukey_window", "record_motion"]
+
+GRID_PER_PERIOD = 64  # samples per period of the highest component when the peak is searched
+BLOCK = 4096  # times evaluated together (a BLOCK × components array of sines)
+
+
+def band_amplitudes(f: np.ndarray, f_lo: float, f_hi: float, rolloff_octaves: float) -> np.ndarray:
+    """Fourier amplitude A(f) of the acceleration: 1 on [f_lo, f_hi], cos²(π x/2) over
+    x = log₂(f_lo/f) (below) or log₂(f/f_hi) (above) for x < ``rolloff_octaves`` (as a fraction of
+    it), 0 beyond (eq. (9.2a))."""
+    f = np.asarray(f, float)
+    x = np.zeros_like(f)
+    below, above = f < f_lo, f > f_hi
+    x[below] = np.log2(f_lo / f[below])
+    x[above] = np.log2(f[above] / f_hi)
+    if rolloff_octaves <= 0.0:
+        return np.where(below | above, 0.0, 1.0)
+    y = x / rolloff_octaves
+    return np.where(y < 1.0, np.cos(0.5 * np.pi * y) ** 2, 0.0)
+
+
+def tukey_window(t: np.ndarray, duration_s: float, taper_fraction: float) -> tuple[np.ndarray, ...]:
+    """(w, w′, w″) of the Tukey window over [0, T]: ½(1 − cos(π t/τ)) for t < τ, the mirror for
+    t > T − τ, 1 between, τ = ``taper_fraction`` T (0 outside [0, T])."""
+    t = np.asarray(t, float)
+    w, dw, d2w = np.ones_like(t), np.zeros_like(t), np.zeros_like(t)
+    tau = taper_fraction * duration_s
+    if tau > 0.0:
+        for s, sign in ((t, 1.0), (duration_s - t, -1.0)):
+            edge = s < tau
+            c = np.pi / tau
+            w[edge] = 0.5 * (1.0 - np.cos(c * s[edge]))
+            dw[edge] = sign * 0.5 * c * np.sin(c * s[edge])
+            d2w[edge] = 0.5 * c * c * np.cos(c * s[edge])
+    outside = (t < 0.0) | (t > duration_s)
+    for a in (w, dw, d2w):
+        a[outside] = 0.0
+    return w, dw, d2w
+
+
+@functools.lru_cache(maxsize=32)
+def record_components(f_lo: float, f_hi: float, rolloff_octaves: float, duration_s: float,
+                      seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(f_k, A_k, φ_k) of eq. (9.2a): the frequencies k/T whose amplitude is not 0, their
+    acceleration amplitudes, and their phases from ``default_rng(seed)`` (one uniform draw per
+    frequency k/T up to the band's end, so the phases of a frequency do not depend on the band
+    below it). Read-only arrays (cached)."""
+    f_top = f_hi * 2.0 ** max(rolloff_octaves, 0.0)
+    k = np.arange(1, int(np.ceil(f_top * duration_s)) + 1)
+    f = k / duration_s
+    phases = np.random.default_rng(seed).uniform(0.0, 2.0 * np.pi, len(k))
+    amp = band_amplitudes(f, f_lo, f_hi, rolloff_octaves)
+    keep = amp > 0.0
+    out = (f[keep], amp[keep], phases[keep])
+    for a in out:
+        a.setflags(write=False)
+    return out
+
+
+def _unit_motion(t, f, amp, phases, duration_s, taper_fraction, order: int) -> np.ndarray:
+    """Derivative ``order`` (0: u, 1: v, 2: a) of w g (s = 1) at times ``t`` within one pass."""
+    t = np.asarray(t, float)
+    w = tukey_window(t, duration_s, taper_fraction)
+    omega = 2.0 * np.pi * f
+    arg = np.multiply.outer(t, omega) + phases
+    s, c = np.sin(arg), np.cos(arg)
+    b = amp / omega ** 2
+    g = s @ b
+    if order == 0:
+        return w[0] * g
+    g1 = c @ (b * omega)
+    if order == 1:
+        return w[1] * g + w[0] * g1
+    g2 = -(s @ amp)
+    return w[2] * g + 2.0 * w[1] * g1 + w[0] * g2
+
+
+@functools.lru_cache(maxsize=32)
+def _unit_peaks(f_lo, f_hi, rolloff_octaves, duration_s, taper_fraction, seed) -> tuple[float, float]:
+    """(max |u|, max |a|) of one pass with s = 1, on a grid of GRID_PER_PERIOD points per period
+    of the highest component, each refined by the parabola through the peak sample and its
+    neighbours."""
+    f, amp, phases = record_components(f_lo, f_hi, rolloff_octaves, duration_s, seed)
+    n = int(np.ceil(GRID_PER_PERIOD * f[-1] * duration_s)) + 1
+    t = np.linspace(0.0, duration_s, n)
+    peaks = []
+    for order in (0, 2):
+        y = np.concatenate([_unit_motion(t[i:i + BLOCK], f, amp, phases, duration_s,
+                                         taper_fraction, order) for i in range(0, n, BLOCK)])
+        y = np.abs(y)
+        i = int(np.argmax(y))
+        if 0 < i < n - 1:
+            y0, y1, y2 = y[i - 1], y[i], y[i + 1]
+            denom = y0 - 2.0 * y1 + y2
+            peaks.append(float(y1 - 0.125 * (y2 - y0) ** 2 / denom) if denom < 0 else float(y1))
+        else:
+            peaks.append(float(y[i]))
+    return peaks[0], peaks[1]
+
+
+def record_motion(t, *, f_lo: float, f_hi: float, rolloff_octaves: float, duration_s: float,
+                  taper_fraction: float, seed: int, passes: int, peak: str, peak_value: float,
+                  order: int = 1) -> np.ndarray:
+    """Displacement (``order`` 0), velocity (1) or acceleration (2) of the table at times ``t``
+    (eqs. (9.2a)–(9.2c)): ``passes`` passes of the record back to back from t = 0, scaled so that
+    its peak displacement (``peak="displacement"``) or acceleration (``"acceleration"``) is
+    ``peak_value``; 0 before t = 0 and after the last pass."""
+    f, amp, phases = record_components(f_lo, f_hi, rolloff_octaves, duration_s, seed)
+    u_peak, a_peak = _unit_peaks(f_lo, f_hi, rolloff_octaves, duration_s, taper_fraction, seed)
+    scale = peak_value / (u_peak if peak == "displacement" else a_peak)
+    t = np.asarray(t, float)
+    flat = t.ravel()
+    out = np.zeros_like(flat)
+    inside = (flat >= 0.0) & (flat <= passes * duration_s)
+    local = np.minimum(flat[inside] - duration_s * np.floor(flat[inside] / duration_s), duration_s)
+    local[flat[inside] == passes * duration_s] = duration_s
+    out[inside] = scale * np.concatenate([
+        _unit_motion(local[i:i + BLOCK], f, amp, phases, duration_s, taper_fraction, order)
+        for i in range(0, len(local), BLOCK)] or [np.zeros(0)])
+    return out.reshape(t.shape)
