@@ -239,6 +239,17 @@ def _remove_failed(eng: Engine, watch: FailureWatch, ids: np.ndarray) -> tuple[l
     return failed, before - (eng.kinetic_energy() + eng.strain_energy())
 
 
+def _same_history(a, b) -> bool:
+    """Whether two velocity histories are the same function of time: the same object, or equal
+    settings (the frozen history types compare by value; any other callable by identity)."""
+    if a is b:
+        return True
+    try:
+        return type(a) is type(b) and bool(a == b)
+    except (TypeError, ValueError):  # a callable whose == is not a truth value
+        return False
+
+
 def _new_contact_w2(dt: float, safety: float) -> float:
     """ω² above which a contact that forms stops the kernel (``RC_STIFF``): (2 safety / Δt)², the
     ω_max the step was chosen for (safety 1 for a user's step: its true limit)."""
@@ -387,8 +398,13 @@ class _StageRun:
         eng, stage, dt = self.eng, self.stage, self.dt
         t_half = eng.time_s - self.stage_t0 + (np.arange(todo) + 0.5) * dt
         presc = np.zeros((todo, max(1, len(self.inputs))))
-        for i, inp in enumerate(self.inputs):
-            presc[:, i] = inp.history(t_half)
+        sampled: list = []  # (history, values): inputs sharing a history (a table's base and
+        for i, inp in enumerate(self.inputs):  # sides) sample it once
+            values = next((v for h, v in sampled if _same_history(h, inp.history)), None)
+            if values is None:
+                values = inp.history(t_half)
+                sampled.append((inp.history, values))
+            presc[:, i] = values
         return eng.advance(todo, presc, self.out, dt, alpha_local=self.alpha_local,
                            alpha_mass=self.alpha_mass, ref_inputs=self.ref_inputs,
                            beta=self.beta, tol_ratio=self.tol,

@@ -123,3 +123,39 @@ def test_read_from_a_solve_config(tmp_path):
                     "peak_value": 0.0155, "passes": 15, "seed": 2}})
     h = cfg.history
     assert isinstance(h, BandRecord) and h.passes == 15 and h.band_hz == (0.6, 6.0)
+
+
+class _Counted:
+    """A velocity history that logs how many times it is sampled; equal to any other _Counted of
+    the same ``tag`` (as two equal BandRecords are)."""
+
+    def __init__(self, log: list, tag: str):
+        self.log, self.tag = log, tag
+
+    def __call__(self, t):
+        self.log.append(len(t))
+        return 0.01 * np.sin(2 * np.pi * 2.0 * np.asarray(t))
+
+    def __eq__(self, other):
+        return isinstance(other, _Counted) and other.tag == self.tag
+
+    __hash__ = None
+
+
+@pytest.mark.parametrize("tags, calls_per_chunk", [(("a", "a"), 1), (("a", "b"), 2)])
+def test_inputs_sharing_a_history_sample_it_once(tags, calls_per_chunk):
+    """The base and sides of a shake table share one motion: the runner samples it once per
+    chunk of steps, and only when the histories are equal."""
+    from rockmass.solver import Coulomb, Material, Settings, Stage, VelocityInput, run
+
+    from ._models import incline
+
+    log: list = []
+    inputs = tuple(VelocityInput(f"blocks:{b}", "x", _Counted(log, tag))
+                   for b, tag in zip((0, 1), tags))
+    settings = Settings(joints={"default": Coulomb(1e9, 1e9, 40.0)}, material=Material(2000.0),
+                        stages=(Stage("shake", "dynamic", duration_s=0.05),),
+                        velocity_inputs=inputs)
+    result = run(incline(0.0), settings)
+    steps = result.stages[0].steps
+    assert sum(log) == calls_per_chunk * steps
