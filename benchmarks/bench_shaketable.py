@@ -106,7 +106,18 @@ the continuously yielding joints of Table 14 — one experiment "cycle" as a 10 
 period of a sine. Does the slip per pass hold, as the experiment's did (4.5 mm in 15 passes, about
 0.3 mm a pass)?
 
-``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–16.
+Table 17 — what sets the critical acceleration (``--tables 17``): Table 1's a_c (k_h > 0 only; the
+model is symmetric) for the sample — gravity settles the blocks in the box, then the tunnel is
+cut — and for two other ways the experiment's model may have been brought to rest: the tunnel open
+from the start (the ingots stacked around the opening), and the stress the paper states written
+into the joints at the start (σ_yy from the weight of the rock above, σ_xx/σ_yy = 4.695/10.941,
+read as kPa), then the tunnel cut. Table 15a asks for an a_c near 0.1–0.15 g.
+
+Table 18 — Table 15b with the continuously yielding joints of Table 14, for two passes
+(``--tables 18``): do joints that yield gradually ratchet under the input the paper describes,
+whose peaks stay far below a_c?
+
+``--frequency F`` skips Tables 1–2 and uses F; ``--tables 3,5`` runs only those of Tables 3–18.
 """
 
 from __future__ import annotations
@@ -124,7 +135,7 @@ from _common import header, save, table  # noqa: E402
 
 from rockmass.solve_stage import prepare  # noqa: E402
 from rockmass.solver import (BandRecord, ContinuouslyYielding, Deformable, Elastic, Fix,  # noqa: E402
-                             TableSine, VelocityInput, run)
+                             InSituStress, TableSine, VelocityInput, run)
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG = ROOT / "samples" / "solve_shaketable.toml"
@@ -158,11 +169,13 @@ def pseudo_static(model, settings, kh: float) -> dict:
             "wall_s": time.perf_counter() - t0}
 
 
-def critical_kh(model, settings, lo: float = 0.2, hi: float = 0.8, tol: float = 0.01):
-    """Smallest |k_h| (either sign) at which blocks fail, by bisection; the rows tried."""
+def critical_kh(model, settings, lo: float = 0.2, hi: float = 0.8, tol: float = 0.01,
+                signs=(1.0, -1.0)):
+    """Smallest |k_h| (of the ``signs`` tried) at which blocks fail, by bisection; the rows
+    tried."""
     rows = []
     bounds = []
-    for sign in (1.0, -1.0):
+    for sign in signs:
         a, b = lo, hi
         rows.append(pseudo_static(model, settings, sign * b))
         if rows[-1]["failed_blocks"] == 0:
@@ -317,6 +330,32 @@ def newmark_slip(acceleration, dt: float, a_c: float) -> np.ndarray:
         d += v * dt
         slip[i] = d
     return slip
+
+
+def assembly_variants(settings) -> list:
+    """Table 17: (label, settings) for the ways the model may be brought to rest before shaking."""
+    gravity, excavation = static_stages(settings)
+    open_from_start = dataclasses.replace(gravity, name="gravity_with_tunnel",
+                                          excavate=excavation.excavate)
+    ratio = 4.695 / 10.941  # Varma et al. (2019) §3, their in-situ stresses (read as kPa)
+    return [("sample: gravity settles the blocks, then the tunnel is cut", settings),
+            ("tunnel open from the start", dataclasses.replace(settings,
+                                                                stages=(open_from_start,))),
+            (f"in-situ stress written at the start (K0 = {ratio:.3f}), then the tunnel is cut",
+             dataclasses.replace(settings, insitu=InSituStress(gravity_gradient=True, k0=ratio)))]
+
+
+def what_sets_a_c(model, settings, tol: float) -> list:
+    """Table 17: a_c (k_h > 0) of each of :func:`assembly_variants`, with the wall time."""
+    rows = []
+    for label, variant in assembly_variants(settings):
+        t0 = time.perf_counter()
+        kh, tried = critical_kh(model, variant, lo=0.05, hi=0.8, tol=tol, signs=(1.0,))
+        rows.append({"variant": label, "a_c_g": kh, "runs": len(tried),
+                     "failed_at_a_c": next(r["failed_blocks"] for r in tried if r["kh"] == kh)
+                     if math.isfinite(kh) else 0,
+                     "wall_s": time.perf_counter() - t0})
+    return rows
 
 
 def mexico_like(peak: str, value: float, passes: int, seed: int = 0) -> BandRecord:
@@ -760,6 +799,21 @@ def main(quick: bool = False, frequency_hz: float | None = None,
         print_record_rows(f"Table 16 — passes of the seed-0 record at {ratio:.2f} a_c, continuously "
                           f"yielding joints (phi_m = phi_b = {phi:g} deg)", out)
         results["record_passes_yielding"] = out
+    if 17 in tables:
+        rows = what_sets_a_c(model, settings, 0.02 if quick else 0.01)
+        print("\nTable 17 — what sets the critical acceleration (pseudo-static, k_h > 0, bisection "
+              "to 0.01 g)")
+        print(table(rows, [("variant", "s"), ("a_c_g", ".3f"), ("failed_at_a_c", "d"),
+                           ("runs", "d"), ("wall_s", ".0f")]))
+        results["what_sets_a_c"] = rows
+    if 18 in tables:
+        a_c = threshold_a_c(frequency_hz)
+        phi = settings.joints["default"].friction_deg
+        out = record_passes(model, yielding_joints(settings),
+                            mexico_like("displacement", SLIP_D_M, 1 if quick else 2), a_c)
+        print_record_rows(f"Table 18 — passes of the seed-0 record at 15.5 mm, continuously "
+                          f"yielding joints (phi_m = phi_b = {phi:g} deg)", out)
+        results["record_at_15p5mm_yielding"] = out
     partial = "" if tables == (1, 3, 4, 5, 6, 7, 8, 9) and band is not None else "_tables" + "".join(
         map(str, tables))
     save("bench_shaketable" + ("_quick" if quick else "") + partial, results)
