@@ -110,8 +110,9 @@ Table 17 — what sets the critical acceleration (``--tables 17``): Table 1's a_
 model is symmetric) for the sample — gravity settles the blocks in the box, then the tunnel is
 cut — and for two other ways the experiment's model may have been brought to rest: the tunnel open
 from the start (the ingots stacked around the opening), and the stress the paper states written
-into the joints at the start (σ_yy from the weight of the rock above, σ_xx/σ_yy = 4.695/10.941,
-read as kPa), then the tunnel cut. Table 15a asks for an a_c near 0.1–0.15 g.
+into the joints at the start (σ_yy from the weight of the rock above — the paper's 10.941 "MPa"
+can only be kPa, the weight of the 61 cm model — and its ratio σ_xx/σ_yy = 4.695/10.941), then
+the tunnel cut. Table 15a asks for an a_c near 0.1–0.15 g.
 
 Table 18 — Table 15b with the continuously yielding joints of Table 14, for two passes
 (``--tables 18``): do joints that yield gradually ratchet under the input the paper describes,
@@ -268,7 +269,13 @@ def slip_after_cycles(result, frequency_hz: float, cycles: int) -> list[float]:
 
 
 def _slips_at(t, rel, frequency_hz: float, cycles: int) -> list[float]:
-    at = [min(int(np.searchsorted(t, c / frequency_hz)), len(t) - 1) for c in range(1, cycles + 1)]
+    return slips_at_times(t, rel, [c / frequency_hz for c in range(1, cycles + 1)])
+
+
+def slips_at_times(t, rel, times) -> list[float]:
+    """|displacement relative to the table| (mm) at the first record at or after each of
+    ``times``, from its value at the start of the shaking."""
+    at = [min(int(np.searchsorted(t, when)), len(t) - 1) for when in times]
     return [1e3 * float(np.hypot(*(rel[i] - rel[0]))) for i in at]
 
 
@@ -333,11 +340,18 @@ def newmark_slip(acceleration, dt: float, a_c: float) -> np.ndarray:
 
 
 def assembly_variants(settings) -> list:
-    """Table 17: (label, settings) for the ways the model may be brought to rest before shaking."""
-    gravity, excavation = static_stages(settings)
+    """Table 17: (label, settings) for the ways the model may be brought to rest before shaking.
+    The in-situ variant writes σ_yy = ρ|g| depth and σ_xx = K0 σ_yy with the gravity vector of the
+    run — tilted by k_h in :func:`pseudo_static`, so its unit weight is ρ g √(1 + k_h²) and the
+    shear the tilt adds is not written: a start state, which the static stages then bring to
+    equilibrium under the tilted gravity."""
+    stages = static_stages(settings)
+    if len(stages) != 2 or not stages[1].excavate:
+        raise ValueError(f"{CONFIG}: expected two static stages, gravity then the excavation")
+    gravity, excavation = stages
     open_from_start = dataclasses.replace(gravity, name="gravity_with_tunnel",
                                           excavate=excavation.excavate)
-    ratio = 4.695 / 10.941  # Varma et al. (2019) §3, their in-situ stresses (read as kPa)
+    ratio = 4.695 / 10.941  # Varma et al. (2019) §3: the ratio of their in-situ stresses
     return [("sample: gravity settles the blocks, then the tunnel is cut", settings),
             ("tunnel open from the start", dataclasses.replace(settings,
                                                                 stages=(open_from_start,))),
@@ -396,13 +410,13 @@ def record_passes(model, settings, history: BandRecord, a_c: float) -> dict:
     tn = np.linspace(0.0, history.passes * PASS_S, 100_001 * history.passes)
     a = history.acceleration(tn)
     newmark = np.maximum(newmark_slip(a, tn[1], a_c), newmark_slip(-a, tn[1], a_c))
+    ends = [k * PASS_S for k in range(1, history.passes + 1)]
+    slips = slips_at_times(t, rel, ends)
     rows = []
-    for k in range(1, history.passes + 1):
-        when = k * PASS_S
-        reached = t[-1] >= when - 0.5
+    for k, (when, slip) in enumerate(zip(ends, slips), 1):
+        reached = t[-1] >= when - 1e-6  # the run shook to the end of this pass
         i = min(int(np.searchsorted(t, when)), len(t) - 1)
-        rows.append({"pass": k, "slip_mm": 1e3 * float(np.hypot(*(rel[i] - rel[0])))
-                     if reached else None,
+        rows.append({"pass": k, "slip_mm": slip if reached else None,
                      "down_mm": -1e3 * float(rel[i, 1] - rel[0, 1]) if reached else None,
                      "newmark_mm": 1e3 * float(newmark[min(np.searchsorted(tn, when), len(tn) - 1)])})
     return {"rows": rows, "status": result.status, "shaken_s": float(t[-1]), "wall_s": wall,
@@ -419,7 +433,8 @@ def print_record_rows(title: str, out: dict) -> None:
     if last:
         slip = last[-1]["slip_mm"] * 1e-3
         print(f"slip after {len(last)} passes {slip * 1e3:.3f} mm; the experiment: 4.5 mm after 15 "
-              f"passes ({EXPERIMENT_SLIP_M * 1e3 / 15:.2f} mm a pass on average), UDEC 3.9 mm")
+              f"passes ({EXPERIMENT_SLIP_M * 1e3 / 15:.2f} mm a pass on average), UDEC "
+              f"{UDEC_SLIP_M * 1e3:.1f} mm")
 
 
 def newmark_check() -> float:
@@ -782,7 +797,7 @@ def main(quick: bool = False, frequency_hz: float | None = None,
         a_c = threshold_a_c(frequency_hz)
         rows = record_input_check(a_c)
         print(f"\nTable 15a — passes of a 0.6-6 Hz record (10 s) at 15.5 mm peak table displacement "
-              f"against the model's a_c = {a_c / G:.3f} g")
+              f"against a_c = {a_c / G:.3f} g (Table 2's threshold read back; Table 1: 0.472 g)")
         print(table(rows, [("seed", "d"), ("a_peak_g", ".3f"), ("a_peak_over_a_c", ".2f"),
                            ("D_at_a_c_mm", ".0f"), ("compression_needed", ".2f"),
                            ("band_needed_hz", "s"), ("newmark_mm", ".3f")]))
@@ -802,7 +817,7 @@ def main(quick: bool = False, frequency_hz: float | None = None,
     if 17 in tables:
         rows = what_sets_a_c(model, settings, 0.02 if quick else 0.01)
         print("\nTable 17 — what sets the critical acceleration (pseudo-static, k_h > 0, bisection "
-              "to 0.01 g)")
+              f"to {0.02 if quick else 0.01} g)")
         print(table(rows, [("variant", "s"), ("a_c_g", ".3f"), ("failed_at_a_c", "d"),
                            ("runs", "d"), ("wall_s", ".0f")]))
         results["what_sets_a_c"] = rows

@@ -17,10 +17,13 @@ table starts and ends each pass at rest at its origin,
 
 The scale s makes the largest |u| over the pass D (``peak="displacement"``) or the largest
 |a| = |u″| over the pass a_max (``peak="acceleration"``), both found on a grid of 64 points per
-period of f_max (the largest f_k) refined by a parabola through the peak sample. The velocity
-and acceleration are the exact derivatives,
+period of f_max (the largest f_k), refined by a bounded search around the largest samples and
+checked at the window's kinks. The velocity and acceleration are the exact derivatives,
 
     v = s (w′g + w g′),   a = s (w″g + 2w′g′ + w g″).                                         (9.2c)
+
+w″ jumps at 0, τ, T − τ and T (by ½(π/τ)²), so the acceleration jumps there by s ½(π/τ)² g(t):
+the table starts each pass with a step of acceleration, as a record cut out of a longer one does.
 
 Passes repeat the same record back to back (each starts and ends at rest), as a shake-table test
 replays one scaled record cycle after cycle (Varma et al. 2019 §4: "a single cycle of the scaled
@@ -28,7 +31,7 @@ Mexico earthquake loading lasting 10 s").
 
 The sum is evaluated directly (no FFT): exact at any time, so the solver can sample it at its own
 half steps. Its cost is one sine and one cosine per component and time; a 10 s pass with a band
-of 0.6–6 Hz and one octave of roll-off has 170 components.
+of 0.6–6 Hz and one octave of roll-off has 116 components (0.4–11.9 Hz).
 """
 
 from __future__ import annotations
@@ -40,7 +43,9 @@ import numpy as np
 __all__ = ["band_amplitudes", "record_components", "tukey_window", "record_motion"]
 
 GRID_PER_PERIOD = 64  # samples per period of the highest component when the peak is searched
-BLOCK = 4096  # times evaluated together (a BLOCK × components array of sines)
+REFINED = 8  # largest grid samples whose neighbourhood is searched for the exact peak
+BLOCK_SINES = 2 ** 20  # times × components evaluated together (memory of the sine arrays)
+MAX_COMPONENTS = 20_000  # a record longer or wider than this is refused (its cost per time)
 
 
 def band_amplitudes(f: np.ndarray, f_lo: float, f_hi: float, rolloff_octaves: float) -> np.ndarray:
@@ -114,26 +119,44 @@ def _unit_motion(t, f, amp, phases, duration_s, taper_fraction, order: int) -> n
     return w[2] * g + 2.0 * w[1] * g1 + w[0] * g2
 
 
+def _evaluate(t, f, amp, phases, duration_s, taper_fraction, order: int) -> np.ndarray:
+    """:func:`_unit_motion` over any number of times, in blocks of at most ~2²⁰ sines."""
+    rows = max(1, BLOCK_SINES // len(f))
+    return np.concatenate([_unit_motion(t[i:i + rows], f, amp, phases, duration_s,
+                                        taper_fraction, order) for i in range(0, len(t), rows)]
+                          or [np.zeros(0)])
+
+
 @functools.lru_cache(maxsize=32)
 def _unit_peaks(f_lo, f_hi, rolloff_octaves, duration_s, taper_fraction, seed) -> tuple[float, float]:
-    """(max |u|, max |a|) of one pass with s = 1, on a grid of GRID_PER_PERIOD points per period
-    of the highest component, each refined by the parabola through the peak sample and its
-    neighbours."""
+    """(max |u|, max |a|) of one pass with s = 1. |u| and |a| are sampled on a grid of
+    GRID_PER_PERIOD points per period of the highest component; the REFINED largest local maxima
+    are then searched (scipy's bounded scalar search) between their neighbours, on each side of
+    any kink of the window in between (w″ jumps at 0, τ, T − τ and T, so a has kinks there), and
+    the kinks themselves are candidates."""
+    from scipy.optimize import minimize_scalar
+
     f, amp, phases = record_components(f_lo, f_hi, rolloff_octaves, duration_s, seed)
+    tau = taper_fraction * duration_s
+    kinks = np.array([0.0, tau, duration_s - tau, duration_s])
     n = int(np.ceil(GRID_PER_PERIOD * f[-1] * duration_s)) + 1
     t = np.linspace(0.0, duration_s, n)
     peaks = []
     for order in (0, 2):
-        y = np.concatenate([_unit_motion(t[i:i + BLOCK], f, amp, phases, duration_s,
-                                         taper_fraction, order) for i in range(0, n, BLOCK)])
-        y = np.abs(y)
-        i = int(np.argmax(y))
-        if 0 < i < n - 1:
-            y0, y1, y2 = y[i - 1], y[i], y[i + 1]
-            denom = y0 - 2.0 * y1 + y2
-            peaks.append(float(y1 - 0.125 * (y2 - y0) ** 2 / denom) if denom < 0 else float(y1))
-        else:
-            peaks.append(float(y[i]))
+        def size(x, order=order):
+            return float(abs(_unit_motion(np.array([x]), f, amp, phases, duration_s,
+                                          taper_fraction, order)[0]))
+
+        y = np.abs(_evaluate(t, f, amp, phases, duration_s, taper_fraction, order))
+        best = max(size(k) for k in kinks)
+        for i in np.argsort(y)[::-1][:REFINED]:
+            lo, hi = t[max(i - 1, 0)], t[min(i + 1, n - 1)]
+            cuts = [lo, *kinks[(kinks > lo) & (kinks < hi)], hi]
+            for a, b in zip(cuts[:-1], cuts[1:]):
+                found = minimize_scalar(lambda x: -size(x), bounds=(a, b), method="bounded",
+                                        options={"xatol": 1e-9 * duration_s})
+                best = max(best, -float(found.fun), size(a), size(b))
+        peaks.append(best)
     return peaks[0], peaks[1]
 
 
@@ -151,9 +174,7 @@ def record_motion(t, *, f_lo: float, f_hi: float, rolloff_octaves: float, durati
     flat = t.ravel()
     out = np.zeros_like(flat)
     inside = (flat >= 0.0) & (flat <= passes * duration_s)
-    local = np.minimum(flat[inside] - duration_s * np.floor(flat[inside] / duration_s), duration_s)
-    local[flat[inside] == passes * duration_s] = duration_s
-    out[inside] = scale * np.concatenate([
-        _unit_motion(local[i:i + BLOCK], f, amp, phases, duration_s, taper_fraction, order)
-        for i in range(0, len(local), BLOCK)] or [np.zeros(0)])
+    local = np.mod(flat[inside], duration_s)  # the pass's own time (g is T-periodic, w is not:
+    local[(local == 0.0) & (flat[inside] > 0.0)] = duration_s  # a pass's end is its t = T)
+    out[inside] = scale * _evaluate(local, f, amp, phases, duration_s, taper_fraction, order)
     return out.reshape(t.shape)

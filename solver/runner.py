@@ -38,7 +38,7 @@ from .monitoring import boundary_points, point_displacement_from
 from .result import (FAILED_STATUSES, STATUS_FAILED_BLOCKS, STATUS_OK, EnergyLedger, Frame, Result,
                      StageResult)
 from .selectors import block_at_point, require_point_in_domain
-from .settings import Settings, Stage
+from .settings import Settings, Stage, same_history
 from .wavelength import warn_coarse_zones, wave_checks
 
 __all__ = ["reference_stage", "run"]
@@ -239,16 +239,6 @@ def _remove_failed(eng: Engine, watch: FailureWatch, ids: np.ndarray) -> tuple[l
     return failed, before - (eng.kinetic_energy() + eng.strain_energy())
 
 
-def _same_history(a, b) -> bool:
-    """Whether two velocity histories are the same function of time: the same object, or equal
-    settings (the frozen history types compare by value; any other callable by identity)."""
-    if a is b:
-        return True
-    try:
-        return type(a) is type(b) and bool(a == b)
-    except (TypeError, ValueError):  # a callable whose == is not a truth value
-        return False
-
 
 def _new_contact_w2(dt: float, safety: float) -> float:
     """ω² above which a contact that forms stops the kernel (``RC_STIFF``): (2 safety / Δt)², the
@@ -324,6 +314,10 @@ class _StageRun:
         self.dt, self.limit = self._first_time_step()
         self.n_steps = math.ceil(stage.duration_s / self.dt) if dynamic else stage.max_steps
         self.inputs = settings.velocity_inputs if dynamic else ()
+        # inputs that share a history (a shake table's base and sides) sample it once per chunk
+        self.first_of_history = [next(j for j in range(i + 1)
+                                      if same_history(self.inputs[j].history, inp.history))
+                                 for i, inp in enumerate(self.inputs)]
         if stage.history_every:
             self.chunk = stage.history_every
         else:
@@ -398,13 +392,9 @@ class _StageRun:
         eng, stage, dt = self.eng, self.stage, self.dt
         t_half = eng.time_s - self.stage_t0 + (np.arange(todo) + 0.5) * dt
         presc = np.zeros((todo, max(1, len(self.inputs))))
-        sampled: list = []  # (history, values): inputs sharing a history (a table's base and
-        for i, inp in enumerate(self.inputs):  # sides) sample it once
-            values = next((v for h, v in sampled if _same_history(h, inp.history)), None)
-            if values is None:
-                values = inp.history(t_half)
-                sampled.append((inp.history, values))
-            presc[:, i] = values
+        for i, inp in enumerate(self.inputs):
+            first = self.first_of_history[i]
+            presc[:, i] = inp.history(t_half) if first == i else presc[:, first]
         return eng.advance(todo, presc, self.out, dt, alpha_local=self.alpha_local,
                            alpha_mass=self.alpha_mass, ref_inputs=self.ref_inputs,
                            beta=self.beta, tol_ratio=self.tol,

@@ -326,9 +326,18 @@ class BandRecord:
         f_lo, f_hi = self.band_hz
         if not 0 < f_lo < f_hi:
             raise field_error(self, "band_hz", "expected 0 < f_lo < f_hi", self.band_hz)
-        if f_hi * self.duration_s < 1.0:
-            raise field_error(self, "band_hz", f"the band must reach the lowest frequency of a pass, "
-                              f"1/duration_s = {1 / self.duration_s:g} Hz", self.band_hz)
+        from .records import MAX_COMPONENTS, record_components
+        spread = 2.0 ** self.rolloff_octaves
+        span = (f_hi * spread - f_lo / spread) * self.duration_s  # frequencies k/T with A_k > 0
+        count = (MAX_COMPONENTS + 1 if span > MAX_COMPONENTS + 1 or f_hi * spread * self.duration_s > 1e7
+                 else len(record_components(f_lo, f_hi, self.rolloff_octaves, self.duration_s,
+                                            self.seed)[0]))
+        if count == 0:
+            raise field_error(self, "band_hz", "the band and its roll-off hold no frequency k/T of a "
+                              f"pass (T = duration_s = {self.duration_s:g} s)", self.band_hz)
+        if count > MAX_COMPONENTS:
+            raise field_error(self, "band_hz", f"more than {MAX_COMPONENTS} frequencies k/T in the "
+                              "band and its roll-off: a narrower band or a shorter pass", self.band_hz)
         return self
 
     def _motion(self, t, order: int):
@@ -788,6 +797,21 @@ class Settings:
         return T.DYNAMIC_STEP_SAFETY if dynamic else T.STATIC_STEP_SAFETY
 
 
+def same_history(a, b) -> bool:
+    """Whether two velocity histories are the same function of time: the same object, or of one
+    type and equal (the frozen history types compare by their settings; a plain callable by
+    identity). An ``==`` that does not give a plain truth value, or raises, means not the same."""
+    if a is b:
+        return True
+    if type(a) is not type(b):
+        return False
+    try:
+        equal = a == b
+    except Exception:  # any failure to compare: treat as different
+        return False
+    return equal if isinstance(equal, bool) else False
+
+
 def _check_reference_inputs(settings: Any, stage: Stage) -> None:
     """``rayleigh_reference="inputs"`` needs velocity inputs, and one history per component (the
     motion the damping is measured from)."""
@@ -796,7 +820,7 @@ def _check_reference_inputs(settings: Any, stage: Stage) -> None:
                           "'inputs' needs velocity_inputs", stage.rayleigh_reference)
     for component in ("x", "y"):
         histories = [inp.history for inp in settings.velocity_inputs if inp.component == component]
-        if any(h != histories[0] for h in histories[1:]):
+        if not all(same_history(histories[0], h) for h in histories[1:]):
             raise field_error(settings, "velocity_inputs", f"stage {stage.name!r}: rayleigh_"
                               f"reference = 'inputs' needs the {component} inputs to share one "
                               "history (the motion the damping is relative to)", component)

@@ -26,8 +26,9 @@ def grid(h: BandRecord, per_second: int = 20_000) -> np.ndarray:
 def test_each_pass_starts_and_ends_at_rest():
     h = record(passes=3)
     ends = np.array([0.0, T, 2 * T, 3 * T])
-    assert np.abs(h.displacement(ends)).max() < 1e-15
-    assert np.abs(h(ends)).max() < 1e-15
+    t = grid(h, 2_000)
+    assert np.abs(h.displacement(ends)).max() < 1e-12 * np.abs(h.displacement(t)).max()
+    assert np.abs(h(ends)).max() < 1e-12 * np.abs(h(t)).max()
 
 
 def test_zero_outside_the_passes():
@@ -38,9 +39,13 @@ def test_zero_outside_the_passes():
 
 
 @pytest.mark.parametrize("peak, value", [("displacement", 0.0155), ("acceleration", 4.6)])
-def test_scaled_to_its_peak(peak, value):
-    h = record(peak=peak, peak_value=value, passes=1)
-    t = grid(h, 50_000)
+@pytest.mark.parametrize("seed", [3, 9, 17, 28])
+def test_scaled_to_its_peak(peak, value, seed):
+    """The largest |u| or |a| on a dense grid (and at the window's kinks, where the acceleration
+    of seed 9 peaks) is the value asked for."""
+    h = record(peak=peak, peak_value=value, passes=1, seed=seed)
+    tau = h.taper_fraction * T
+    t = np.concatenate([grid(h, 50_000), [tau, T - tau]])
     motion = h.displacement(t) if peak == "displacement" else h.acceleration(t)
     assert np.abs(motion).max() == pytest.approx(value, rel=2e-4)
 
@@ -63,7 +68,7 @@ def test_passes_repeat_the_same_record():
     h = record(passes=3)
     t = np.linspace(0.0, T, 2001)
     for k in (1, 2):
-        np.testing.assert_allclose(h(t + k * T), h(t), atol=1e-14)
+        np.testing.assert_allclose(h(t + k * T), h(t), rtol=0, atol=1e-12 * np.abs(h(t)).max())
 
 
 def test_seed_reproduces_and_changes_the_record():
@@ -108,7 +113,10 @@ def test_band_amplitudes_and_window_closed_forms():
                                        ({"band_hz": (0.01, 0.1), "duration_s": 2.0}, "band_hz"),
                                        ({"peak_value": 0.0}, "peak_value"),
                                        ({"passes": 0}, "passes"),
-                                       ({"taper_fraction": 0.6}, "taper_fraction")])
+                                       ({"taper_fraction": 0.6}, "taper_fraction"),
+                                       ({"band_hz": (0.62, 0.68), "duration_s": 10.0,
+                                         "rolloff_octaves": 0.0}, "no frequency"),
+                                       ({"band_hz": (0.6, 6e4)}, "more than")])
 def test_bad_settings_name_the_field(kw, field):
     with pytest.raises(ValueError, match=field):
         record(**kw)
