@@ -59,7 +59,25 @@ def _plain_warning(message, category, filename, lineno, file=None, line=None) ->
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the CLI; return the exit code (the console script passes it to ``sys.exit``)."""
+    """Run the CLI; return the exit code (the console script passes it to ``sys.exit``).
+
+    Without ``argv`` (the console script, ``python -m rockmass``) the process ends when this
+    returns: the objects alive then are frozen out of the garbage collector (:func:`gc.freeze`),
+    which spares the interpreter its last collections over them on the way out (0.3 s of the
+    0.35 s ``rockmass extract`` took to exit after loading numba, scipy and matplotlib, on a loaded
+    two-core machine). Every output is written and closed before; ``atexit`` handlers, the
+    finalizers of objects freed by reference counting and the flushing of stdout and stderr still
+    run; only cyclic garbage left at exit is not collected.
+    """
+    code = _main(argv)
+    if argv is None:
+        import gc
+
+        gc.freeze()
+    return code
+
+
+def _main(argv: list[str] | None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)  # usage errors exit with code 2 by argparse's own rule
     args.argv = ["rockmass", *(sys.argv[1:] if argv is None else argv)]  # for manifests
