@@ -47,7 +47,6 @@ error still names the field (``fractal.range_px``), not the section.
 from __future__ import annotations
 
 import difflib
-import hashlib
 import json
 import math
 import os
@@ -61,7 +60,7 @@ from typing import Annotated, Any, Literal
 from pydantic import (AfterValidator, BaseModel, Field, ValidationError, field_validator, model_serializer,
                       model_validator)
 
-from .atomic import to_jsonable
+from .canonical import canonical_json, config_hash  # here too: their home before they moved
 from .errors import ConfigError
 from .strict import StrictModel, field_problem
 
@@ -679,50 +678,3 @@ def problems_from_validation_error(
         if problem not in problems:
             problems.append(problem)
     return problems
-
-
-# ------------------------------------------------------------------------------------------- hashing
-
-
-def canonical_json(obj: Any) -> str:
-    """Canonical JSON text of a configuration: sorted keys, no whitespace, floats by ``repr``.
-
-    Parameters
-    ----------
-    obj : pydantic model, mapping, dataclass or JSON-like value
-        A pydantic model is dumped with ``model_dump(mode="json")``, i.e. *resolved*: defaults are
-        filled in, so a file that spells out a default and one that omits it give the same text.
-        NaN and ±Infinity are refused (:func:`rockmass.atomic.to_jsonable`).
-
-    Returns
-    -------
-    str
-
-    Notes
-    -----
-    ``1`` and ``1.0`` are different texts; for a validated model this cannot happen, because each field
-    has one type (a float field stores ``2`` as ``2.0``). Adding a section to
-    :class:`RockmassConfig` adds ``"section":null`` to every canonical text, so hashes are comparable
-    only between the same rockmass version (which the manifest records).
-
-    Examples
-    --------
-    >>> canonical_json({"b": 1, "a": [1.5, None]})
-    '{"a":[1.5,null],"b":1}'
-    """
-    if isinstance(obj, BaseModel):
-        obj = obj.model_dump(mode="json")
-    plain = to_jsonable(obj)
-    return json.dumps(plain, sort_keys=True, separators=(",", ":"), ensure_ascii=False, allow_nan=False)
-
-
-def config_hash(obj: Any) -> str:
-    """SHA-256 hex digest of :func:`canonical_json` of ``obj`` (UTF-8).
-
-    Examples
-    --------
-    >>> empty = {"imaging": None, "fractal": None, "dfn": None, "blocks": None, "solve": None}
-    >>> config_hash(RockmassConfig()) == config_hash(empty)
-    True
-    """
-    return hashlib.sha256(canonical_json(obj).encode("utf-8")).hexdigest()

@@ -266,7 +266,7 @@ def build_manifest(
     config_json: Any = None
     digest: str | None = None
     if config is not None:
-        from .config import config_hash  # pydantic-based; imported only when needed
+        from .canonical import config_hash  # no pydantic (rockmass extract without --config)
 
         if hasattr(config, "model_dump") and not isinstance(config, type):
             config_json = config.model_dump(mode="json")

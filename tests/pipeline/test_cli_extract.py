@@ -187,3 +187,30 @@ def test_confident_statistics_fall_back_to_bic_when_too_few_traces_are_kept():
                                        window=[(0, 0), (1, 0), (1, 1), (0, 1)],
                                        attributes={"joint_score": [0.9, 0.6, 0.5]})
     assert _confident_statistics(all_kept, 2, "m", every)["statistics"] is every
+
+
+def test_imaging_defaults_without_a_config_are_those_of_the_config_model():
+    # rockmass extract without --config writes the [imaging] defaults out instead of importing
+    # pydantic for them: they must stay ImagingConfig's
+    from rockmass.config import ImagingConfig
+    from rockmass.extract_stage import _imaging_defaults
+
+    assert _imaging_defaults() == ImagingConfig().model_dump()
+
+
+def test_extract_without_a_config_does_not_import_pydantic(face_png, tmp_path):
+    import subprocess
+    import sys
+
+    path, _ = face_png
+    out = tmp_path / "out"
+    code = ("import sys\nfrom rockmass.cli import main\n"
+            f"assert main(['extract', {str(path)!r}, '--m-per-px', '0.02', '--out', {str(out)!r}, "
+            "'--detector', 'ridge']) == 0\n"
+            "print('pydantic' in sys.modules, 'rockmass.config' in sys.modules)\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.split()[-2:] == ["False", "False"]
+    manifest = json.loads((out / "manifest.json").read_text())
+    from rockmass.config import config_hash
+
+    assert manifest["config_hash"] == config_hash(manifest["config"])
