@@ -67,8 +67,15 @@ def main(argv: list[str] | None = None) -> int:
     0.35 s ``rockmass extract`` took to exit after loading numba, scipy and matplotlib, on a loaded
     two-core machine). Every output is written and closed before; ``atexit`` handlers, the
     finalizers of objects freed by reference counting and the flushing of stdout and stderr still
-    run; only cyclic garbage left at exit is not collected.
+    run; only cyclic garbage left at exit is not collected. Such a process also runs OpenBLAS on
+    one thread unless ``OPENBLAS_NUM_THREADS`` says otherwise.
     """
+    if argv is None:
+        # one BLAS thread: rockmass runs its own threads (the two detectors of `extract`, numba),
+        # and OpenBLAS's spin-waiting threads beside them slow the learned detector's matrix
+        # products down, badly on a busy machine (docs/imaging.md §3.1). Numpy is not imported
+        # yet; a value the user set is kept.
+        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     code = _main(argv)
     if argv is None:
         import gc
