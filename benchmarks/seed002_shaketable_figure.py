@@ -2,6 +2,7 @@
 top-left block of the tunnel against the cycle, beside the experiment and Newmark's sliding block.
 
     python benchmarks/seed002_shaketable_figure.py [--png docs/figures/seed002_shaketable_slip.png]
+        [--passes-png docs/figures/seed002_record_passes.png]
 
 Reads what ``benchmarks/bench_shaketable.py`` saved (no new run): Table 4 (15 cycles at the 15.5 mm
 amplitude of the experiment, 2.94 Hz, ``results/bench_shaketable_tables4.json``) and Table 7 (eight
@@ -13,6 +14,11 @@ UDEC's 3.9 mm after 15 cycles (seed 002 Fig. 8) and the straight line of 4.5 mm 
 the 15 cycles; right, the slip of each cycle (log scale) against Newmark's. What the figure shows
 is the model's slip per cycle dying away near the threshold where Newmark's block and the
 experiment keep slipping (docs/dem.md §13, problem 16).
+
+``--passes-png`` draws the record passes of Tables 15b, 16 and 18 (``results/
+bench_shaketable_tables15.json``, ``...16.json``, ``...18.json``): the slip of the top-left block in
+each 10 s pass of a 0.6-6 Hz band record, beside Newmark's block under the same record and the
+experiment's mean of 0.3 mm a pass (4.5 mm over 15 passes).
 """
 
 from __future__ import annotations
@@ -84,9 +90,64 @@ def draw(fifteen, by_level, path: Path) -> None:
     plt.close(fig)
 
 
+#: (results file, key, label) of the record-pass runs of bench_shaketable.py
+PASS_RUNS = (("bench_shaketable_tables15.json", "record_at_15p5mm",
+              "record at 15.5 mm (0.12 g), Coulomb (Table 15b)"),
+             ("bench_shaketable_tables18.json", "record_at_15p5mm_yielding",
+              "record at 15.5 mm, continuously yielding (Table 18)"),
+             ("bench_shaketable_tables16.json", "record_passes_yielding",
+              "record at 1.14 a_c (0.54 g), continuously yielding (Table 16)"))
+
+
+def read_passes(results: Path = RESULTS) -> list[tuple[str, list[float], list[float]]]:
+    """Per run of :data:`PASS_RUNS`: (label, slip in each pass, Newmark's slip in each pass), mm."""
+    runs = []
+    for name, key, label in PASS_RUNS:
+        rows = json.loads((results / name).read_text())[key]["rows"]
+        slips = [r["slip_mm"] for r in rows if r["slip_mm"] is not None]
+        newmark = [r["newmark_mm"] for r in rows][:len(slips)]
+        runs.append((label, per_step(slips), per_step(newmark)))
+    return runs
+
+
+def per_step(totals: list[float]) -> list[float]:
+    """Increments of an accumulated series."""
+    return [b - a for a, b in zip([0.0] + totals[:-1], totals)]
+
+
+def draw_passes(runs, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 5.2))
+    colours = ("tab:blue", "tab:orange", "tab:red")
+    width = 0.8 / len(runs)
+    for k, ((label, slips, newmark), colour) in enumerate(zip(runs, colours)):
+        x = [p + 1 + (k - (len(runs) - 1) / 2) * width for p in range(len(slips))]
+        ax.bar(x, [max(v, 1e-4) for v in slips], width, color=colour, label=f"model, {label}")
+        ax.plot(x, [max(v, 1e-4) for v in newmark], "_", ms=18, mew=2, color=colour)
+    ax.plot([], [], "_", ms=18, mew=2, color="k",
+            label="Newmark's block at a_c under the same record, same colour (0 at 15.5 mm)")
+    ax.axhline(EXPERIMENT_MM / CYCLES, ls=":", color="tab:green",
+               label="experiment, 4.5 mm over 15 passes: mean per pass")
+    ax.set_yscale("log")
+    ax.set(xlabel="pass of the 10 s record", ylabel="slip of the top-left block in the pass, mm",
+           ylim=(1e-3, 3), xticks=[1, 2],
+           title="slip in each pass of a 0.6-6 Hz band record (10 s)")
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=1)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--png", type=Path, default=None, help="where to draw the figure")
+    parser.add_argument("--passes-png", type=Path, default=None,
+                        help="where to draw the record passes of Tables 15b, 16 and 18")
     args = parser.parse_args(argv)
     fifteen, by_level = read_tables()
     print("Table 4, 15.5 mm at 2.94 Hz: slip after each cycle, mm")
@@ -101,6 +162,13 @@ def main(argv=None) -> int:
     if args.png:
         draw(fifteen, by_level, args.png)
         print(f"figure written to {args.png}")
+    runs = read_passes()
+    print("Tables 15b, 18, 16: slip in each 10 s pass of the record, mm (Newmark's in brackets)")
+    for label, slips, newmark in runs:
+        print(f"  {label}: " + "  ".join(f"{v:.3f} ({n:.3f})" for v, n in zip(slips, newmark)))
+    if args.passes_png:
+        draw_passes(runs, args.passes_png)
+        print(f"figure written to {args.passes_png}")
     return 0
 
 
