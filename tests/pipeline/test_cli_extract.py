@@ -214,3 +214,27 @@ def test_extract_without_a_config_does_not_import_pydantic(face_png, tmp_path):
     from rockmass.config import config_hash
 
     assert manifest["config_hash"] == config_hash(manifest["config"])
+
+
+def test_the_process_runs_one_blas_thread_and_keeps_a_users_choice(face_png, tmp_path):
+    """`rockmass` as a process sets OPENBLAS_NUM_THREADS to 1 before numpy loads (its own threads
+    and OpenBLAS's spin-waiting ones would share the cores), keeps a value the user set, and, once
+    main returns, has frozen the garbage collector's objects (gc.freeze)."""
+    import os
+    import subprocess
+    import sys
+
+    path, _ = face_png
+    code = ("import gc, os, sys\nfrom rockmass.cli import main\n"
+            f"sys.argv = ['rockmass', 'extract', {str(path)!r}, '--m-per-px', '0.02', '--out', "
+            f"{str(tmp_path / 'out')!r}, '--detector', 'ridge']\n"
+            "assert main() == 0\n"
+            "print(os.environ.get('OPENBLAS_NUM_THREADS'), gc.get_freeze_count() > 0)\n")
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                          env=env)
+    assert done.stdout.split()[-2:] == ["1", "True"]
+    env["OPENBLAS_NUM_THREADS"] = "2"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                          env=env)
+    assert done.stdout.split()[-2:] == ["2", "True"]
