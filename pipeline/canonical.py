@@ -2,7 +2,7 @@
 
 Kept apart from :mod:`rockmass.config` (which re-exports both), so that writing a manifest
 (:mod:`rockmass.manifest`) does not import pydantic: ``rockmass extract`` without ``--config``
-then never does (about 0.1 s of start-up). Only the standard library and
+then never does. Only the standard library and
 :mod:`rockmass.atomic` are imported here.
 """
 

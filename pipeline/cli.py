@@ -63,9 +63,8 @@ def main(argv: list[str] | None = None) -> int:
 
     Without ``argv`` (the console script, ``python -m rockmass``) the process ends when this
     returns: the objects alive then are frozen out of the garbage collector (:func:`gc.freeze`),
-    which spares the interpreter its last collections over them on the way out (0.3 s of the
-    0.35 s ``rockmass extract`` took to exit after loading numba, scipy and matplotlib, on a loaded
-    two-core machine). Every output is written and closed before; ``atexit`` handlers, the
+    which spares the interpreter its last collections over them on the way out (many objects,
+    once numba, scipy and matplotlib are loaded). Every output is written and closed before; ``atexit`` handlers, the
     finalizers of objects freed by reference counting and the flushing of stdout and stderr still
     run; only cyclic garbage left at exit is not collected. Such a process also runs OpenBLAS on
     one thread unless ``OPENBLAS_NUM_THREADS`` says otherwise.

@@ -62,7 +62,7 @@ def _settings(args, document=None):
 def _imaging_defaults() -> dict:
     """``ImagingConfig().model_dump()``, the ``[imaging]`` settings of a run without that section,
     written out so that ``rockmass extract`` without ``--config`` does not import pydantic and the
-    config models (about 0.1 s; a test holds the two equal)."""
+    config models (a test holds the two equal)."""
     return {"m_per_px": None, "joint_width_px": None, "joint_width_m": None, "face_dip_deg": None,
             "face_dip_direction_deg": None, "params": {}}
 

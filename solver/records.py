@@ -40,12 +40,13 @@ import functools
 
 import numpy as np
 
-__all__ = ["band_amplitudes", "record_components", "tukey_window", "record_motion"]
+__all__ = ["band_amplitudes", "band_problem", "record_components", "tukey_window", "record_motion"]
 
 GRID_PER_PERIOD = 64  # samples per period of the highest component when the peak is searched
 REFINED = 8  # largest grid samples whose neighbourhood is searched for the exact peak
 BLOCK_SINES = 2 ** 20  # times × components evaluated together (memory of the sine arrays)
 MAX_COMPONENTS = 20_000  # a record longer or wider than this is refused (its cost per time)
+MAX_PHASES = 1_000_000  # phases drawn, one per k/T up to the band's top (8 MB)
 
 
 def band_amplitudes(f: np.ndarray, f_lo: float, f_hi: float, rolloff_octaves: float) -> np.ndarray:
@@ -82,6 +83,27 @@ def tukey_window(t: np.ndarray, duration_s: float, taper_fraction: float) -> tup
     return w, dw, d2w
 
 
+def band_problem(f_lo: float, f_hi: float, rolloff_octaves: float, duration_s: float,
+                 seed: int) -> str | None:
+    """What is wrong with a band for passes of ``duration_s`` (None: nothing): the phases drawn
+    up to its top, one per frequency k/T, must stay under MAX_PHASES (checked first, without
+    building anything); then it must hold at least one frequency k/T with A_k > 0 and at most
+    MAX_COMPONENTS (:func:`record_components`, whose arrays the record then uses)."""
+    if not 0 < f_lo < f_hi:
+        return "expected 0 < f_lo < f_hi"
+    top = f_hi * 2.0 ** rolloff_octaves
+    if top * duration_s > MAX_PHASES:
+        return (f"its top, {top:g} Hz, lies {top * duration_s:.3g} frequencies k/T up (at most "
+                f"{MAX_PHASES}): a lower band or a shorter pass")
+    count = len(record_components(f_lo, f_hi, rolloff_octaves, duration_s, seed)[0])
+    if count == 0:
+        return f"the band and its roll-off hold no frequency k/T of a pass (T = {duration_s:g} s)"
+    if count > MAX_COMPONENTS:
+        return (f"{count} frequencies k/T in the band and its roll-off (at most {MAX_COMPONENTS}): "
+                "a narrower band or a shorter pass")
+    return None
+
+
 @functools.lru_cache(maxsize=32)
 def record_components(f_lo: float, f_hi: float, rolloff_octaves: float, duration_s: float,
                       seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -107,12 +129,12 @@ def _unit_motion(t, f, amp, phases, duration_s, taper_fraction, order: int) -> n
     w = tukey_window(t, duration_s, taper_fraction)
     omega = 2.0 * np.pi * f
     arg = np.multiply.outer(t, omega) + phases
-    s, c = np.sin(arg), np.cos(arg)
+    s = np.sin(arg)
     b = amp / omega ** 2
     g = s @ b
     if order == 0:
         return w[0] * g
-    g1 = c @ (b * omega)
+    g1 = np.cos(arg) @ (b * omega)
     if order == 1:
         return w[1] * g + w[0] * g1
     g2 = -(s @ amp)
@@ -127,13 +149,13 @@ def _evaluate(t, f, amp, phases, duration_s, taper_fraction, order: int) -> np.n
                           or [np.zeros(0)])
 
 
-@functools.lru_cache(maxsize=32)
-def _unit_peaks(f_lo, f_hi, rolloff_octaves, duration_s, taper_fraction, seed) -> tuple[float, float]:
-    """(max |u|, max |a|) of one pass with s = 1. |u| and |a| are sampled on a grid of
-    GRID_PER_PERIOD points per period of the highest component; the REFINED largest local maxima
-    are then searched (scipy's bounded scalar search) between their neighbours, on each side of
-    any kink of the window in between (w″ jumps at 0, τ, T − τ and T, so a has kinks there), and
-    the kinks themselves are candidates."""
+@functools.lru_cache(maxsize=64)
+def _unit_peak(f_lo, f_hi, rolloff_octaves, duration_s, taper_fraction, seed, order: int) -> float:
+    """max |u| (``order`` 0) or max |a| (``order`` 2) of one pass with s = 1. The motion is sampled
+    on a grid of GRID_PER_PERIOD points per period of the highest component; around the REFINED
+    largest samples the peak is then searched (scipy's bounded scalar search) between their
+    neighbours, on each side of any kink of the window in between (w″ jumps at 0, τ, T − τ and T,
+    so a has kinks there), and the kinks themselves are candidates."""
     from scipy.optimize import minimize_scalar
 
     f, amp, phases = record_components(f_lo, f_hi, rolloff_octaves, duration_s, seed)
@@ -141,23 +163,21 @@ def _unit_peaks(f_lo, f_hi, rolloff_octaves, duration_s, taper_fraction, seed) -
     kinks = np.array([0.0, tau, duration_s - tau, duration_s])
     n = int(np.ceil(GRID_PER_PERIOD * f[-1] * duration_s)) + 1
     t = np.linspace(0.0, duration_s, n)
-    peaks = []
-    for order in (0, 2):
-        def size(x, order=order):
-            return float(abs(_unit_motion(np.array([x]), f, amp, phases, duration_s,
-                                          taper_fraction, order)[0]))
 
-        y = np.abs(_evaluate(t, f, amp, phases, duration_s, taper_fraction, order))
-        best = max(size(k) for k in kinks)
-        for i in np.argsort(y)[::-1][:REFINED]:
-            lo, hi = t[max(i - 1, 0)], t[min(i + 1, n - 1)]
-            cuts = [lo, *kinks[(kinks > lo) & (kinks < hi)], hi]
-            for a, b in zip(cuts[:-1], cuts[1:]):
-                found = minimize_scalar(lambda x: -size(x), bounds=(a, b), method="bounded",
-                                        options={"xatol": 1e-9 * duration_s})
-                best = max(best, -float(found.fun), size(a), size(b))
-        peaks.append(best)
-    return peaks[0], peaks[1]
+    def size(x):
+        return float(abs(_unit_motion(np.array([x]), f, amp, phases, duration_s, taper_fraction,
+                                      order)[0]))
+
+    y = np.abs(_evaluate(t, f, amp, phases, duration_s, taper_fraction, order))
+    best = max(size(k) for k in kinks)
+    for i in np.argsort(y)[::-1][:REFINED]:
+        lo, hi = t[max(i - 1, 0)], t[min(i + 1, n - 1)]
+        cuts = [lo, *kinks[(kinks > lo) & (kinks < hi)], hi]
+        for a, b in zip(cuts[:-1], cuts[1:]):
+            found = minimize_scalar(lambda x: -size(x), bounds=(a, b), method="bounded",
+                                    options={"xatol": 1e-9 * duration_s})
+            best = max(best, -float(found.fun), size(a), size(b))
+    return best
 
 
 def record_motion(t, *, f_lo: float, f_hi: float, rolloff_octaves: float, duration_s: float,
@@ -168,8 +188,8 @@ def record_motion(t, *, f_lo: float, f_hi: float, rolloff_octaves: float, durati
     its peak displacement (``peak="displacement"``) or acceleration (``"acceleration"``) is
     ``peak_value``; 0 before t = 0 and after the last pass."""
     f, amp, phases = record_components(f_lo, f_hi, rolloff_octaves, duration_s, seed)
-    u_peak, a_peak = _unit_peaks(f_lo, f_hi, rolloff_octaves, duration_s, taper_fraction, seed)
-    scale = peak_value / (u_peak if peak == "displacement" else a_peak)
+    scale = peak_value / _unit_peak(f_lo, f_hi, rolloff_octaves, duration_s, taper_fraction, seed,
+                                    0 if peak == "displacement" else 2)
     t = np.asarray(t, float)
     flat = t.ravel()
     out = np.zeros_like(flat)

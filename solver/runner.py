@@ -239,7 +239,6 @@ def _remove_failed(eng: Engine, watch: FailureWatch, ids: np.ndarray) -> tuple[l
     return failed, before - (eng.kinetic_energy() + eng.strain_energy())
 
 
-
 def _new_contact_w2(dt: float, safety: float) -> float:
     """ω² above which a contact that forms stops the kernel (``RC_STIFF``): (2 safety / Δt)², the
     ω_max the step was chosen for (safety 1 for a user's step: its true limit)."""
