@@ -3,7 +3,7 @@
     python benchmarks/bench_imaging_real.py [--quick] [--detectors ridge,learned,auto]
                                             [--splits val,train] [--no-synthetic] [--no-settings]
                                             [--face-masks full,border,off] [--upsampled 2,4]
-                                            [--agreement-only] [--stages-only]
+                                            [--agreement-only] [--stages-only] [--spreads-only]
 
 1. Real faces: ``../shared/data/rock-face-fractures`` (natural rock faces, 300-400 px, with
    hand-traced major fractures painted red about 5 px wide; AGPL-3.0, read from the shared data
@@ -24,9 +24,11 @@
    another copy.
 2. Synthetic faces, the two generators (1000 x 1500 px, 0.008 m/px; seeds 1-3, not the tuning seeds
    100+ nor the training seeds of the learned model, 10_000+): the chain's own "moderate" faces
-   (:func:`rockmass.imaging.synthetic_face`) and field-like faces
-   (:func:`rockmass.imaging.synthetic_field.field_face`), buffered F1 at 3 px, dP21, dP20, run time;
-   the learned detector also at the last session's setting (not with ``--no-settings``).
+   (:func:`rockmass.imaging.synthetic_face`), the same in flat light (grey levels pulled towards
+   the median to 0.35 of their spread, :func:`rockmass.imaging.synthetic.in_flat_light`) and
+   "hard", and field-like faces (:func:`rockmass.imaging.synthetic_field.field_face`), buffered F1
+   at 3 px, dP21, dP20, run time; the learned detector also at session 7's setting and with the
+   contrast floor fixed at 0.25 as before session 17 (not with ``--no-settings``).
 
    With ``--face-masks`` (e.g. ``full,border,off``), each detector's defaults are run once per
    ``ExtractParams.face_mask`` mode listed (docs/imaging.md §2.1), the extraction time including
@@ -63,6 +65,15 @@
    holes filled), its skeleton, the pruned skeleton graph, and the traces after linking and the
    length, contrast and width filters; and the traces' precision at 3 px. Rows in
    ``results/bench_imaging_real_stages.json``.
+
+8. Faces of low contrast (``--spreads-only``): the relative spread s = 1.4826 MAD / median of the
+   learned detector's flattened input (:func:`rockmass.imaging.learned.relative_spread`) on the
+   faces the shipped model was trained on (its recipe: 80 field-like and 20 plain faces, seeds
+   10 000+), the real ``train/`` and ``val/`` photos and the synthetic faces of section 2; the
+   smallest, median and largest s, how many faces are stretched (s < ``min_face_spread``), and,
+   extracting with the learned detector, on how many its contrast floor was lowered
+   (``face_contrast_share``; not for the training faces). Rows in
+   ``results/bench_imaging_real_spreads.json`` (with the lowest floor of each set).
 
 Each photo is extracted once per setting: the joint-score rows and section 1b reuse the traces
 (and report the time of that one extraction).
@@ -105,6 +116,8 @@ LEARNED_SETTINGS = (
     ("+ width >= 1 joint width (3 px)", dict(min_trace_contrast=float("-inf"))),
     ("+ contrast >= 0.20", dict(min_trace_contrast=0.20)),
     ("+ contrast >= 0.30", dict(min_trace_contrast=0.30)),
+    ("contrast floor fixed at 0.25 (face_contrast_share = inf, before session 17)",
+     dict(face_contrast_share=float("inf"))),
 )
 #: Labelled branches shorter than this are not counted as traces (pixels).
 LABEL_MIN_TRACE_PX = 10.0
@@ -304,6 +317,55 @@ def stages_section() -> list[dict]:
             for name, make, seeds in makers]
 
 
+def spreads_section(splits) -> list[dict]:
+    """Section 8: the relative spread of the learned detector's flattened input, per set of faces,
+    and how often the stretch and the lowered contrast floor act (read from each extraction's
+    ``face_contrast`` record; for the training faces, the spread as training computes it)."""
+    import cv2
+
+    from rockmass.imaging.extract import ExtractParams, extract
+    from rockmass.imaging.learned import flattened, relative_spread
+    from rockmass.imaging.synthetic import in_flat_light, synthetic_face
+    from rockmass.imaging.synthetic_field import field_face
+    from rockmass.imaging.train_pixel_model import training_faces
+
+    params = ExtractParams(detector="learned")
+
+    def row(name, spreads, records=None) -> dict:
+        s = np.asarray(spreads)
+        out = {"faces": name, "n": int(s.size), "min": float(s.min()), "median": float(np.median(s)),
+               "max": float(s.max()), "stretched": "-", "floor_lowered": "-", "floor_min": None}
+        if records is not None:
+            floors = np.array([r["contrast_floor"] for r in records])
+            out.update(stretched=str(sum(r["stretch"] > 1.0 for r in records)),
+                       floor_lowered=str(int(np.sum(floors < params.resolved("min_trace_contrast")))),
+                       floor_min=float(floors.min()))
+        return out
+
+    def extracted(name, faces) -> dict:  # faces: (image, m_per_px) pairs
+        records = [extract(image, m_per_px=scale, params=params).face_contrast for image, scale in faces]
+        return row(name, [r["spread"] for r in records], records)
+
+    training = [relative_spread(flattened(image.astype(np.float32) / 255.0))[1]
+                for _, image, _, _ in training_faces(10_000, 80, 20)]
+    rows = [row("training faces of the shipped model (80 field-like, 20 plain)", training)]
+    for split in splits:
+        if (DATA / split / "images").is_dir():
+            rows.append(extracted(f"real {split}/", [
+                (np.ascontiguousarray(cv2.imread(str(p), cv2.IMREAD_COLOR)[..., ::-1]), 1.0)
+                for p, _ in real_pairs(split)]))
+    makers = (("moderate", lambda s: synthetic_face("moderate", seed=s, shape_px=(1000, 1500),
+                                                    m_per_px=0.008)),
+              ("moderate in flat light (x 0.35)", lambda s: in_flat_light(synthetic_face(
+                  "moderate", seed=s, shape_px=(1000, 1500), m_per_px=0.008), 0.35)),
+              ("hard", lambda s: synthetic_face("hard", seed=s, shape_px=(1000, 1500), m_per_px=0.008)),
+              ("field-like", lambda s: field_face(seed=s, shape_px=(1000, 1500), m_per_px=0.008)))
+    for name, make in makers:
+        faces = [make(seed) for seed in (1, 2, 3)]
+        rows.append(extracted(f"synthetic {name}, seeds 1-3", [(f.image, f.m_per_px) for f in faces]))
+    return rows
+
+
 def stage_recall(make, seeds) -> dict:
     """Section 7: the share of the truth's centre-line length within 3 px of each stage's pixels
     (learned detector, defaults), summed over ``seeds``; and the final traces' precision."""
@@ -400,7 +462,7 @@ def main(argv=None) -> int:
 
     from rockmass.imaging.extract import ExtractParams, extract
     from rockmass.imaging.learned import MODEL_FILE
-    from rockmass.imaging.synthetic import synthetic_face
+    from rockmass.imaging.synthetic import in_flat_light, synthetic_face
     from rockmass.imaging.trace_score import LOW_SCORE
 
     cv2.setNumThreads(1)
@@ -410,6 +472,8 @@ def main(argv=None) -> int:
                         help="comma-separated ExtractParams.detector values (default all three)")
     parser.add_argument("--stages-only", action="store_true",
                         help="section 7 only: the joints' length each stage of the learned chain keeps")
+    parser.add_argument("--spreads-only", action="store_true",
+                        help="section 8 only: faces of low contrast, the stretch and the floor")
     parser.add_argument("--agreement-only", action="store_true",
                         help="section 6 only: the two detectors' agreement, by which 'auto' keeps one")
     parser.add_argument("--splits", default="val,train",
@@ -436,6 +500,17 @@ def main(argv=None) -> int:
                            ("hysteresis mask", ".2f"), ("skeleton", ".2f"), ("pruned graph", ".2f"),
                            ("traces", ".2f"), ("precision", ".2f")]))
         path = save("bench_imaging_real_stages", {"stages": rows})
+        print(f"\nrows saved to {path}")
+        return 0
+    if args.spreads_only:
+        print(header("faces of low contrast: the learned detector's stretch and contrast floor"))
+        rows = spreads_section(splits)
+        print(f"\n8. relative spread s = 1.4826 MAD / median of the flattened face; stretched: s < "
+              f"min_face_spread ({ExtractParams().min_face_spread:g}); floor_lowered: faces on which the "
+              f"learned detector's contrast floor was lowered (face_contrast_share)")
+        print(table(rows, [("faces", "s"), ("n", "d"), ("min", ".3f"), ("median", ".3f"),
+                           ("max", ".3f"), ("stretched", "s"), ("floor_lowered", "s")]))
+        path = save("bench_imaging_real_spreads", {"spreads": rows})
         print(f"\nrows saved to {path}")
         return 0
     if args.agreement_only:
@@ -490,6 +565,11 @@ def main(argv=None) -> int:
         seeds = [1] if args.quick else [1, 2, 3]
         makers = {"moderate (synthetic_face)":
                   lambda s: synthetic_face("moderate", seed=s, shape_px=(1000, 1500), m_per_px=0.008),
+                  "moderate in flat light (grey levels x 0.35 about the median)":
+                  lambda s: in_flat_light(synthetic_face("moderate", seed=s, shape_px=(1000, 1500),
+                                                         m_per_px=0.008), 0.35),
+                  "hard (synthetic_face)":
+                  lambda s: synthetic_face("hard", seed=s, shape_px=(1000, 1500), m_per_px=0.008),
                   "field-like (field_face)":
                   lambda s: field_face(seed=s, shape_px=(1000, 1500), m_per_px=0.008),
                   "tunnel (field_face, TUNNEL_STYLE: half-casts, shotcrete)":
@@ -508,9 +588,10 @@ def main(argv=None) -> int:
                              **score_synthetic(make, seeds, ExtractParams(detector=detector),
                                                min_joint_score=LOW_SCORE)})
                 if detector == "learned" and not args.no_settings:
-                    label, extra = LEARNED_SETTINGS[0]
-                    rows.append({"detector": f"learned, {label}", "faces": f"{name}, seeds {seeds}",
-                                 **score_synthetic(make, seeds, ExtractParams(detector=detector, **extra))})
+                    for label, extra in (LEARNED_SETTINGS[0], LEARNED_SETTINGS[-1]):
+                        rows.append({"detector": f"learned, {label}", "faces": f"{name}, seeds {seeds}",
+                                     **score_synthetic(make, seeds,
+                                                       ExtractParams(detector=detector, **extra))})
         print("\n2. synthetic faces (1000 x 1500 px; buffered F1 at 3 px, means over seeds)")
         print(table(rows, SYNTH_COLUMNS))
         payload["synthetic"] = rows

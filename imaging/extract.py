@@ -83,6 +83,7 @@ DETECTOR_DEFAULTS = MappingProxyType({
     "fill_holes_px": MappingProxyType({"ridge": 0, "learned": 400}),
     "min_trace_length_px": MappingProxyType({"ridge": 20.0, "learned": 70.0}),
     "min_trace_contrast": MappingProxyType({"ridge": None, "learned": 0.25}),
+    "face_contrast_share": MappingProxyType({"ridge": None, "learned": 0.8}),
     "min_trace_width": MappingProxyType({"ridge": None, "learned": 1.0}),
 })
 
@@ -157,6 +158,16 @@ class ExtractParams:
         the trace filters below (``fill_holes_px``, ``min_trace_contrast``, ``min_trace_width``,
         ``min_trace_length_px``); see those. The synthetic training faces leave the model
         over-confident on real rock texture, hence the high values.
+    min_face_spread : float, default 0.075
+        The learned detector's input, the flattened face, is stretched about its median when its
+        relative spread (1.4826 MAD / median) is under this, to this spread, at most 10 times
+        (:func:`rockmass.imaging.learned.stretch_flat_face`): the same face in flatter light
+        then gives the model the input it gives in ordinary light. 0.075 is the spread of the
+        plain synthetic "moderate" faces, the flattest on which the model is measured
+        (:data:`rockmass.imaging.learned.MIN_SPREAD`); 0 turns the stretch off (a smooth face
+        whose low spread is its rock, not its light). Trace contrasts are measured on the face
+        as it is (``face_contrast_share`` makes the floor follow its contrast); the factor is in
+        ``Extraction.face_contrast``.
     min_object_px : int, default 40
         Smallest connected piece of the binary mask kept, pixels.
     fill_holes_px : int or None, default None
@@ -205,6 +216,16 @@ class ExtractParams:
         least this fraction below the face's median flattened grey level are dropped (the
         ``contrast`` attribute of a trace: 1 - mean / median; 0.25 = a quarter darker). None:
         0.25 with the learned detector, no filter with the ridge detector; ``-inf`` turns it off.
+        On a face of low contrast the learned detector lowers it (``face_contrast_share``).
+    face_contrast_share : float or None, default None
+        On a face of low contrast the floor ``min_trace_contrast`` is lowered to this share of
+        the face's own contrast C = 1 - q5(I) / med(I) (how much darker than the median the
+        darkest 5 % of the flattened face are, :func:`rockmass.imaging.vectorize.face_contrast`),
+        when that is lower: on a face whose joints are all faint against its rock, a fixed floor
+        drops them all. None: 0.8 with the learned detector, no lowering with the ridge detector;
+        ``inf`` keeps the fixed floor, 0 lowers it to 0 on every face. Chosen on ``train/`` and the synthetic tuning
+        faces (docs/imaging.md §3.1, "Faces of low contrast"). A face flatter overall, as in flat
+        light, is first stretched (:func:`rockmass.imaging.learned.stretch_flat_face`).
     min_trace_width : float or None, default None
         Traces along which the binary mask is on average narrower than this many expected joint
         widths (``joint_width_px`` of :func:`extract`, scaled to the working grid; the mask's
@@ -260,6 +281,7 @@ class ExtractParams:
     high_k: float = 4.0
     prob_low: float = 0.8
     prob_high: float = 0.97
+    min_face_spread: float = 0.075
     min_object_px: int = 40
     fill_holes_px: int | None = None
     spur_length_px: float = 10.0
@@ -277,6 +299,7 @@ class ExtractParams:
     border_extend_px: float = 12.0
     min_trace_length_px: float | None = None
     min_trace_contrast: float | None = None
+    face_contrast_share: float | None = None
     min_trace_width: float | None = None
     simplify_tolerance_px: float = 1.0
     face_mask: str = "border"
@@ -325,6 +348,11 @@ class ExtractParams:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and 0 <= value <= 90):
                 raise ValueError(f"params.{name} must be an angle in 0-90 degrees, got {value!r}")
+        value = self.min_face_spread
+        if isinstance(value, bool) or not (isinstance(value, (int, float)) and np.isfinite(value)
+                                           and 0 <= value < 1):
+            raise ValueError(f"params.min_face_spread must be a number in [0, 1) (0: no stretch), "
+                             f"got {value!r}")
         for name in ("prob_low", "prob_high"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and 0 <= value <= 1):
@@ -346,6 +374,11 @@ class ExtractParams:
         if value is not None and not (isinstance(value, (int, float)) and value <= 1):
             raise ValueError(f"params.min_trace_contrast must be a number <= 1 (-inf: no filter), "
                              f"got {value!r}")
+        value = self.face_contrast_share
+        if value is not None and (isinstance(value, bool) or not (isinstance(value, (int, float))
+                                                                  and value >= 0)):
+            raise ValueError(f"params.face_contrast_share must be a number >= 0 (inf: the fixed "
+                             f"floor min_trace_contrast), got {value!r}")
         from .enhance import FLATTEN_METHODS
 
         if self.flatten_method not in FLATTEN_METHODS:
@@ -549,6 +582,14 @@ class Extraction:
         With ``detector = "auto"``: the detector whose traces were kept (``kept``), the
         :func:`detector_agreement` measured (``agreement``), the ``auto_agreement`` it was compared
         with, and how many traces each detector found (``traces``); None otherwise.
+    face_contrast : mapping or None
+        When the learned detector's traces were kept: how it saw the face's contrast
+        (docs/imaging.md §3.1): ``spread``, the relative spread 1.4826 MAD / median of the
+        flattened face, ``stretch``, the factor its input was stretched by (1: not;
+        ``ExtractParams.min_face_spread``), ``face_contrast``, the face's own contrast
+        1 - q5 / median of the flattened face (:func:`rockmass.imaging.vectorize.face_contrast`),
+        and ``contrast_floor``, the traces' contrast floor used (``min_trace_contrast``, or lower
+        by ``face_contrast_share``); None with the ridge detector's traces.
     """
 
     traces: Any
@@ -563,6 +604,7 @@ class Extraction:
     joint_width_source: str = "joint_width_px"
     detector_model: Mapping[str, Any] | None = None
     detector_choice: Mapping[str, Any] | None = None
+    face_contrast: Mapping[str, Any] | None = None
 
     def summary(self) -> dict:
         """A JSON-ready dict of the scale, parameters, timings and warnings (no arrays)."""
@@ -575,6 +617,7 @@ class Extraction:
                 "detector_model": None if self.detector_model is None else dict(self.detector_model),
                 "detector_choice": None if self.detector_choice is None
                 else {**self.detector_choice, "traces": dict(self.detector_choice["traces"])},
+                "face_contrast": None if self.face_contrast is None else dict(self.face_contrast),
                 "timings_s": dict(self.timings_s), "warnings": list(self.warnings)}
 
 
@@ -815,18 +858,24 @@ def _candidate_area(raw, roi, face_mask: str, shape_px, work_shape, scale: float
 def _joint_pixels(grey, params: ExtractParams, width_work: float, mask, clock: _Clock) -> tuple:
     """Flatten the working grey image, find the joint response (ridge filter or learned
     probability) and threshold it (hysteresis, inside ``mask``; holes filled). Returns (flattened
-    image, response, binary mask of joint pixels)."""
+    image, response, binary mask of joint pixels, and for the learned detector the relative
+    spread of the flattened face and the factor its input was stretched by, else None)."""
     from . import enhance, learned, ridges, segment
 
+    stretch = None
     if params.detector == "learned":
-        flat = learned.model_input(grey, background_sigma_px=params.background_sigma_px)
+        flat = learned.flattened(grey, background_sigma_px=params.background_sigma_px)
+        model_image, gain, spread = learned.stretch_flat_face(
+            flat, min_spread=params.min_face_spread, mask=mask)
+        stretch = {"spread": spread, "stretch": gain}
     else:
         flat = enhance.flatten_illumination(
             grey, line_width_px=max(2.0 * width_work, 2.0), sigma_px=params.background_sigma_px,
             method=params.flatten_method, clahe=params.clahe, clahe_clip_limit=params.clahe_clip_limit)
     clock.lap("flatten")
     if params.detector == "learned":
-        response = learned.joint_probability(flat, learned.load_model(params.pixel_model))
+        response = learned.joint_probability(model_image, learned.load_model(params.pixel_model))
+        del model_image
         clock.lap("ridges")
         binary = segment.hysteresis_mask(response, low=params.prob_low, high=params.prob_high,
                                          min_size_px=params.min_object_px, mask=mask)
@@ -839,7 +888,7 @@ def _joint_pixels(grey, params: ExtractParams, width_work: float, mask, clock: _
                                         min_size_px=params.min_object_px, mask=mask)
     binary = segment.fill_holes(binary, params.resolved("fill_holes_px"))
     clock.lap("segment")
-    return flat, response, binary
+    return flat, response, binary, stretch
 
 
 def _trace_chains(binary, params: ExtractParams, work_shape, width_work: float, band_px: float,
@@ -887,6 +936,44 @@ class _Found(NamedTuple):
     binary: np.ndarray
     skeleton: np.ndarray
     pruned: Any
+    face_contrast: Mapping[str, Any] | None
+
+
+def contrast_floor(params: ExtractParams, face_contrast: float | None) -> float | None:
+    """The traces' contrast floor on a face of contrast ``face_contrast``
+    (:func:`vectorize.face_contrast`): ``min_trace_contrast``, lowered to ``face_contrast_share``
+    times the face's contrast when that is lower; None: no floor.
+
+    Examples
+    --------
+    >>> learned = ExtractParams(detector="learned")
+    >>> contrast_floor(learned, 0.5), round(contrast_floor(learned, 0.1), 3)
+    (0.25, 0.08)
+    """
+    floor, share = params.resolved("min_trace_contrast"), params.resolved("face_contrast_share")
+    if floor is None or share is None or not np.isfinite(share) or face_contrast is None:
+        return floor
+    return float(min(floor, share * face_contrast))
+
+
+def _low_contrast_notes(record, params: ExtractParams) -> list[str]:
+    """Warnings for a face the learned detector saw as of low contrast: its input stretched, or
+    its contrast floor lowered below half the fixed one (``record`` as in
+    ``Extraction.face_contrast``)."""
+    if record is None:
+        return []
+    notes = []
+    if record["stretch"] > 1.0:
+        notes.append(f"flat face: the learned detector's input was stretched {record['stretch']:.3g} "
+                     f"times to the spread min_face_spread = {params.min_face_spread:g} "
+                     f"(docs/imaging.md §3.1)")
+    fixed, floor = params.resolved("min_trace_contrast"), record["contrast_floor"]
+    if fixed is not None and floor is not None and floor < 0.5 * fixed:
+        notes.append(f"low-contrast face (its darkest 5 % only {record['face_contrast']:.3g} below "
+                     f"its median): the learned detector's contrast floor was lowered from {fixed:g} "
+                     f"to {floor:.3g} (face_contrast_share); if its traces miss faint joints, "
+                     f"compare --detector ridge")
+    return notes
 
 
 def _detect(grey, params: ExtractParams, width_work: float, mask, band_px: float, work_shape,
@@ -895,18 +982,24 @@ def _detect(grey, params: ExtractParams, width_work: float, mask, band_px: float
     to filtered traces: joint pixels, traces, the contrast and width filters."""
     from . import vectorize
 
-    flat, response, binary = _joint_pixels(grey, params, width_work, mask, clock)
+    flat, response, binary, stretch = _joint_pixels(grey, params, width_work, mask, clock)
     chains, skeleton, pruned = _trace_chains(binary, params, work_shape, width_work, band_px, clock)
     contrast = vectorize.trace_contrast(chains, flat, mask=mask)
     band = vectorize.band_width_px(chains, binary)
     keep = np.ones(len(chains), dtype=bool)
-    if params.resolved("min_trace_contrast") is not None:
-        keep &= contrast >= params.resolved("min_trace_contrast")
+    face = None
+    if params.resolved("face_contrast_share") is not None:
+        face = vectorize.face_contrast(flat, mask=mask)
+    floor = contrast_floor(params, face)
+    if floor is not None:
+        keep &= contrast >= floor
     if params.resolved("min_trace_width") is not None:
         keep &= band >= params.resolved("min_trace_width") * width_work
     clock.lap("link")
+    record = None if stretch is None else MappingProxyType(
+        {**stretch, "face_contrast": face, "contrast_floor": floor})
     return _Found([c for c, k in zip(chains, keep) if k], contrast[keep], band[keep], flat,
-                  response, binary, skeleton, pruned)
+                  response, binary, skeleton, pruned, record)
 
 
 def detector_agreement(ridge_chains, learned_chains, shape_px, *,
@@ -1097,7 +1190,8 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         notes.append(capped_note)
         width_work, width_source = learned_width, f"{width_source}, capped"
     params = given_params.for_detector(kept).on_grid(scale_of_grid)
-    chains, contrast, band, flat, response, binary, skeleton, pruned = found[kept]
+    chains, contrast, band, flat, response, binary, skeleton, pruned, face_contrast = found[kept]
+    notes += _low_contrast_notes(face_contrast, params)
     confidence = vectorize.mean_along(chains, response)
     chains_in = [np.column_stack([(c[:, 0] + 0.5) / row_factor - 0.5,
                                   (c[:, 1] + 0.5) / col_factor - 0.5]) for c in chains]
@@ -1133,4 +1227,5 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         debug=MappingProxyType(debug_images), face_mask=MappingProxyType(face_info),
         detector_model=None if "learned" not in found
         else MappingProxyType(learned.model_record(given_params.pixel_model)),
-        detector_choice=None if choice is None else MappingProxyType(choice))
+        detector_choice=None if choice is None else MappingProxyType(choice),
+        face_contrast=face_contrast)

@@ -28,8 +28,9 @@ import numpy as np
 
 from .features import CONTEXT_NAMES, FEATURE_NAMES, context_features, pixel_features
 
-__all__ = ["MODEL_FILE", "MODEL_LINE_WIDTH_PX", "Stage", "PixelModel", "load_model", "model_record",
-           "model_input", "joint_probability"]
+__all__ = ["MODEL_FILE", "MODEL_LINE_WIDTH_PX", "MIN_SPREAD", "MAX_STRETCH", "Stage", "PixelModel",
+           "load_model", "model_record", "flattened", "model_input", "relative_spread",
+           "stretch_flat_face", "joint_probability"]
 
 #: The shipped model, inside the installed package.
 MODEL_FILE = Path(__file__).resolve().parent / "models" / "joint_pixel_mlp.npz"
@@ -37,6 +38,15 @@ MODEL_FILE = Path(__file__).resolve().parent / "models" / "joint_pixel_mlp.npz"
 MODEL_LINE_WIDTH_PX = 12.0
 #: Standardised inputs are clipped to ± this many standard deviations.
 CLIP_SD = 6.0
+#: A flattened face whose relative spread (1.4826 MAD / median) is under this is stretched to it
+#: before the features (:func:`stretch_flat_face`): the plain synthetic "moderate" faces' spread,
+#: the flattest faces on which the model is measured. The shipped model's training faces spread
+#: 0.100-0.597, the real ``train/`` photographs 0.057-0.394 (``bench_imaging_real.py
+#: --spreads-only``).
+MIN_SPREAD = 0.075
+#: The stretch is at most this many times: a face flatter than MIN_SPREAD / MAX_STRETCH holds too
+#: few grey levels to be worth stretching further.
+MAX_STRETCH = 10.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -220,13 +230,98 @@ def model_record(path=None) -> dict:
     return dict(_RECORDS[key])
 
 
-def model_input(grey, *, background_sigma_px: float = 40.0) -> np.ndarray:
-    """The flattened image the features are computed on: division by the background, with dark
-    lines up to :data:`MODEL_LINE_WIDTH_PX` kept out of it (docs/imaging.md §2, eq. (2.1))."""
+def flattened(grey, *, background_sigma_px: float = 40.0) -> np.ndarray:
+    """The face divided by its background, with dark lines up to :data:`MODEL_LINE_WIDTH_PX`
+    kept out of it (docs/imaging.md §2, eq. (2.1)): what trace contrasts are measured on."""
     from .enhance import flatten_illumination
 
     return flatten_illumination(grey, line_width_px=MODEL_LINE_WIDTH_PX, sigma_px=background_sigma_px,
                                 method="divide")
+
+
+def model_input(grey, *, background_sigma_px: float = 40.0,
+                min_spread: float = MIN_SPREAD) -> np.ndarray:
+    """The image the features are computed on: :func:`flattened`, stretched when the face is
+    flatter than ``min_spread`` (:func:`stretch_flat_face`; 0: never). Training reads it so; the
+    extraction chain does the same in two steps, to keep the unstretched face for contrasts."""
+    return stretch_flat_face(flattened(grey, background_sigma_px=background_sigma_px),
+                             min_spread=min_spread)[0]
+
+
+def relative_spread(flat, *, mask=None) -> tuple[float, float]:
+    """(m, s): the median m of a flattened face and its relative spread s = 1.4826 MAD / m, over
+    the pixels inside ``mask`` (all when None), at most a million of them on a regular grid
+    (:func:`rockmass.imaging.vectorize.face_sample`: a 4 MP face at a quarter of the cost);
+    s = 0 when m is not positive.
+
+    Examples
+    --------
+    >>> img = np.ones((40, 40), np.float32); img[::2] = 1.2
+    >>> [round(v, 3) for v in relative_spread(img)]
+    [1.1, 0.135]
+    """
+    from .vectorize import face_sample
+
+    sample = face_sample(flat, mask=mask).astype(np.float64, copy=False)
+    median = float(np.median(sample)) if sample.size else 0.0
+    if not median > 0:
+        return median, 0.0
+    return median, 1.4826 * float(np.median(np.abs(sample - median))) / median
+
+
+def stretch_flat_face(flat, *, min_spread: float = MIN_SPREAD, max_stretch: float = MAX_STRETCH,
+                      mask=None) -> tuple[np.ndarray, float, float]:
+    r"""A flattened face of low contrast stretched about its median to the spread ``min_spread``.
+
+    With m the median of the flattened image I and :math:`s = 1.4826\,\mathrm{MAD}(I) / m` its
+    relative spread (robust standard deviation over median, over the face ``mask`` when given;
+    :func:`relative_spread`),
+
+    .. math:: I' = \max\bigl(0,\ m + g\,(I - m)\bigr),
+              \qquad g = \min\bigl(\max(1, s_{min} / s),\ g_{max}\bigr),
+
+    so a face already as contrasted as ``min_spread`` is returned as it is (g = 1), and so is a
+    face with no spread at all (a uniform grey but for its lines). The pixel
+    model's features respond to grey-level differences, not ratios: the same face photographed
+    in flatter light, every difference from the median smaller by a factor f, gives weaker
+    responses and, below the spreads the model was trained on, probabilities too low to reach
+    its thresholds (docs/imaging.md §3.1). The stretch undoes f up to ``max_stretch``.
+
+    Returns
+    -------
+    (image, g, s)
+        With g > 1 a new float array (float32 for float32 input); with g = 1 ``flat`` itself.
+        ``flat`` is never modified. s is the face's relative spread before the stretch.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> face = 1.0 + 0.1 * rng.standard_normal((50, 50))
+    >>> dim = 1.0 + 0.02 * (face - 1.0) / 0.1
+    >>> out, gain, spread = stretch_flat_face(dim.astype(np.float32))
+    >>> round(gain, 1), round(spread, 3)
+    (3.7, 0.02)
+    >>> spread = 1.4826 * np.median(np.abs(out - np.median(out))) / np.median(out)
+    >>> round(float(spread), 3)
+    0.075
+    >>> stretch_flat_face(face.astype(np.float32))[1]
+    1.0
+    """
+    if not max_stretch >= 1:
+        raise ValueError(f"max_stretch must be >= 1 (1: never stretch), got {max_stretch!r}")
+    values = np.asarray(flat)
+    median, spread = relative_spread(values, mask=mask)
+    if not (median > 0 and spread > 0):  # e.g. a uniform face but for its lines: not flat light
+        return values, 1.0, spread
+    gain = min(max(1.0, min_spread / spread), max_stretch)
+    if gain == 1.0:
+        return values, 1.0, spread
+    kind = values.dtype if values.dtype.kind == "f" else np.float64
+    stretched = values.astype(kind)  # a copy: the caller's image is not changed
+    stretched -= median
+    stretched *= gain
+    stretched += median
+    return np.maximum(stretched, 0.0, out=stretched), float(gain), spread
 
 
 def joint_probability(flat, model: PixelModel | None = None) -> np.ndarray:

@@ -22,7 +22,7 @@ import numpy as np
 from .frame import check_scale, uv_to_rc
 
 __all__ = ["JointSetSpec", "FaceStyle", "DIFFICULTIES", "DEFAULT_SETS", "SyntheticFace",
-           "synthetic_network", "synthetic_face", "save_synthetic_face"]
+           "synthetic_network", "synthetic_face", "in_flat_light", "save_synthetic_face"]
 
 
 @dataclass(frozen=True)
@@ -296,6 +296,27 @@ def synthetic_face(difficulty: str = "moderate", *, seed: int = 0, shape_px=(100
         window=window, frame="face")
     return SyntheticFace(image=image, truth=truth, m_per_px=m_per_px, difficulty=difficulty,
                          seed=int(seed), style=replace(style))
+
+
+def in_flat_light(face: SyntheticFace, factor: float) -> SyntheticFace:
+    r"""The same face photographed in flatter light: every grey level pulled towards the image's
+    median, :math:`I' = \operatorname{med}(I) + f\,(I - \operatorname{med}(I))`, rounded to
+    8 bits. The joints stay where they were, each darker than the face by ``factor`` times as
+    much; the truth is unchanged.
+
+    Examples
+    --------
+    >>> face = synthetic_face("easy", seed=1, shape_px=(40, 60), m_per_px=0.05)
+    >>> dim = in_flat_light(face, 0.5)
+    >>> int(np.ptp(dim.image)) <= int(np.ptp(face.image)) // 2 + 1, dim.truth is face.truth
+    (True, True)
+    """
+    if not (isinstance(factor, (int, float)) and np.isfinite(factor) and 0 < factor <= 1):
+        raise ValueError(f"factor must be in (0, 1], got {factor!r}")
+    grey = face.image.astype(np.float64)
+    median = np.median(grey)
+    image = np.clip(np.round(median + factor * (grey - median)), 0, 255).astype(np.uint8)
+    return replace(face, image=image)
 
 
 def save_synthetic_face(face: SyntheticFace, directory) -> dict[str, Path]:
