@@ -67,7 +67,7 @@
    ``results/bench_imaging_real_stages.json``.
 
 8. Faces of low contrast (``--spreads-only``): the relative spread s = 1.4826 MAD / median of the
-   learned detector's flattened input (:func:`rockmass.imaging.learned.relative_spread`) on the
+   learned detector's flattened input (:func:`rockmass.imaging.vectorize.face_levels`) on the
    faces the shipped model was trained on (its recipe: 80 field-like and 20 plain faces, seeds
    10 000+), the real ``train/`` and ``val/`` photos and the synthetic faces of section 2; the
    smallest, median and largest s, how many faces are stretched (s < ``min_face_spread``), and,
@@ -324,7 +324,8 @@ def spreads_section(splits) -> list[dict]:
     import cv2
 
     from rockmass.imaging.extract import ExtractParams, extract
-    from rockmass.imaging.learned import flattened, relative_spread
+    from rockmass.imaging.learned import flattened
+    from rockmass.imaging.vectorize import face_levels
     from rockmass.imaging.synthetic import in_flat_light, synthetic_face
     from rockmass.imaging.synthetic_field import field_face
     from rockmass.imaging.train_pixel_model import training_faces
@@ -346,7 +347,7 @@ def spreads_section(splits) -> list[dict]:
         records = [extract(image, m_per_px=scale, params=params).face_contrast for image, scale in faces]
         return row(name, [r["spread"] for r in records], records)
 
-    training = [relative_spread(flattened(image.astype(np.float32) / 255.0))[1]
+    training = [face_levels(flattened(image.astype(np.float32) / 255.0)).spread
                 for _, image, _, _ in training_faces(10_000, 80, 20)]
     rows = [row("training faces of the shipped model (80 field-like, 20 plain)", training)]
     for split in splits:

@@ -220,12 +220,13 @@ class ExtractParams:
     face_contrast_share : float or None, default None
         On a face of low contrast the floor ``min_trace_contrast`` is lowered to this share of
         the face's own contrast C = 1 - q5(I) / med(I) (how much darker than the median the
-        darkest 5 % of the flattened face are, :func:`rockmass.imaging.vectorize.face_contrast`),
+        darkest 5 % of the flattened face are, :func:`rockmass.imaging.vectorize.face_levels`),
         when that is lower: on a face whose joints are all faint against its rock, a fixed floor
         drops them all. None: 0.8 with the learned detector, no lowering with the ridge detector;
-        ``inf`` keeps the fixed floor, 0 lowers it to 0 on every face. Chosen on ``train/`` and the synthetic tuning
-        faces (docs/imaging.md §3.1, "Faces of low contrast"). A face flatter overall, as in flat
-        light, is first stretched (:func:`rockmass.imaging.learned.stretch_flat_face`).
+        ``inf`` keeps the fixed floor, 0 lowers it to 0 on every face. Chosen on ``train/`` and
+        the synthetic tuning faces (docs/imaging.md §3.1, "Faces of low contrast"). A face flatter
+        overall, as in flat light, is first stretched
+        (:func:`rockmass.imaging.learned.stretch_flat_face`).
     min_trace_width : float or None, default None
         Traces along which the binary mask is on average narrower than this many expected joint
         widths (``joint_width_px`` of :func:`extract`, scaled to the working grid; the mask's
@@ -587,7 +588,7 @@ class Extraction:
         (docs/imaging.md §3.1): ``spread``, the relative spread 1.4826 MAD / median of the
         flattened face, ``stretch``, the factor its input was stretched by (1: not;
         ``ExtractParams.min_face_spread``), ``face_contrast``, the face's own contrast
-        1 - q5 / median of the flattened face (:func:`rockmass.imaging.vectorize.face_contrast`),
+        1 - q5 / median of the flattened face (:func:`rockmass.imaging.vectorize.face_levels`),
         and ``contrast_floor``, the traces' contrast floor used (``min_trace_contrast``, or lower
         by ``face_contrast_share``); None with the ridge detector's traces.
     """
@@ -859,15 +860,17 @@ def _joint_pixels(grey, params: ExtractParams, width_work: float, mask, clock: _
     """Flatten the working grey image, find the joint response (ridge filter or learned
     probability) and threshold it (hysteresis, inside ``mask``; holes filled). Returns (flattened
     image, response, binary mask of joint pixels, and for the learned detector the relative
-    spread of the flattened face and the factor its input was stretched by, else None)."""
-    from . import enhance, learned, ridges, segment
+    spread and contrast of the flattened face and the factor its input was stretched by, else
+    None)."""
+    from . import enhance, learned, ridges, segment, vectorize
 
     stretch = None
     if params.detector == "learned":
         flat = learned.flattened(grey, background_sigma_px=params.background_sigma_px)
-        model_image, gain, spread = learned.stretch_flat_face(
-            flat, min_spread=params.min_face_spread, mask=mask)
-        stretch = {"spread": spread, "stretch": gain}
+        levels = vectorize.face_levels(flat, mask=mask)  # one sample: the stretch and the floor
+        model_image, gain, _ = learned.stretch_flat_face(flat, min_spread=params.min_face_spread,
+                                                         levels=levels)
+        stretch = {"spread": levels.spread, "stretch": gain, "face_contrast": levels.contrast}
     else:
         flat = enhance.flatten_illumination(
             grey, line_width_px=max(2.0 * width_work, 2.0), sigma_px=params.background_sigma_px,
@@ -941,7 +944,7 @@ class _Found(NamedTuple):
 
 def contrast_floor(params: ExtractParams, face_contrast: float | None) -> float | None:
     """The traces' contrast floor on a face of contrast ``face_contrast``
-    (:func:`vectorize.face_contrast`): ``min_trace_contrast``, lowered to ``face_contrast_share``
+    (:func:`vectorize.face_levels`): ``min_trace_contrast``, lowered to ``face_contrast_share``
     times the face's contrast when that is lower; None: no floor.
 
     Examples
@@ -987,17 +990,16 @@ def _detect(grey, params: ExtractParams, width_work: float, mask, band_px: float
     contrast = vectorize.trace_contrast(chains, flat, mask=mask)
     band = vectorize.band_width_px(chains, binary)
     keep = np.ones(len(chains), dtype=bool)
-    face = None
-    if params.resolved("face_contrast_share") is not None:
-        face = vectorize.face_contrast(flat, mask=mask)
+    face = None if stretch is None else stretch["face_contrast"]
+    if face is None and params.resolved("face_contrast_share") is not None:  # a share for ridge
+        face = vectorize.face_levels(flat, mask=mask).contrast
     floor = contrast_floor(params, face)
     if floor is not None:
         keep &= contrast >= floor
     if params.resolved("min_trace_width") is not None:
         keep &= band >= params.resolved("min_trace_width") * width_work
     clock.lap("link")
-    record = None if stretch is None else MappingProxyType(
-        {**stretch, "face_contrast": face, "contrast_floor": floor})
+    record = None if stretch is None else MappingProxyType({**stretch, "contrast_floor": floor})
     return _Found([c for c, k in zip(chains, keep) if k], contrast[keep], band[keep], flat,
                   response, binary, skeleton, pruned, record)
 

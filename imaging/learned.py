@@ -29,8 +29,8 @@ import numpy as np
 from .features import CONTEXT_NAMES, FEATURE_NAMES, context_features, pixel_features
 
 __all__ = ["MODEL_FILE", "MODEL_LINE_WIDTH_PX", "MIN_SPREAD", "MAX_STRETCH", "Stage", "PixelModel",
-           "load_model", "model_record", "flattened", "model_input", "relative_spread",
-           "stretch_flat_face", "joint_probability"]
+           "load_model", "model_record", "flattened", "model_input", "stretch_flat_face",
+           "joint_probability"]
 
 #: The shipped model, inside the installed package.
 MODEL_FILE = Path(__file__).resolve().parent / "models" / "joint_pixel_mlp.npz"
@@ -248,34 +248,13 @@ def model_input(grey, *, background_sigma_px: float = 40.0,
                              min_spread=min_spread)[0]
 
 
-def relative_spread(flat, *, mask=None) -> tuple[float, float]:
-    """(m, s): the median m of a flattened face and its relative spread s = 1.4826 MAD / m, over
-    the pixels inside ``mask`` (all when None), at most a million of them on a regular grid
-    (:func:`rockmass.imaging.vectorize.face_sample`: a 4 MP face at a quarter of the cost);
-    s = 0 when m is not positive.
-
-    Examples
-    --------
-    >>> img = np.ones((40, 40), np.float32); img[::2] = 1.2
-    >>> [round(v, 3) for v in relative_spread(img)]
-    [1.1, 0.135]
-    """
-    from .vectorize import face_sample
-
-    sample = face_sample(flat, mask=mask).astype(np.float64, copy=False)
-    median = float(np.median(sample)) if sample.size else 0.0
-    if not median > 0:
-        return median, 0.0
-    return median, 1.4826 * float(np.median(np.abs(sample - median))) / median
-
-
 def stretch_flat_face(flat, *, min_spread: float = MIN_SPREAD, max_stretch: float = MAX_STRETCH,
-                      mask=None) -> tuple[np.ndarray, float, float]:
+                      mask=None, levels=None) -> tuple[np.ndarray, float, float]:
     r"""A flattened face of low contrast stretched about its median to the spread ``min_spread``.
 
     With m the median of the flattened image I and :math:`s = 1.4826\,\mathrm{MAD}(I) / m` its
     relative spread (robust standard deviation over median, over the face ``mask`` when given;
-    :func:`relative_spread`),
+    :func:`rockmass.imaging.vectorize.face_levels`, or its result given as ``levels``),
 
     .. math:: I' = \max\bigl(0,\ m + g\,(I - m)\bigr),
               \qquad g = \min\bigl(\max(1, s_{min} / s),\ g_{max}\bigr),
@@ -309,8 +288,10 @@ def stretch_flat_face(flat, *, min_spread: float = MIN_SPREAD, max_stretch: floa
     """
     if not max_stretch >= 1:
         raise ValueError(f"max_stretch must be >= 1 (1: never stretch), got {max_stretch!r}")
+    from .vectorize import face_levels
+
     values = np.asarray(flat)
-    median, spread = relative_spread(values, mask=mask)
+    median, spread, _ = face_levels(values, mask=mask) if levels is None else levels
     if not (median > 0 and spread > 0):  # e.g. a uniform face but for its lines: not flat light
         return values, 1.0, spread
     gain = min(max(1.0, min_spread / spread), max_stretch)

@@ -7,12 +7,14 @@ goes through :mod:`rockmass.imaging.frame`.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from .frame import check_scale, rc_to_uv
 
 __all__ = ["simplify_polylines", "axial_angle_deg", "image_window_uv_m", "mean_along", "trace_contrast",
-           "face_contrast", "face_sample", "band_width_px", "to_trace_map"]
+           "FaceLevels", "face_levels", "face_sample", "band_width_px", "to_trace_map"]
 
 
 def simplify_polylines(polylines_rc_px, tolerance_px: float) -> list[np.ndarray]:
@@ -153,7 +155,7 @@ def _face_values(values: np.ndarray, mask) -> np.ndarray:
 def face_sample(image, *, mask=None, max_pixels: int = 1_000_000) -> np.ndarray:
     """The pixels of a 2-D ``image`` inside ``mask`` on a regular grid of every k-th row and
     column, k the smallest step leaving at most ``max_pixels`` (k = 1 for smaller images): enough
-    for percentiles of the face (a 4 MP face gives 1 MP), at a quarter of the cost or less.
+    for percentiles of the face (a 4 MP face gives a quarter of its pixels).
 
     Examples
     --------
@@ -168,31 +170,48 @@ def face_sample(image, *, mask=None, max_pixels: int = 1_000_000) -> np.ndarray:
     return _face_values(grid, None if mask is None else np.asarray(mask, dtype=bool)[::step, ::step])
 
 
-def face_contrast(flat, *, mask=None, percentile: float = 5.0) -> float:
-    r"""How dark the darkest pixels of the face are: :math:`C = 1 - q_p(I) / \operatorname{med}(I)`,
-    with :math:`q_p` the ``percentile`` of the flattened image and the median, both over ``mask``
-    when given: the :func:`trace_contrast` of a line as dark as the face's darkest ``p`` %.
+class FaceLevels(NamedTuple):
+    """What :func:`face_levels` reads from a flattened face."""
 
-    A photo taken in flat light, or of pale rock, has a small C: all its joints are faint
-    in absolute terms, and a contrast floor set on photos of ordinary contrast would drop every
-    one of them (``ExtractParams.face_contrast_share``, docs/imaging.md §3.1). 0 for an empty
-    image or a median that is not positive.
+    median: float
+    spread: float
+    contrast: float
+
+
+def face_levels(flat, *, mask=None, percentile: float = 5.0) -> FaceLevels:
+    r"""The flattened face's median m, relative spread and own contrast, from one
+    :func:`face_sample` (over ``mask`` when given):
+
+    - the spread :math:`s = 1.4826\,\mathrm{MAD}(I) / m`, a robust standard deviation over the
+      median (how flat the face is: ``ExtractParams.min_face_spread``);
+    - the contrast :math:`C = \max(0,\ 1 - q_p(I) / m)`, with :math:`q_p` the ``percentile``: the
+      :func:`trace_contrast` of a line as dark as the face's darkest ``p`` %. A photo in flat
+      light, or of pale rock, has a small C: all its joints are faint in absolute terms, and a
+      contrast floor set on photos of ordinary contrast would drop every one of them
+      (``ExtractParams.face_contrast_share``, docs/imaging.md §3.1).
+
+    s and C are 0 for an empty image or a median that is not positive.
 
     Examples
     --------
     >>> img = np.ones((10, 10)); img[0] = 0.4  # a tenth of the face at 0.4
-    >>> round(face_contrast(img), 3)
+    >>> round(face_levels(img).contrast, 3)
     0.6
-    >>> round(face_contrast(np.full((4, 4), 0.8)), 3)
-    0.0
+    >>> img = np.ones((40, 40), np.float32); img[::2] = 1.2
+    >>> [round(v, 3) for v in face_levels(img)[:2]]
+    [1.1, 0.135]
+    >>> face_levels(np.full((4, 4), 0.8))
+    FaceLevels(median=0.8, spread=0.0, contrast=0.0)
     """
-    values = np.asarray(flat)
-    if not values.size:
-        return 0.0
-    low, reference = np.percentile(face_sample(values, mask=mask), [percentile, 50.0])
-    if not reference > 0:
-        return 0.0
-    return float(max(1.0 - low / reference, 0.0))
+    sample = face_sample(flat, mask=mask).astype(np.float64, copy=False)
+    if not sample.size:
+        return FaceLevels(0.0, 0.0, 0.0)
+    median = float(np.median(sample))
+    if not median > 0:
+        return FaceLevels(median, 0.0, 0.0)
+    spread = 1.4826 * float(np.median(np.abs(sample - median))) / median
+    contrast = max(1.0 - float(np.percentile(sample, percentile)) / median, 0.0)
+    return FaceLevels(median, spread, contrast)
 
 
 def band_width_px(polylines_rc_px, binary) -> np.ndarray:

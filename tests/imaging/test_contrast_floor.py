@@ -18,19 +18,19 @@ from rockmass.imaging.extract import ExtractParams, contrast_floor, extract
 from rockmass.imaging.learned import MAX_STRETCH, MIN_SPREAD, stretch_flat_face
 from rockmass.imaging.metrics import trace_accuracy
 from rockmass.imaging.synthetic import in_flat_light, synthetic_face
-from rockmass.imaging.vectorize import face_contrast, face_sample
+from rockmass.imaging.vectorize import face_levels, face_sample
 
 
 def test_face_contrast_is_the_darkest_percentile_below_the_median():
     img = np.full((20, 20), 0.8)
     img[:2] = 0.2  # a tenth of the face at 0.2: its 5th percentile
-    assert face_contrast(img) == pytest.approx(1 - 0.2 / 0.8)
-    assert face_contrast(img, percentile=50) == pytest.approx(0.0)
+    assert face_levels(img).contrast == pytest.approx(1 - 0.2 / 0.8)
+    assert face_levels(img, percentile=50).contrast == pytest.approx(0.0)
     mask = np.zeros_like(img, dtype=bool)
     mask[5:] = True  # the dark rows left out: a uniform face
-    assert face_contrast(img, mask=mask) == pytest.approx(0.0)
-    assert face_contrast(np.zeros((0, 0))) == 0.0
-    assert face_contrast(np.zeros((4, 4))) == 0.0  # no positive median: no contrast
+    assert face_levels(img, mask=mask).contrast == pytest.approx(0.0)
+    assert face_levels(np.zeros((0, 0))).contrast == 0.0
+    assert face_levels(np.zeros((4, 4))).contrast == 0.0  # no positive median: no contrast
 
 
 def test_face_sample_is_a_regular_grid_inside_the_mask():
@@ -46,7 +46,7 @@ def test_face_sample_is_a_regular_grid_inside_the_mask():
 def test_face_contrast_does_not_change_with_the_grey_scale():
     rng = np.random.default_rng(1)
     img = rng.uniform(0.2, 1.0, (50, 50))
-    assert face_contrast(3.7 * img) == pytest.approx(face_contrast(img))
+    assert face_levels(3.7 * img).contrast == pytest.approx(face_levels(img).contrast)
 
 
 def test_floor_is_the_fixed_one_lowered_on_a_flat_face():
