@@ -64,15 +64,15 @@ def main(argv: list[str] | None = None) -> int:
     Without ``argv`` (the console script, ``python -m rockmass``) the process ends when this
     returns: the objects alive then are frozen out of the garbage collector (:func:`gc.freeze`),
     which spares the interpreter its last collections over them on the way out (many objects,
-    once numba, scipy and matplotlib are loaded). Every output is written and closed before; ``atexit`` handlers, the
-    finalizers of objects freed by reference counting and the flushing of stdout and stderr still
-    run; only cyclic garbage left at exit is not collected. Such a process also runs OpenBLAS on
+    once numba, scipy and matplotlib are loaded). Every output is written and closed before;
+    ``atexit`` handlers, the finalizers of objects freed by reference counting and the flushing
+    of stdout and stderr still run; only cyclic garbage left at exit is not collected. Such a process also runs OpenBLAS on
     one thread unless ``OPENBLAS_NUM_THREADS`` says otherwise.
     """
     if argv is None:
         # one BLAS thread: rockmass runs its own threads (the two detectors of `extract`, numba),
         # and OpenBLAS's spin-waiting threads beside them slow the learned detector's matrix
-        # products down, badly on a busy machine (docs/imaging.md §3.1). Numpy is not imported
+        # products down, badly on a busy machine (docs/imaging.md §3.3). Numpy is not imported
         # yet; a value the user set is kept.
         os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     code = _main(argv)
