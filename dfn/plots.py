@@ -19,23 +19,26 @@ __all__ = ["rose_petals", "rose_diagram", "plot_trace_map", "ternary_xy", "conne
            "plot_xyi_ternary", "plot_trace_lengths", "plot_p21_map", "plot_spacings", "plot_rqd"]
 
 
-def _figure(size):
+def _figure(size, layout: str | None = "constrained"):
     import matplotlib
 
     matplotlib.use("Agg", force=False)
     from matplotlib.figure import Figure
 
-    return Figure(figsize=size, layout="constrained")
+    return Figure(figsize=size, layout=layout)
 
 
-def _segment_colours(trace_map, set_ids, unassigned: str) -> list[str]:
-    """One matplotlib colour per straight segment of ``trace_map``: its set's cycle colour ``C<set>``,
-    the grey ``unassigned`` for set -1, all ``C0`` when ``set_ids`` is None."""
+def _segment_colours(trace_map, set_ids, unassigned: str) -> np.ndarray:
+    """(n_segments, 4) RGBA colours of the straight segments of ``trace_map``: its set's cycle colour
+    ``C<set>``, the grey ``unassigned`` for set -1, all ``C0`` when ``set_ids`` is None. Each set's
+    colour name is converted once, not once per segment."""
+    from matplotlib.colors import to_rgba
+
     owner = trace_map.segment_trace_index()
-    if set_ids is None:
-        return ["C0"] * owner.size
-    per_segment = np.asarray(set_ids)[owner]
-    return [unassigned if s < 0 else f"C{int(s) % 10}" for s in per_segment]
+    per_segment = np.zeros(owner.size, np.int64) if set_ids is None else np.asarray(set_ids)[owner]
+    sets, index = np.unique(per_segment, return_inverse=True)
+    palette = np.array([to_rgba(unassigned if s < 0 else f"C{int(s) % 10}") for s in sets])
+    return palette.reshape(-1, 4)[index.reshape(-1)]
 
 
 def _set_legend(ax, set_ids) -> None:
@@ -104,7 +107,9 @@ def rose_diagram(angles_deg, weights, path, *, bin_deg: float = 10.0, set_means_
     if convention not in ANGLE_CONVENTIONS:
         raise ValueError(f"convention must be one of {', '.join(map(repr, ANGLE_CONVENTIONS))}, got {convention!r}")
     edges, radii = rose_petals(angles_deg, weights, bin_deg)
-    fig = _figure((5.0, 5.2))
+    # the default margins hold the title, labels and legend of one polar axes: no layout solver,
+    # which ``rockmass extract`` would run on every photo for nothing
+    fig = _figure((5.0, 5.2), layout=None)
     ax = fig.add_subplot(projection="polar")
     width = np.radians(np.diff(edges))
     ax.bar(np.radians(edges[:-1]), radii, width=width, align="edge", color="C0", alpha=0.75,

@@ -46,7 +46,6 @@ def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title
     set_ids : (n_traces,) array of int, optional
         Joint set of each trace, -1 for none.
     """
-    from matplotlib.colors import to_rgba
     from matplotlib.collections import LineCollection
 
     import cv2
@@ -68,7 +67,7 @@ def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title
         a = uv_to_rc(segments[:, :2], h, m_per_px)
         b = uv_to_rc(segments[:, 2:], h, m_per_px)
         lines = np.stack([a[:, ::-1], b[:, ::-1]], axis=1)  # (x=col, y=row) for matplotlib
-        colours = np.array([to_rgba(c) for c in _segment_colours(trace_map, set_ids, "0.7")])
+        colours = _segment_colours(trace_map, set_ids, "0.7")
         if shade_key is not None:
             alpha = np.clip(np.asarray(trace_map.attributes[shade_key], dtype=float), 0.0, 1.0)
             colours[:, 3] = 0.25 + 0.75 * np.nan_to_num(alpha)[trace_map.segment_trace_index()]

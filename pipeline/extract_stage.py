@@ -212,7 +212,9 @@ def produce(args, out_dir, document=None):
 
     import numpy as np
 
+    plotting = _import_plotting_in_background()
     summary, result, traces, image, set_ids, timings, settings = compute(args, document)
+    plotting.join()
     from .atomic import atomic_path, atomic_write_json
     from .dfn import write_traces
     from .dfn.plots import rose_diagram
@@ -247,6 +249,31 @@ def produce(args, out_dir, document=None):
             command=args.argv, inputs=[args.photo] + [p for p in (args.roi, args.roi_px, args.config) if p],
             config={"imaging": settings}, timings_s=timings))
     return summary
+
+
+def _import_plotting_in_background():
+    """Start importing matplotlib's figure, Agg backend, line collections and polar axes in a
+    thread of their own, and return the thread.
+
+    The overlay and rose are drawn last, and their imports are the largest of the command's
+    (``python -X importtime``); this thread runs them while the photograph is decoded and the
+    chain runs, mostly in OpenCV and NumPy calls that release the GIL. The main thread imports the
+    same modules when it draws: a module being imported by this thread is waited for, not imported
+    twice; none of these modules imports rockmass, so the two threads cannot wait on each other."""
+    import threading
+
+    def load():
+        import matplotlib
+
+        matplotlib.use("Agg", force=False)
+        import matplotlib.backends.backend_agg  # noqa: F401
+        import matplotlib.collections  # noqa: F401
+        import matplotlib.figure  # noqa: F401
+        import matplotlib.projections.polar  # noqa: F401
+
+    thread = threading.Thread(target=load, name="import-matplotlib", daemon=True)
+    thread.start()
+    return thread
 
 
 def _write_debug_image(array, path) -> None:
