@@ -587,7 +587,9 @@ class Extraction:
         When the learned detector's traces were kept: how it saw the face's contrast
         (docs/imaging.md §3.1): ``spread``, the relative spread 1.4826 MAD / median of the
         flattened face, ``stretch``, the factor its input was stretched by (1: not;
-        ``ExtractParams.min_face_spread``), ``face_contrast``, the face's own contrast
+        ``ExtractParams.min_face_spread``), ``model_stretch``, the factor the pixel model's
+        training would have stretched it by (:attr:`rockmass.imaging.learned.PixelModel.input_stretch`;
+        None when the model file does not record it), ``face_contrast``, the face's own contrast
         1 - q5 / median of the flattened face (:func:`rockmass.imaging.vectorize.face_levels`),
         and ``contrast_floor``, the traces' contrast floor used (``min_trace_contrast``, or lower
         by ``face_contrast_share``); None with the ridge detector's traces.
@@ -866,18 +868,22 @@ def _joint_pixels(grey, params: ExtractParams, width_work: float, mask, clock: _
 
     stretch = None
     if params.detector == "learned":
+        model = learned.load_model(params.pixel_model)
         flat = learned.flattened(grey, background_sigma_px=params.background_sigma_px)
         levels = vectorize.face_levels(flat, mask=mask)  # one sample: the stretch and the floor
         model_image, gain, _ = learned.stretch_flat_face(flat, min_spread=params.min_face_spread,
                                                          levels=levels)
-        stretch = {"spread": levels.spread, "stretch": gain, "face_contrast": levels.contrast}
+        trained = model.input_stretch
+        stretch = {"spread": levels.spread, "stretch": gain, "face_contrast": levels.contrast,
+                   "model_stretch": None if trained is None
+                   else learned.stretch_gain(levels.spread, *trained)}
     else:
         flat = enhance.flatten_illumination(
             grey, line_width_px=max(2.0 * width_work, 2.0), sigma_px=params.background_sigma_px,
             method=params.flatten_method, clahe=params.clahe, clahe_clip_limit=params.clahe_clip_limit)
     clock.lap("flatten")
     if params.detector == "learned":
-        response = learned.joint_probability(model_image, learned.load_model(params.pixel_model))
+        response = learned.joint_probability(model_image, model)
         del model_image
         clock.lap("ridges")
         binary = segment.hysteresis_mask(response, low=params.prob_low, high=params.prob_high,
@@ -960,9 +966,10 @@ def contrast_floor(params: ExtractParams, face_contrast: float | None) -> float 
 
 
 def _low_contrast_notes(record, params: ExtractParams) -> list[str]:
-    """Warnings for a face the learned detector saw as of low contrast: its input stretched, or
-    its contrast floor lowered below half the fixed one (``record`` as in
-    ``Extraction.face_contrast``)."""
+    """Warnings for a face the learned detector saw as of low contrast: its input stretched
+    (and by another factor than the pixel model's training would have, or by a model that does
+    not record its training's), or its contrast floor lowered below half the fixed one
+    (``record`` as in ``Extraction.face_contrast``)."""
     if record is None:
         return []
     notes = []
@@ -970,6 +977,17 @@ def _low_contrast_notes(record, params: ExtractParams) -> list[str]:
         notes.append(f"flat face: the learned detector's input was stretched {record['stretch']:.3g} "
                      f"times to the spread min_face_spread = {params.min_face_spread:g} "
                      f"(docs/imaging.md §3.1)")
+    trained = record["model_stretch"]
+    if trained is None and record["stretch"] > 1.0:
+        notes.append("the pixel model file does not record the stretch its training faces went "
+                     "through (trained before rockmass recorded it): it may not have learned from "
+                     "stretched faces like this one")
+    elif trained is not None and not np.isclose(trained, record["stretch"]):
+        notes.append(f"this face's input was stretched {record['stretch']:.3g} times "
+                     f"(min_face_spread = {params.min_face_spread:g}), the pixel model's training "
+                     f"faces would have been {trained:.3g} times: its input differs from what it "
+                     f"learned; give the min_face_spread it was trained with (detector_model."
+                     f"input_stretch in the summary)")
     fixed, floor = params.resolved("min_trace_contrast"), record["contrast_floor"]
     if fixed is not None and floor is not None and floor < 0.5 * fixed:
         notes.append(f"low-contrast face (its darkest 5 % only {record['face_contrast']:.3g} below "

@@ -29,8 +29,8 @@ import numpy as np
 from .features import CONTEXT_NAMES, FEATURE_NAMES, context_features, pixel_features
 
 __all__ = ["MODEL_FILE", "MODEL_LINE_WIDTH_PX", "MIN_SPREAD", "MAX_STRETCH", "Stage", "PixelModel",
-           "load_model", "model_record", "flattened", "model_input", "stretch_flat_face",
-           "joint_probability"]
+           "load_model", "model_record", "flattened", "model_input", "stretch_gain",
+           "stretch_flat_face", "joint_probability"]
 
 #: The shipped model, inside the installed package.
 MODEL_FILE = Path(__file__).resolve().parent / "models" / "joint_pixel_mlp.npz"
@@ -131,6 +131,17 @@ class PixelModel:
     feature_names: tuple
     info: dict = field(default_factory=dict)
 
+    @property
+    def input_stretch(self) -> tuple[float, float] | None:
+        """(min_face_spread, max_stretch) of the stretch its training faces went through
+        (:func:`stretch_flat_face`, recorded in ``info["input"]`` by
+        :mod:`rockmass.imaging.train_pixel_model`); None for a model file that does not record it
+        (trained before rockmass recorded it)."""
+        entry = self.info.get("input") or {}
+        if "min_face_spread" not in entry:
+            return None
+        return float(entry["min_face_spread"]), float(entry.get("max_stretch", MAX_STRETCH))
+
     def probability(self, features: np.ndarray) -> np.ndarray:
         """Joint probability map (H, W) from the (F, H, W) pixel features of an image."""
         shape = features.shape[1:]
@@ -216,8 +227,9 @@ def _resolved(path) -> str:
 
 def model_record(path=None) -> dict:
     """Which model a result came from, for its summary: ``file`` (resolved path), ``shipped``
-    (bool: the model of the package), ``sha256`` of the file and ``trained_on`` (the ``data`` entry
-    of its ``info``). The model is loaded (and checked) as :func:`load_model` does; the file is
+    (bool: the model of the package), ``sha256`` of the file, ``trained_on`` (the ``data`` entry
+    of its ``info``) and ``input_stretch`` (``min_face_spread`` and ``max_stretch`` of the stretch
+    its training faces went through, :attr:`PixelModel.input_stretch`; None when not recorded). The model is loaded (and checked) as :func:`load_model` does; the file is
     hashed once per path, like the model it caches."""
     import hashlib
 
@@ -226,7 +238,9 @@ def model_record(path=None) -> dict:
         model = load_model(path)
         _RECORDS[key] = {"file": key, "shipped": key == _resolved(None),
                          "sha256": hashlib.sha256(Path(key).read_bytes()).hexdigest(),
-                         "trained_on": model.info.get("data")}
+                         "trained_on": model.info.get("data"),
+                         "input_stretch": None if model.input_stretch is None
+                         else dict(zip(("min_face_spread", "max_stretch"), model.input_stretch))}
     return dict(_RECORDS[key])
 
 
@@ -246,6 +260,21 @@ def model_input(grey, *, background_sigma_px: float = 40.0,
     extraction chain does the same in two steps, to keep the unstretched face for contrasts."""
     return stretch_flat_face(flattened(grey, background_sigma_px=background_sigma_px),
                              min_spread=min_spread)[0]
+
+
+def stretch_gain(spread: float, min_spread: float = MIN_SPREAD,
+                 max_stretch: float = MAX_STRETCH) -> float:
+    """The factor g = min(max(1, min_spread / s), max_stretch) of :func:`stretch_flat_face` for a
+    face of relative spread ``spread`` (1 for a face of no spread).
+
+    Examples
+    --------
+    >>> round(stretch_gain(0.025), 6), stretch_gain(0.2), stretch_gain(0.001), stretch_gain(0.0)
+    (3.0, 1.0, 10.0, 1.0)
+    """
+    if not spread > 0:
+        return 1.0
+    return min(max(1.0, min_spread / spread), max_stretch)
 
 
 def stretch_flat_face(flat, *, min_spread: float = MIN_SPREAD, max_stretch: float = MAX_STRETCH,
@@ -294,7 +323,7 @@ def stretch_flat_face(flat, *, min_spread: float = MIN_SPREAD, max_stretch: floa
     median, spread, _ = face_levels(values, mask=mask) if levels is None else levels
     if not (median > 0 and spread > 0):  # e.g. a uniform face but for its lines: not flat light
         return values, 1.0, spread
-    gain = min(max(1.0, min_spread / spread), max_stretch)
+    gain = stretch_gain(spread, min_spread, max_stretch)
     if gain == 1.0:
         return values, 1.0, spread
     kind = values.dtype if values.dtype.kind == "f" else np.float64

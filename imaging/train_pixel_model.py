@@ -61,7 +61,7 @@ from pathlib import Path
 import numpy as np
 
 from .features import CONTEXT_NAMES, FEATURE_NAMES, context_features, pixel_features
-from .learned import MODEL_FILE, PixelModel, Stage, model_input
+from .learned import MAX_STRETCH, MIN_SPREAD, MODEL_FILE, PixelModel, Stage, model_input
 from .synthetic_field import CREVICE_STYLE, TUNNEL_STYLE, FieldStyle
 
 __all__ = ["face_samples", "training_faces", "field_style", "labelled_photo", "fit_mlp", "main"]
@@ -347,7 +347,9 @@ def main(argv=None) -> int:
             "stage1_s": round(t_stage1, 1), "total_s": round(time.perf_counter() - t0, 1),
             "python": platform.python_version(), "numpy": np.__version__,
             "data": _data_note(args.faces + n_plain, photos, args.photos),
-            "photos": args.photos, "labels": args.labels}
+            "photos": args.photos, "labels": args.labels,
+            # the stretch model_input applied to flat faces: extract warns when a run's differs
+            "input": {"min_face_spread": MIN_SPREAD, "max_stretch": MAX_STRETCH}}
     if args.wide_crevices is not None:
         info["wide_crevices"] = {"share": style.crevice_share,
                                  "width_px": list(style.crevice_width_px)}

@@ -145,3 +145,44 @@ def test_stretch_setting_defaults_to_the_model_range_and_is_checked():
     for value in (-0.1, 1.0, math.inf, "0.1", False):
         with pytest.raises(ValueError, match="min_face_spread"):
             ExtractParams(min_face_spread=value)
+
+
+def test_a_stretch_other_than_the_models_training_is_reported(tmp_path):
+    """A model file records the stretch its training faces went through (``info["input"]``); a
+    run that stretches a flat face by another factor, or with a model that records none, says so
+    and records both factors."""
+    from rockmass.imaging.learned import PixelModel, load_model
+
+    shipped = load_model()
+    assert shipped.input_stretch == (MIN_SPREAD, MAX_STRETCH)
+
+    def model_with(name, entry):
+        info = {k: v for k, v in shipped.info.items() if k != "input"}
+        info.update({} if entry is None else {"input": entry})
+        return str(PixelModel(shipped.stages, shipped.feature_names, info).save(tmp_path / name))
+
+    face = synthetic_face("moderate", seed=5, shape_px=(250, 375), m_per_px=0.032)
+    dim = in_flat_light(face, 0.3).image
+
+    def run(model, image=dim, **settings):
+        result = extract(image, m_per_px=face.m_per_px,
+                         params=ExtractParams(detector="learned", pixel_model=model, **settings))
+        return result, [note for note in result.warnings if "pixel model" in note]
+
+    result, notes = run(None)
+    record = result.face_contrast
+    assert 1.0 < record["stretch"] < 5.0 and record["model_stretch"] == record["stretch"]
+    assert not notes
+    assert result.summary()["detector_model"]["input_stretch"] == {
+        "min_face_spread": MIN_SPREAD, "max_stretch": MAX_STRETCH}
+    wider = model_with("wider.npz", {"min_face_spread": 2 * MIN_SPREAD, "max_stretch": MAX_STRETCH})
+    result, notes = run(wider)
+    assert result.face_contrast["model_stretch"] == pytest.approx(2 * record["stretch"])
+    assert len(notes) == 1 and "min_face_spread" in notes[0]
+    assert not run(wider, min_face_spread=2 * MIN_SPREAD)[1]  # the run follows the model: silent
+    unrecorded = model_with("unrecorded.npz", None)
+    result, notes = run(unrecorded)
+    assert result.face_contrast["model_stretch"] is None
+    assert len(notes) == 1 and "does not record" in notes[0]
+    assert result.summary()["detector_model"]["input_stretch"] is None
+    assert not run(unrecorded, image=face.image)[1]  # a face not stretched: nothing to say

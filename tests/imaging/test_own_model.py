@@ -12,7 +12,7 @@ import pytest
 from rockmass.cli import main as cli
 from rockmass.imaging.extract import ExtractParams, extract
 from rockmass.imaging.labels import label_centre_lines, label_mask, labelled_pairs
-from rockmass.imaging.learned import MODEL_FILE, load_model
+from rockmass.imaging.learned import MAX_STRETCH, MIN_SPREAD, MODEL_FILE, load_model
 from rockmass.imaging.metrics import raster_counts, render_traces
 from rockmass.imaging.train_pixel_model import labelled_photo, main as train
 
@@ -158,6 +158,9 @@ def test_results_name_the_model_they_came_from(vein_model):
     assert not own["detector_model"]["shipped"]
     assert own["detector_model"]["sha256"] == hashlib.sha256(model.read_bytes()).hexdigest()
     assert "12 labelled photographs" in own["detector_model"]["trained_on"]
+    # the stretch its training photos went through (learned.model_input), for extract to compare
+    assert own["detector_model"]["input_stretch"] == {"min_face_spread": MIN_SPREAD,
+                                                      "max_stretch": MAX_STRETCH}
     ridge = extract(image, m_per_px=1.0, params=ExtractParams(detector="ridge")).summary()
     assert ridge["detector_model"] is None
 
