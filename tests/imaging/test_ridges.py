@@ -50,3 +50,19 @@ def test_input_not_modified():
     before = image.copy()
     ridge_response(image, [1.0])
     np.testing.assert_array_equal(image, before)
+
+
+@pytest.mark.parametrize("sigma", [1.0, 6.0])
+def test_cutting_the_kernel_tails_changes_nothing_float32_resolves(sigma, monkeypatch):
+    """The Hessian's kernels lose their ends under 1e-8 of their peak: against the full kernels
+    (radius about 11 sigma) the response differs by less than float32's relative resolution."""
+    from rockmass.imaging import ridges
+
+    image = np.random.default_rng(4).random((160, 170)).astype(np.float32)
+    cut = ridge_response(image, [sigma], normalise=False)
+    monkeypatch.setattr(ridges, "_KERNEL_TAIL", 0.0)
+    full = ridge_response(image, [sigma], normalise=False)
+    assert len(ridges._gaussian_kernels(sigma)[0]) > 1.6 * (12 * sigma)  # the full ones: wide
+    np.testing.assert_allclose(cut, full, rtol=0, atol=2e-6 * float(full.max()))
+    monkeypatch.undo()
+    assert len(ridges._gaussian_kernels(sigma)[0]) <= 2 * 6.6 * sigma + 1  # the cut ones
