@@ -29,9 +29,9 @@ def _figure(size, layout: str | None = "constrained"):
 
 
 def _segment_colours(trace_map, set_ids, unassigned: str) -> np.ndarray:
-    """(n_segments, 4) RGBA colours of the straight segments of ``trace_map``: its set's cycle colour
-    ``C<set>``, the grey ``unassigned`` for set -1, all ``C0`` when ``set_ids`` is None. Each set's
-    colour name is converted once, not once per segment."""
+    """(n_segments, 4) RGBA colours of the straight segments of ``trace_map``: its set's cycle
+    colour ``C<set>``, the grey ``unassigned`` for set -1, all ``C0`` when ``set_ids`` is None.
+    Each set's colour name is converted once, not once per segment."""
     from matplotlib.colors import to_rgba
 
     owner = trace_map.segment_trace_index()

@@ -588,8 +588,9 @@ class Extraction:
         (docs/imaging.md §3.1): ``spread``, the relative spread 1.4826 MAD / median of the
         flattened face, ``stretch``, the factor its input was stretched by (1: not;
         ``ExtractParams.min_face_spread``), ``model_stretch``, the factor the pixel model's
-        training would have stretched it by (:attr:`rockmass.imaging.learned.PixelModel.input_stretch`;
-        None when the model file does not record it), ``face_contrast``, the face's own contrast
+        training would have stretched it by
+        (:attr:`rockmass.imaging.learned.PixelModel.input_stretch`; None when the model file does
+        not record it), ``face_contrast``, the face's own contrast
         1 - q5 / median of the flattened face (:func:`rockmass.imaging.vectorize.face_levels`),
         and ``contrast_floor``, the traces' contrast floor used (``min_trace_contrast``, or lower
         by ``face_contrast_share``); None with the ridge detector's traces.

@@ -229,8 +229,9 @@ def model_record(path=None) -> dict:
     """Which model a result came from, for its summary: ``file`` (resolved path), ``shipped``
     (bool: the model of the package), ``sha256`` of the file, ``trained_on`` (the ``data`` entry
     of its ``info``) and ``input_stretch`` (``min_face_spread`` and ``max_stretch`` of the stretch
-    its training faces went through, :attr:`PixelModel.input_stretch`; None when not recorded). The model is loaded (and checked) as :func:`load_model` does; the file is
-    hashed once per path, like the model it caches."""
+    its training faces went through, :attr:`PixelModel.input_stretch`; None when not recorded).
+    The model is loaded (and checked) as :func:`load_model` does; the file is hashed once per
+    path, like the model it caches."""
     import hashlib
 
     key = _resolved(path)

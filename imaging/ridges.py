@@ -56,7 +56,8 @@ def ridge_sigmas(joint_width_px: float, n_scales: int = 3, *, spread: float = 2.
     return np.unique(np.maximum(sigmas, min_sigma_px))
 
 
-#: Kernel ends under this share of the kernel's largest magnitude are cut off (:func:`_gaussian_kernels`).
+#: Kernel ends under this share of the kernel's largest magnitude are cut off
+#: (:func:`_gaussian_kernels`).
 _KERNEL_TAIL = 1e-8
 
 
