@@ -42,10 +42,12 @@
 4. Face mask alone (with ``--face-masks``): :func:`rockmass.imaging.face_mask.face_mask` on a
    12 MP (3000 x 4000) RGB photo (the moderate face of section 3 in colour), best of 5, one core.
 
-5. Photo size (with ``--upsampled``, e.g. ``2,4``): the ``val/`` photos enlarged that many times
-   (bicubic) with their labels, scored at the tolerance times the enlargement, at the defaults with
-   the joint width not given and given as 3 px times the enlargement. The same scenes at more
-   pixels: how far the chain's pixel-valued settings tie it to the photos' size.
+5. Photo size (with ``--upsampled``, e.g. ``2,4``): the real photos of ``--splits`` enlarged that
+   many times (bicubic) with their labels, scored at the tolerance times the enlargement, at the
+   defaults with the joint width not given and given as 3 px times the enlargement, and for the
+   learned detector also on the working grid alone (``learned_levels = []``, as before session
+   18). The same scenes at more pixels: how far the chain's pixel-valued settings tie it to the
+   photos' size. ``train/`` is where ``learned_levels`` and its rule were chosen.
 
 6. The two detectors' agreement (with the "auto" detector among ``--detectors``; alone with
    ``--agreement-only``): :func:`rockmass.imaging.extract.detector_agreement`, the share of the
@@ -79,7 +81,8 @@ Each photo is extracted once per setting: the joint-score rows and section 1b re
 (and report the time of that one extraction).
 
 The header names the shipped model file and its size. Rows also go to
-benchmarks/results/bench_imaging_real.json (``..._quick.json`` with ``--quick``).
+benchmarks/results/bench_imaging_real.json (``..._quick.json`` with ``--quick``; the runs with
+``--face-masks`` or ``--upsampled`` to ``..._face_mask.json`` or ``..._enlarged.json``).
 """
 
 from __future__ import annotations
@@ -118,7 +121,11 @@ LEARNED_SETTINGS = (
     ("+ contrast >= 0.30", dict(min_trace_contrast=0.30)),
     ("contrast floor fixed at 0.25 (face_contrast_share = inf, before session 17)",
      dict(face_contrast_share=float("inf"))),
+    ("working grid only (learned_levels = [], before session 18)", dict(learned_levels=())),
 )
+#: The rows of LEARNED_SETTINGS also run on the synthetic faces: the oldest setting and the steps
+#: of the last two sessions.
+SYNTHETIC_SETTINGS = (LEARNED_SETTINGS[0], LEARNED_SETTINGS[-2], LEARNED_SETTINGS[-1])
 #: Labelled branches shorter than this are not counted as traces (pixels).
 LABEL_MIN_TRACE_PX = 10.0
 
@@ -589,7 +596,7 @@ def main(argv=None) -> int:
                              **score_synthetic(make, seeds, ExtractParams(detector=detector),
                                                min_joint_score=LOW_SCORE)})
                 if detector == "learned" and not args.no_settings:
-                    for label, extra in (LEARNED_SETTINGS[0], LEARNED_SETTINGS[-1]):
+                    for label, extra in SYNTHETIC_SETTINGS:
                         rows.append({"detector": f"learned, {label}", "faces": f"{name}, seeds {seeds}",
                                      **score_synthetic(make, seeds,
                                                        ExtractParams(detector=detector, **extra))})
@@ -627,26 +634,34 @@ def main(argv=None) -> int:
         print(table(rows, [("mode", "s"), ("MP", ".1f"), ("time_s", ".3f")]))
         payload["face_mask_time"] = rows
     enlargements = [float(f) for f in args.upsampled.split(",") if f.strip()]
-    if enlargements and (DATA / "val" / "images").is_dir():
-        pairs = real_pairs("val")[:12] if args.quick else real_pairs("val")
+    if enlargements:
         rows = []
-        for detector in detectors:
-            for factor in [1.0, *enlargements]:
-                for width in ([None] if factor == 1.0 else [None, 3.0 * factor]):
-                    row = score_real(pairs, ExtractParams(detector=detector), width, upsample=factor)
-                    rows.append({"detector": detector, "enlarged": factor,
-                                 "joint_width_px": "default" if width is None else f"{width:g}", **row})
-        print(f"\n5. the val/ photos enlarged (bicubic; labels with them, tolerance {TOLERANCE_PX:g} px "
+        for split in [s for s in splits if (DATA / s / "images").is_dir()]:
+            pairs = real_pairs(split)[:12] if args.quick else real_pairs(split)
+            for detector in detectors:
+                variants = [("", {})] + ([("working grid only", {"learned_levels": ()})]
+                                         if detector == "learned" else [])
+                for factor in [1.0, *enlargements]:
+                    for width in ([None] if factor == 1.0 else [None, 3.0 * factor]):
+                        for label, extra in variants:
+                            row = score_real(pairs, ExtractParams(detector=detector, **extra), width,
+                                             upsample=factor)
+                            rows.append({"split": split, "detector": f"{detector}, {label}"
+                                         if label else detector, "enlarged": factor,
+                                         "joint_width_px": "default" if width is None else f"{width:g}",
+                                         **row})
+        print(f"\n5. the real photos enlarged (bicubic; labels with them, tolerance {TOLERANCE_PX:g} px "
               "x the enlargement): the same scenes at more pixels, the joint width not given or given "
-              "in proportion; band_px = length-weighted median band width of the traces")
-        print(table(rows, [("detector", "s"), ("enlarged", "g"), ("joint_width_px", "s"),
-                           ("F1", ".3f"), ("P", ".3f"), ("R", ".3f"), ("dP21_pct", "+.0f"),
-                           ("band_px", ".1f"), ("s_per_image", ".2f")]))
+              "in proportion; the learned detector also on the working grid alone (learned_levels "
+              "= []); band_px = length-weighted median band width of the traces")
+        print(table(rows, [("split", "s"), ("detector", "s"), ("enlarged", "g"),
+                           ("joint_width_px", "s"), ("F1", ".3f"), ("P", ".3f"), ("R", ".3f"),
+                           ("dP21_pct", "+.0f"), ("band_px", ".1f"), ("s_per_image", ".2f")]))
         payload["enlarged"] = rows
     if "auto" in detectors:
         payload["agreement"], payload["ridge_kept_on_field_faces"] = agreement_section(splits, args.quick)
         _print_agreement(payload["agreement"], payload["ridge_kept_on_field_faces"])
-    suffix = "_face_mask" if masks else ""
+    suffix = "_face_mask" if masks else "_enlarged" if enlargements else ""
     path = save(("bench_imaging_real_quick" if args.quick else "bench_imaging_real") + suffix, payload)
     print(f"\nrows saved to {path}")
     return 0

@@ -259,6 +259,15 @@ class ExtractParams:
         and on the plain synthetic faces the band costs 0.008 (0.978 -> 0.970, ridge)
         (``benchmarks/bench_imaging_real.py --face-masks``): hence "border" by default,
         "full" for photos showing lining, sky or machinery (docs/imaging.md §2.1).
+    learned_levels : tuple of int, default (2, 4)
+        The learned detector also runs on the working grid coarsened by each of these factors
+        (those whose grid keeps 64 px a side), and the grid whose traces have the highest
+        length-weighted mean ``joint_score`` is kept (:mod:`rockmass.imaging.grid_levels`,
+        docs/imaging.md §3.4), provided they add up to at least 30 % of the working grid's
+        trace length: its model knows joints a few pixels wide, and a photograph with more
+        pixels per joint width shows them wide and soft. ``()`` runs the working grid only.
+        Chosen on the real ``train/`` photographs, as they are and enlarged 2 and 4 times
+        (``benchmarks/bench_imaging_real.py --upsampled 2,4``).
     pixel_model : str or None, default None
         The learned detector's model file (``.npz``); None: the one shipped in the package
         (:data:`rockmass.imaging.learned.MODEL_FILE`). A model trained on the user's own labelled
@@ -304,6 +313,7 @@ class ExtractParams:
     min_trace_width: float | None = None
     simplify_tolerance_px: float = 1.0
     face_mask: str = "border"
+    learned_levels: tuple[int, ...] = (2, 4)
     pixel_model: str | None = None
 
     def __post_init__(self) -> None:
@@ -380,6 +390,13 @@ class ExtractParams:
                                                                   and value >= 0)):
             raise ValueError(f"params.face_contrast_share must be a number >= 0 (inf: the fixed "
                              f"floor min_trace_contrast), got {value!r}")
+        levels = self.learned_levels
+        if not (isinstance(levels, (tuple, list)) and all(
+                isinstance(f, int) and not isinstance(f, bool) and f >= 2 for f in levels)
+                and len(set(levels)) == len(levels)):
+            raise ValueError(f"params.learned_levels must be a list of distinct integers >= 2 "
+                             f"(factors coarser than the working grid; [] for none), got {levels!r}")
+        object.__setattr__(self, "learned_levels", tuple(sorted(levels)))
         from .enhance import FLATTEN_METHODS
 
         if self.flatten_method not in FLATTEN_METHODS:
@@ -594,6 +611,12 @@ class Extraction:
         1 - q5 / median of the flattened face (:func:`rockmass.imaging.vectorize.face_levels`),
         and ``contrast_floor``, the traces' contrast floor used (``min_trace_contrast``, or lower
         by ``face_contrast_share``); None with the ridge detector's traces.
+    learned_levels : mapping or None
+        When the learned detector ran on coarser grids too (``ExtractParams.learned_levels``,
+        docs/imaging.md §3.4): the grids tried (``levels``, 1 the working grid, f coarsened f
+        times), the length-weighted mean joint score of each one's traces (``joint_score``),
+        their trace counts (``traces``) and total lengths (``length``, in the traces' units) and
+        the grid whose traces the learned detector gives (``kept``); None otherwise.
     """
 
     traces: Any
@@ -609,6 +632,7 @@ class Extraction:
     detector_model: Mapping[str, Any] | None = None
     detector_choice: Mapping[str, Any] | None = None
     face_contrast: Mapping[str, Any] | None = None
+    learned_levels: Mapping[str, Any] | None = None
 
     def summary(self) -> dict:
         """A JSON-ready dict of the scale, parameters, timings and warnings (no arrays)."""
@@ -622,6 +646,7 @@ class Extraction:
                 "detector_choice": None if self.detector_choice is None
                 else {**self.detector_choice, "traces": dict(self.detector_choice["traces"])},
                 "face_contrast": None if self.face_contrast is None else dict(self.face_contrast),
+                "learned_levels": None if self.learned_levels is None else dict(self.learned_levels),
                 "timings_s": dict(self.timings_s), "warnings": list(self.warnings)}
 
 
@@ -936,7 +961,8 @@ def _trace_chains(binary, params: ExtractParams, work_shape, width_work: float, 
 
 
 class _Found(NamedTuple):
-    """One detector's traces on the working grid, with what the debug output shows."""
+    """One detector's traces on its grid (the working grid, or a coarser one for the learned
+    detector), with what the debug output shows."""
 
     chains: list
     contrast: np.ndarray
@@ -1132,7 +1158,7 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     >>> result.scale.units, result.traces.n_traces > 0
     ('m', True)
     """
-    from . import learned, vectorize
+    from . import grid_levels, learned, trace_score, vectorize
 
     params = ExtractParams() if params is None else params
     if not isinstance(params, ExtractParams):
@@ -1186,49 +1212,98 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         return _detect(image, params.for_detector(detector).on_grid(scale_of_grid), width, mask,
                        band_px, work_shape, detector_clock)
 
-    if params.detector == AUTO:  # the ridge chain beside the learned one, on the other core
-        from concurrent.futures import ThreadPoolExecutor
+    def detect_coarser(level, image, detector_clock):  # the learned detector on a coarser grid
+        image, level_mask, shape = grid_levels.coarsen(image, mask, level)
+        return _detect(image, params.for_detector("learned").on_grid(scale_of_grid),
+                       level_width(level), level_mask, band_px / level, shape, detector_clock)
 
-        ridge_clock = _Clock()
-        with ThreadPoolExecutor(max_workers=1) as pool:
-            ridge = pool.submit(detect, "ridge", grey, ridge_clock)
-            found = {"learned": detect("learned", grey, clock)}
+    def level_width(level):  # the learned detector's joint width on a grid, in its pixels
+        given = width_work / level if width_source != "default" else learned_width
+        return min(given, learned_width)
+
+    uses_learned = params.detector in (AUTO, "learned")
+    levels = (grid_levels.usable_levels(params.learned_levels, work_shape)
+              if uses_learned and trace_score.scoring() else ())
+    # the ridge chain of "auto" and the coarser grids run beside the working grid's learned
+    # chain, on the other core
+    from concurrent.futures import ThreadPoolExecutor
+
+    side_clocks = []
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        def beside(task, *args):
+            side_clocks.append(_Clock())
+            return pool.submit(task, *args, side_clocks[-1])
+
+        ridge = beside(detect, "ridge", grey) if params.detector == AUTO else None
+        coarser = {level: beside(detect_coarser, level, grey) for level in levels}
+        main_detector = "learned" if uses_learned else params.detector
+        found = {main_detector: detect(main_detector, grey, clock)}
+        if ridge is not None:
             found["ridge"] = ridge.result()
-        clock.add(ridge_clock)
-    else:
-        found = {params.detector: detect(params.detector, grey, clock)}
+        coarser = {level: future.result() for level, future in coarser.items()}
+    for side_clock in side_clocks:
+        clock.add(side_clock)
     del grey
+
+    def trace_map(run: _Found, detector: str, width_px: float):  # input pixels or metres
+        rows, cols = run.flat.shape
+        grid_factor = float(np.sqrt(rows / h * cols / w))
+        chains_in = grid_levels.to_grid(run.chains, (rows, cols), (h, w))
+        traces = vectorize.to_trace_map(
+            chains_in, height_px=h, m_per_px=scale, window_uv_m=window,
+            tolerance_px=params.for_detector(detector).simplify_tolerance_px / grid_factor,
+            frame="face", attributes={"confidence": vectorize.mean_along(run.chains, run.response),
+                                      "contrast": run.contrast,
+                                      "band_width_px": run.band_px / grid_factor})
+        return _with_joint_score(traces, detector, m_per_px=scale,
+                                 joint_width_px=width_px / grid_factor)
+
+    maps, level_record, level = {}, None, 1
+    if uses_learned:
+        runs = {1: found["learned"], **coarser}
+        widths = {1: min(width_work, learned_width), **{f: level_width(f) for f in coarser}}
+        by_level = {f: trace_map(run, "learned", widths[f]) for f, run in runs.items()}
+        if coarser:
+            scores = {f: grid_levels.mean_joint_score(m) for f, m in by_level.items()}
+            lengths = {f: float(m.lengths_m().sum()) for f, m in by_level.items()}
+            level = grid_levels.choose_level(scores, lengths)
+            level_record = {"levels": sorted(runs), "joint_score": [scores[f] for f in sorted(runs)],
+                            "traces": [by_level[f].n_traces for f in sorted(runs)],
+                            "length": [lengths[f] for f in sorted(runs)], "kept": level}
+        maps["learned"] = by_level[level]
+        found["learned"] = runs[level]
     choice = None
     if params.detector == AUTO:
-        agreement = detector_agreement(found["ridge"].chains, found["learned"].chains, work_shape,
+        learned_chains = grid_levels.to_grid(found["learned"].chains, found["learned"].flat.shape,
+                                             work_shape)
+        agreement = detector_agreement(found["ridge"].chains, learned_chains, work_shape,
                                        radius_px=AGREEMENT_RADIUS_PX * scale_of_grid)
         kept = "ridge" if agreement > params.auto_agreement else "learned"
         choice = {"kept": kept, "agreement": agreement, "auto_agreement": params.auto_agreement,
                   "traces": {d: len(found[d].chains) for d in DETECTORS}}
     else:
         kept = params.detector
-    if kept == "learned" and width_work > learned_width:
-        notes.append(capped_note)
-        width_work, width_source = learned_width, f"{width_source}, capped"
+    if kept == "learned":
+        width_used = level_width(level) * level if level > 1 else min(width_work, learned_width)
+        if width_work > learned_width:
+            notes.append(capped_note)
+            width_source = f"{width_source}, capped"
+        if level > 1:
+            notes.append(f"the learned detector's traces come from the working grid coarsened "
+                         f"{level} times, where they score highest (joints wide in pixels; "
+                         f"learned_levels, docs/imaging.md §3.4)")
+            width_source = f"{width_source}, grid coarsened {level}x"
+        width_work = width_used
     params = given_params.for_detector(kept).on_grid(scale_of_grid)
     chains, contrast, band, flat, response, binary, skeleton, pruned, face_contrast = found[kept]
     notes += _low_contrast_notes(face_contrast, params)
-    confidence = vectorize.mean_along(chains, response)
-    chains_in = [np.column_stack([(c[:, 0] + 0.5) / row_factor - 0.5,
-                                  (c[:, 1] + 0.5) / col_factor - 0.5]) for c in chains]
-    traces = vectorize.to_trace_map(chains_in, height_px=h, m_per_px=scale, window_uv_m=window,
-                                    tolerance_px=params.simplify_tolerance_px / factor,
-                                    frame="face",
-                                    attributes={"confidence": confidence, "contrast": contrast,
-                                                "band_width_px": band / factor})
-    traces = _with_joint_score(traces, kept, m_per_px=scale,
-                               joint_width_px=width_work / factor)
+    traces = maps[kept] if kept in maps else trace_map(found[kept], kept, width_work)
     clock.lap("vectorize")
 
     debug_images = {}
     if debug:
         debug_images = {"flattened": flat, "binary": binary, "skeleton": skeleton,
-                        "pruned": _render(pruned, work_shape)}
+                        "pruned": _render(pruned, flat.shape)}  # on the grid the traces came from
         for detector, run in found.items():  # "auto": both responses, the rest of the kept one
             debug_images["joint_probability" if detector == "learned" else "ridge_response"] = \
                 run.response
@@ -1249,4 +1324,5 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         detector_model=None if "learned" not in found
         else MappingProxyType(learned.model_record(given_params.pixel_model)),
         detector_choice=None if choice is None else MappingProxyType(choice),
-        face_contrast=face_contrast)
+        face_contrast=face_contrast,
+        learned_levels=None if level_record is None else MappingProxyType(level_record))
