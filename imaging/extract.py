@@ -1215,11 +1215,7 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     def detect_coarser(level, image, detector_clock):  # the learned detector on a coarser grid
         image, level_mask, shape = grid_levels.coarsen(image, mask, level)
         return _detect(image, params.for_detector("learned").on_grid(scale_of_grid),
-                       level_width(level), level_mask, band_px / level, shape, detector_clock)
-
-    def level_width(level):  # the learned detector's joint width on a grid, in its pixels
-        given = width_work / level if width_source != "default" else learned_width
-        return min(given, learned_width)
+                       learned_width, level_mask, band_px / level, shape, detector_clock)
 
     uses_learned = params.detector in (AUTO, "learned")
     levels = (grid_levels.usable_levels(params.learned_levels, work_shape)
@@ -1261,7 +1257,9 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     maps, level_record, level = {}, None, 1
     if uses_learned:
         runs = {1: found["learned"], **coarser}
-        widths = {1: min(width_work, learned_width), **{f: level_width(f) for f in coarser}}
+        # a coarser grid at the learned detector's own width (in its pixels): the joints a given
+        # width describes are those of the working grid
+        widths = {1: min(width_work, learned_width), **{f: learned_width for f in coarser}}
         by_level = {f: trace_map(run, "learned", widths[f]) for f, run in runs.items()}
         if coarser:
             scores = {f: grid_levels.mean_joint_score(m) for f, m in by_level.items()}
@@ -1284,7 +1282,7 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     else:
         kept = params.detector
     if kept == "learned":
-        width_used = level_width(level) * level if level > 1 else min(width_work, learned_width)
+        width_used = learned_width * level if level > 1 else min(width_work, learned_width)
         if width_work > learned_width:
             notes.append(capped_note)
             width_source = f"{width_source}, capped"
