@@ -75,27 +75,38 @@ def _coarse(image):
     return cv2.resize(image, (max(w // 2, 1), max(h // 2, 1)), interpolation=cv2.INTER_AREA)
 
 
-def _fine(values, shape):
-    """A coarse-grid map resized back to ``shape`` (bilinear)."""
+def _fine(values, shape, out=None):
+    """A coarse-grid map resized back to ``shape`` (bilinear), into ``out`` when given (a
+    contiguous float32 map of that shape: no copy of the result)."""
     import cv2
 
-    return cv2.resize(values, (shape[1], shape[0]), interpolation=cv2.INTER_LINEAR)
+    fine = cv2.resize(values, (shape[1], shape[0]), dst=out, interpolation=cv2.INTER_LINEAR)
+    return _into(fine, out)
 
 
-def _ridge(image, half, sigma, black=True):
+def _into(values, out):
+    """``values``, written into ``out`` unless it is already there (or ``out`` is None)."""
+    if out is None or values is out:
+        return values
+    out[...] = values
+    return out
+
+
+def _ridge(image, half, sigma, black=True, out=None):
     """Scale-normalised Sato response at one scale; on the coarse grid from COARSE_FROM_SIGMA."""
     if sigma < COARSE_FROM_SIGMA:
-        return ridge_response(image, [sigma], black_ridges=black, normalise=False)
-    return _fine(ridge_response(half, [sigma / 2], black_ridges=black, normalise=False), image.shape)
+        return _into(ridge_response(image, [sigma], black_ridges=black, normalise=False), out)
+    return _fine(ridge_response(half, [sigma / 2], black_ridges=black, normalise=False), image.shape,
+                 out)
 
 
-def _edge(image, half, sigma):
+def _edge(image, half, sigma, out=None):
     """Scale-normalised gradient magnitude σ|∇G_σ * I|; on the coarse grid from COARSE_FROM_SIGMA."""
     if sigma < COARSE_FROM_SIGMA:
         g_r, g_c = _gradient(image, sigma)
-        return np.float32(sigma) * np.sqrt(g_r * g_r + g_c * g_c)
+        return _into(np.float32(sigma) * np.sqrt(g_r * g_r + g_c * g_c), out)
     g_r, g_c = _gradient(half, sigma / 2)
-    return _fine(np.float32(sigma / 2) * np.sqrt(g_r * g_r + g_c * g_c), image.shape)
+    return _fine(np.float32(sigma / 2) * np.sqrt(g_r * g_r + g_c * g_c), image.shape, out)
 
 
 def _blur(image, sigma):
@@ -126,12 +137,12 @@ class _Pyramid:
     def __init__(self, *maps, coarse=None):
         self.maps, self._halves = maps, coarse
 
-    def at(self, sigma, combine):
+    def at(self, sigma, combine, out=None):
         if sigma < COARSE_FROM_SIGMA:
-            return combine(*(_blur(m, sigma) for m in self.maps))
+            return _into(combine(*(_blur(m, sigma) for m in self.maps)), out)
         if self._halves is None:
             self._halves = [_coarse(m) for m in self.maps]
-        return _fine(combine(*(_blur(m, sigma / 2) for m in self._halves)), self.maps[0].shape)
+        return _fine(combine(*(_blur(m, sigma / 2) for m in self._halves)), self.maps[0].shape, out)
 
 
 def _gradient(image, sigma):
@@ -208,39 +219,35 @@ def pixel_features(flat) -> np.ndarray:
     image = np.array(flat, dtype=np.float32, copy=True)
     if image.ndim != 2:
         raise ValueError(f"flat must be a 2-D grey image, got shape {image.shape}")
-    # each map is written into its row as it is made: stacking a list of 27 maps at the end
-    # copied 27 x 4 MP x 4 bytes = 430 MB at 4 MP and doubled the peak memory
+    # each map is written into its row as it is made (the coarse-grid ones resized straight into
+    # it): stacking a list of 27 maps at the end copied 27 x 4 MP x 4 bytes = 430 MB at 4 MP and
+    # doubled the peak memory
     out = np.empty((len(FEATURE_NAMES),) + image.shape, np.float32)
     rows = iter(out)
-
-    def put(value):
-        next(rows)[...] = value
-        return value
-
     half = _coarse(image)
-    put(image)
+    _into(image, next(rows))
     levels = _Pyramid(image, coarse=[half])
     for s in _CONTRAST_SIGMAS:
-        put(image - levels.at(s, lambda mean: mean))
-    dark = [put(_ridge(image, half, s)) for s in _RIDGE_SIGMAS]
+        np.subtract(image, levels.at(s, lambda mean: mean), out=next(rows))
+    dark = [_ridge(image, half, s, out=next(rows)) for s in _RIDGE_SIGMAS]
     for s in _BRIGHT_SIGMAS:
-        put(_ridge(image, half, s, black=False))
-    edges = [put(_edge(image, half, s)) for s in _EDGE_SIGMAS]
+        _ridge(image, half, s, black=False, out=next(rows))
+    edges = [_edge(image, half, s, out=next(rows)) for s in _EDGE_SIGMAS]
     g_r, g_c = _gradient(image, 1.0)
     tensor = _Pyramid(g_r * g_r, g_c * g_c, g_r * g_c)
     for s in _COHERENCE_SIGMAS:
-        put(tensor.at(s, _coherence))
+        tensor.at(s, _coherence, out=next(rows))
     square = image * image
     moments = _Pyramid(image, square, coarse=[half, _coarse(square)])  # both σ on the coarse grid
     for s in _STD_SIGMAS:
-        put(moments.at(s, _local_sd))
+        moments.at(s, _local_sd, out=next(rows))
     ridge = np.max(dark[1:4], axis=0)  # σ 2-8: the joints' widths
     edge = np.max(edges[1:3], axis=0)
     for source in (ridge, edge):  # on the coarse grid, segments of half the length
         coarse = _coarse(source)
         for n in _SUPPORT_LENGTHS:
             for v in line_support(coarse, n // 2):
-                put(_fine(v, image.shape))
+                _fine(v, image.shape, out=next(rows))
     if next(rows, None) is not None:  # every row written, in FEATURE_NAMES order
         raise AssertionError("pixel_features wrote fewer maps than FEATURE_NAMES lists")
     return out
