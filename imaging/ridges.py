@@ -155,8 +155,15 @@ def ridge_response(image, sigmas, *, black_ridges: bool = True, normalise: bool 
     best = np.zeros(work.shape, dtype=np.float32)
     for sigma in sig:
         h_rr, h_rc, h_cc = _hessian(work, float(sigma))
-        half_diff = 0.5 * (h_rr - h_cc)
-        lam = 0.5 * (h_rr + h_cc) + np.sqrt(half_diff * half_diff + h_rc * h_rc)
+        # λ1 = (H_rr + H_cc)/2 + sqrt(((H_rr - H_cc)/2)² + H_rc²), in place: no temporary maps
+        half_diff = np.subtract(h_rr, h_cc)
+        half_diff *= np.float32(0.5)
+        lam = np.add(h_rr, h_cc, out=h_rr)
+        lam *= np.float32(0.5)
+        half_diff *= half_diff
+        h_rc *= h_rc
+        half_diff += h_rc
+        lam += np.sqrt(half_diff, out=half_diff)
         np.maximum(lam, 0.0, out=lam)
         lam *= np.float32(sigma * sigma)
         np.maximum(best, lam, out=best)
