@@ -38,7 +38,7 @@ MIN_LEVEL_SIDE_PX = 64
 MIN_LENGTH_SHARE = 0.3
 #: ... or when its joint-like length (trace length times mean joint score) is at least this many
 #: times the finer grid's: a working grid that finds only a few clean pieces of wide joints. 2 and
-#: 3 differ by under 0.01 of F1 on ``train/``; 3 keeps the trace length error lower.
+#: 3 scored about the same on ``train/``; 3 kept the trace length error lower.
 JOINT_LENGTH_RATIO = 3.0
 
 
