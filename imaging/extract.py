@@ -1247,7 +1247,8 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         chains_in = grid_levels.to_grid(run.chains, (rows, cols), (h, w))
         traces = vectorize.to_trace_map(
             chains_in, height_px=h, m_per_px=scale, window_uv_m=window,
-            tolerance_px=params.for_detector(detector).simplify_tolerance_px / grid_factor,
+            tolerance_px=given_params.for_detector(detector).on_grid(scale_of_grid)
+            .simplify_tolerance_px / grid_factor,
             frame="face", attributes={"confidence": vectorize.mean_along(run.chains, run.response),
                                       "contrast": run.contrast,
                                       "band_width_px": run.band_px / grid_factor})
