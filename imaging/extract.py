@@ -264,8 +264,10 @@ class ExtractParams:
         (those whose grid keeps 64 px a side), and the grid whose traces have the highest
         length-weighted mean ``joint_score`` is kept (:mod:`rockmass.imaging.grid_levels`,
         docs/imaging.md §3.4), provided they add up to at least 30 % of the working grid's
-        trace length: its model knows joints a few pixels wide, and a photograph with more
-        pixels per joint width shows them wide and soft. ``()`` runs the working grid only.
+        trace length, or a coarser grid whose joint-like length (length times mean score) is
+        three times the finer one's: its model knows joints a few pixels wide, and a photograph
+        with more pixels per joint width shows them wide and soft. ``()`` runs the working grid
+        only. Not run while the joint score is off (``trace_score.unscored``).
         Chosen on the real ``train/`` photographs, as they are and enlarged 2 and 4 times
         (``benchmarks/bench_imaging_real.py --upsampled 2,4``).
     pixel_model : str or None, default None
@@ -562,7 +564,7 @@ class Extraction:
         Traces in the face frame (u right, v up, origin at the image's bottom-left corner), in
         ``scale.units``, with attributes ``id``, ``length_m``, ``angle_deg`` (0–180° counter-
         clockwise from +u) and ``confidence`` (the detector's mean response along the trace on the
-        working grid, 0–1: the mean probability of the learned detector; the mean normalised ridge
+        grid it was found on (the working grid, or a coarser one, ``learned_levels``), 0–1: the mean probability of the learned detector; the mean normalised ridge
         response of the ridge detector, not a probability) and ``contrast`` (1 - the mean of the
         flattened image along the trace / its median over the image: how much darker than the face
         the trace is; see ``ExtractParams.min_trace_contrast``), and the window (image rectangle,
@@ -576,17 +578,20 @@ class Extraction:
     joint_width_source : str
         Where it came from: "default", "joint_width_px" or "joint_width_m", the last two followed
         by ", capped" when the learned detector used its default width, narrower than the one
-        given (see :func:`extract`).
+        given (see :func:`extract`); then ", grid coarsened fx" when the learned traces came from
+        a grid coarsened f times (its width in input pixels is f times as wide).
     face_orientation : (dip_deg, dip_direction_deg) or None
         The face plane, for placing the traces in 3D later.
     timings_s : mapping of str to float
-        Wall time per step, seconds, in chain order.
+        Wall time per step, seconds, in chain order; the steps of the chains run on the second
+        thread (the ridge chain of "auto", the coarser grids) are added in, so their sum can
+        exceed the wall time.
     warnings : tuple of str
     debug : mapping of str to ndarray
         With ``debug=True``: ``flattened``, ``ridge_response`` (``joint_probability`` with the
         learned detector, both with "auto"), ``binary``, ``skeleton`` and ``pruned`` (of the
-        detector whose traces were kept) on the working grid, and ``face_mask`` when one was used;
-        else empty.
+        detector whose traces were kept) on the working grid (a coarser grid's maps enlarged to
+        it, nearest pixel), and ``face_mask`` when one was used; else empty.
     face_mask : mapping
         How candidates were limited: ``used`` (bool), ``source`` ("face mask", "roi" or "none"),
         ``mode`` (``params.face_mask``), ``masked_fraction`` (share of the working grid outside
@@ -752,6 +757,10 @@ class _Clock:
         self._t = now
         if self.progress is not None and first:
             self.progress(name)
+
+    def skip(self) -> None:
+        """Restart the running lap without recording it (time spent waiting for another thread)."""
+        self._t = time.perf_counter()
 
     def add(self, other: _Clock) -> None:
         """Add the step times of a chain timed apart (the ridge chain of "auto", run beside)."""
@@ -1197,7 +1206,8 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     capped_note = (f"the joint width given ({width_work / factor:.4g} px, {width_work:.4g} px of the "
                    f"working grid) is wider than the learned detector uses: its probability bands "
                    f"do not widen with the joints (docs/imaging.md §3.1), so its width filter, "
-                   f"linking and joint scores use {learned_width:g} px of the working grid; "
+                   f"linking and joint scores use {learned_width:g} px of the grid it reads (the "
+                   f"working grid or a coarser one, §3.4); "
                    f"--detector ridge sets its filter scales from the width given")
     if scale_of_grid > 1.0:
         notes.append(f"working grid {work_shape[0] * work_shape[1] / 1e6:.1f} MP, above the "
@@ -1225,18 +1235,24 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     from concurrent.futures import ThreadPoolExecutor
 
     side_clocks = []
-    with ThreadPoolExecutor(max_workers=1) as pool:
-        def beside(task, *args):
-            side_clocks.append(_Clock())
-            return pool.submit(task, *args, side_clocks[-1])
 
-        ridge = beside(detect, "ridge", grey) if params.detector == AUTO else None
-        coarser = {level: beside(detect_coarser, level, grey) for level in levels}
-        main_detector = "learned" if uses_learned else params.detector
-        found = {main_detector: detect(main_detector, grey, clock)}
-        if ridge is not None:
-            found["ridge"] = ridge.result()
-        coarser = {level: future.result() for level, future in coarser.items()}
+    def timed(task, *args):  # a side task's clock starts when the task does, not when queued
+        side_clocks.append(_Clock())
+        return task(*args, side_clocks[-1])  # one worker: its tasks run one after another
+
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        try:
+            ridge = pool.submit(timed, detect, "ridge", grey) if params.detector == AUTO else None
+            coarser = {level: pool.submit(timed, detect_coarser, level, grey) for level in levels}
+            main_detector = "learned" if uses_learned else params.detector
+            found = {main_detector: detect(main_detector, grey, clock)}
+            if ridge is not None:
+                found["ridge"] = ridge.result()
+            coarser = {level: future.result() for level, future in coarser.items()}
+        except BaseException:  # an error or Ctrl-C: the side tasks not begun are dropped
+            pool.shutdown(wait=True, cancel_futures=True)
+            raise
+    clock.skip()  # the wait for the side tasks is no step's time
     for side_clock in side_clocks:
         clock.add(side_clock)
     del grey
@@ -1289,8 +1305,8 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
             width_source = f"{width_source}, capped"
         if level > 1:
             notes.append(f"the learned detector's traces come from the working grid coarsened "
-                         f"{level} times, where they score highest (joints wide in pixels; "
-                         f"learned_levels, docs/imaging.md §3.4)")
+                         f"{level} times, where they are the most joint-like (joints wide in "
+                         f"pixels; learned_levels, docs/imaging.md §3.4)")
             width_source = f"{width_source}, grid coarsened {level}x"
         width_work = width_used
     params = given_params.for_detector(kept).on_grid(scale_of_grid)
@@ -1302,10 +1318,12 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     debug_images = {}
     if debug:
         debug_images = {"flattened": flat, "binary": binary, "skeleton": skeleton,
-                        "pruned": _render(pruned, flat.shape)}  # on the grid the traces came from
+                        "pruned": _render(pruned, flat.shape)}
+        debug_images = {key: grid_levels.resized(image, work_shape)  # a coarser grid's too
+                        for key, image in debug_images.items()}
         for detector, run in found.items():  # "auto": both responses, the rest of the kept one
             debug_images["joint_probability" if detector == "learned" else "ridge_response"] = \
-                run.response
+                grid_levels.resized(run.response, work_shape)
         if face_info["source"] == "face mask":
             debug_images["face_mask"] = mask
     for note in notes:

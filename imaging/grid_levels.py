@@ -27,7 +27,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 __all__ = ["MIN_LEVEL_SIDE_PX", "MIN_LENGTH_SHARE", "JOINT_LENGTH_RATIO",
-           "usable_levels", "coarsen", "to_grid", "mean_joint_score",
+           "usable_levels", "coarsen", "resized", "to_grid", "mean_joint_score",
            "choose_level"]
 
 #: A coarser grid is tried only when its shorter side keeps at least this many pixels.
@@ -65,6 +65,19 @@ def coarsen(grey: np.ndarray, mask: np.ndarray | None, level: int):
         return image, None, shape
     share = cv2.resize(mask.astype(np.float32), shape[::-1], interpolation=cv2.INTER_AREA)
     return image, share >= 0.5, shape
+
+
+def resized(image: np.ndarray, shape_px: tuple[int, int]) -> np.ndarray:
+    """A map of a coarser grid shown on a finer one (nearest pixel: binary maps stay binary);
+    ``image`` itself when it has that shape already."""
+    import cv2
+
+    image = np.asarray(image)
+    if image.shape[:2] == tuple(shape_px):
+        return image
+    kind = np.uint8 if image.dtype == bool else image.dtype
+    out = cv2.resize(image.astype(kind), (shape_px[1], shape_px[0]), interpolation=cv2.INTER_NEAREST)
+    return out.astype(bool) if image.dtype == bool else out
 
 
 def to_grid(chains: Sequence[np.ndarray], from_shape, to_shape) -> list[np.ndarray]:

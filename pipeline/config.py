@@ -159,7 +159,7 @@ class ImagingConfig(StrictModel):
     joint_width_m: float | None = Field(None, gt=0)
     face_dip_deg: float | None = Field(None, ge=0, le=90)
     face_dip_direction_deg: float | None = Field(None, ge=0, lt=360)
-    params: dict[str, bool | int | float | str] = Field(default_factory=dict)
+    params: dict[str, bool | int | float | str | list[int]] = Field(default_factory=dict)
 
     @field_validator("params")
     @classmethod

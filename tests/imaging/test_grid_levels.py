@@ -82,7 +82,31 @@ def test_an_enlarged_photo_is_read_on_a_coarser_grid(enlarged_face):
     assert result.joint_width_source.endswith(f"grid coarsened {record['kept']}x")
 
 
-def test_the_ridge_detector_runs_on_the_working_grid_only(enlarged_face):
+def test_auto_reads_the_learned_detector_on_the_same_grids(enlarged_face):
+    face, big = enlarged_face
+    learned = extract(big, m_per_px=0.005, params=ExtractParams(detector="learned"))
+    auto = extract(big, m_per_px=0.005, params=ExtractParams(detector="auto"))
+    assert dict(auto.learned_levels) == dict(learned.learned_levels)
+    assert extract(big, m_per_px=0.005, params=ExtractParams(detector="ridge")).learned_levels is None
+
+
+def test_a_coarser_grid_is_recorded_in_a_json_summary_and_its_debug_maps_fit_the_grid(enlarged_face):
+    import json
+
     _, big = enlarged_face
-    result = extract(big[:400, :600], m_per_px=0.005, params=ExtractParams(detector="ridge"))
-    assert result.learned_levels is None
+    result = extract(big, m_per_px=0.005, params=ExtractParams(detector="learned"), debug=True)
+    assert result.learned_levels["kept"] > 1
+    json.dumps(result.summary(), allow_nan=False)
+    work = result.scale.work_shape_px
+    assert all(image.shape[:2] == work for image in result.debug.values())
+    timings = result.timings_s
+    assert set(timings) and all(v >= 0 for v in timings.values())
+
+
+def test_levels_can_be_set_in_a_config_file():
+    from rockmass.config import ImagingConfig
+
+    assert ImagingConfig(params={"learned_levels": []}).params["learned_levels"] == []
+    assert ImagingConfig(params={"learned_levels": [2, 4]}).params["learned_levels"] == [2, 4]
+    with pytest.raises(ValueError, match="learned_levels"):
+        ImagingConfig(params={"learned_levels": [1]})
