@@ -854,16 +854,14 @@ def _candidate_area(raw, roi, face_mask: str, shape_px, work_shape, scale: float
     ``Extraction.face_mask`` record, the mask's border band on the working grid in pixels)."""
     import shapely
 
-    from . import segment
+    from . import grid_levels, segment
 
     h, _w = shape_px
-    row_factor, col_factor = work_shape[0] / shape_px[0], work_shape[1] / shape_px[1]
     mask = None
     window = image_window_uv_m(shape_px, scale)
     if roi is not None:
         rc_in = segment.roi_vertices_rc(roi, shape_px, m_per_px=scale if units == "m" else None)
-        rc_work = np.column_stack([(rc_in[:, 0] + 0.5) * row_factor - 0.5,
-                                   (rc_in[:, 1] + 0.5) * col_factor - 0.5])
+        rc_work = grid_levels.to_grid([rc_in], shape_px, work_shape)[0]
         mask = segment.roi_mask({"rc_px": rc_work}, work_shape)
         area = shapely.Polygon(rc_to_uv(rc_in, h, scale)).intersection(shapely.Polygon(window))
         window = np.asarray(_largest_polygon(area).exterior.coords)
@@ -1217,15 +1215,18 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
 
     mask, window, face_info, band_px = _candidate_area(
         raw, roi, params.face_mask, (h, w), work_shape, scale, units, name, clock)
-    def detect(detector, image, detector_clock):
-        width = min(width_work, learned_width) if detector == "learned" else width_work
-        return _detect(image, params.for_detector(detector).on_grid(scale_of_grid), width, mask,
-                       band_px, work_shape, detector_clock)
+    def learned_width_on(level):  # the learned detector's joint width, pixels of its grid
+        # a given width describes the working grid's joints; a coarser grid uses the detector's
+        # own, so that the grids' joint scores are compared at one width
+        return min(width_work, learned_width) if level == 1 else learned_width
 
-    def detect_coarser(level, image, detector_clock):  # the learned detector on a coarser grid
-        image, level_mask, shape = grid_levels.coarsen(image, mask, level)
-        return _detect(image, params.for_detector("learned").on_grid(scale_of_grid),
-                       learned_width, level_mask, band_px / level, shape, detector_clock)
+    def detect(detector, image, detector_clock, level=1):  # level > 1: a coarser grid (§3.4)
+        width = learned_width_on(level) if detector == "learned" else width_work
+        level_mask, shape = mask, work_shape
+        if level > 1:
+            image, level_mask, shape = grid_levels.coarsen(image, mask, level)
+        return _detect(image, params.for_detector(detector).on_grid(scale_of_grid), width,
+                       level_mask, band_px / level, shape, detector_clock)
 
     uses_learned = params.detector in (AUTO, "learned")
     levels = (grid_levels.usable_levels(params.learned_levels, work_shape)
@@ -1236,14 +1237,15 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
 
     side_clocks = []
 
-    def timed(task, *args):  # a side task's clock starts when the task does, not when queued
+    def timed(task, *args, **kwargs):  # a side task's clock starts with the task, not queued
         side_clocks.append(_Clock())
-        return task(*args, side_clocks[-1])  # one worker: its tasks run one after another
+        return task(*args, side_clocks[-1], **kwargs)  # one worker: one task after another
 
     with ThreadPoolExecutor(max_workers=1) as pool:
         try:
             ridge = pool.submit(timed, detect, "ridge", grey) if params.detector == AUTO else None
-            coarser = {level: pool.submit(timed, detect_coarser, level, grey) for level in levels}
+            coarser = {level: pool.submit(timed, detect, "learned", grey, level=level)
+                       for level in levels}
             main_detector = "learned" if uses_learned else params.detector
             found = {main_detector: detect(main_detector, grey, clock)}
             if ridge is not None:
@@ -1274,10 +1276,7 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     maps, level_record, level = {}, None, 1
     if uses_learned:
         runs = {1: found["learned"], **coarser}
-        # a coarser grid at the learned detector's own width (in its pixels): the joints a given
-        # width describes are those of the working grid
-        widths = {1: min(width_work, learned_width), **{f: learned_width for f in coarser}}
-        by_level = {f: trace_map(run, "learned", widths[f]) for f, run in runs.items()}
+        by_level = {f: trace_map(run, "learned", learned_width_on(f)) for f, run in runs.items()}
         if coarser:
             scores = {f: grid_levels.mean_joint_score(m) for f, m in by_level.items()}
             lengths = {f: float(m.lengths_m().sum()) for f, m in by_level.items()}
@@ -1299,7 +1298,7 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     else:
         kept = params.detector
     if kept == "learned":
-        width_used = learned_width * level if level > 1 else min(width_work, learned_width)
+        width_used = learned_width_on(level) * level
         if width_work > learned_width:
             notes.append(capped_note)
             width_source = f"{width_source}, capped"

@@ -83,10 +83,17 @@ def test_an_enlarged_photo_is_read_on_a_coarser_grid(enlarged_face):
 
 
 def test_auto_reads_the_learned_detector_on_the_same_grids(enlarged_face):
+    import time
+
     face, big = enlarged_face
     learned = extract(big, m_per_px=0.005, params=ExtractParams(detector="learned"))
+    t0 = time.perf_counter()
     auto = extract(big, m_per_px=0.005, params=ExtractParams(detector="auto"))
+    wall = time.perf_counter() - t0
     assert dict(auto.learned_levels) == dict(learned.learned_levels)
+    # two threads at most: the steps' times, summed over both, cannot exceed twice the wall time
+    # (they did while a queued task's clock ran from the moment it was queued)
+    assert sum(auto.timings_s.values()) <= 2.0 * wall
     assert extract(big, m_per_px=0.005, params=ExtractParams(detector="ridge")).learned_levels is None
 
 
@@ -99,8 +106,6 @@ def test_a_coarser_grid_is_recorded_in_a_json_summary_and_its_debug_maps_fit_the
     json.dumps(result.summary(), allow_nan=False)
     work = result.scale.work_shape_px
     assert all(image.shape[:2] == work for image in result.debug.values())
-    timings = result.timings_s
-    assert set(timings) and all(v >= 0 for v in timings.values())
 
 
 def test_levels_can_be_set_in_a_config_file():
