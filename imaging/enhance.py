@@ -66,6 +66,10 @@ def read_photo(path, max_pixels: int | None = None) -> np.ndarray:
         raise FileNotFoundError(f"{path}: no such file")
     try:
         with _pillow_pixel_limit(Image, max_pixels), Image.open(path) as img:
+            # the whole file to the decoder in one call: Pillow hands it 64 kB at a time, and takes
+            # the GIL back between the pieces, which lets another thread (``rockmass extract``
+            # imports matplotlib meanwhile) double the decoding time of a 12 MP JPEG
+            img.decodermaxblock = max(img.decodermaxblock, path.stat().st_size)
             img.load()
             img = ImageOps.exif_transpose(img)
             mode = img.mode

@@ -1091,12 +1091,11 @@ def detector_agreement(ridge_chains, learned_chains, shape_px, *,
     >>> detector_agreement(line, [np.array([[30.0, 5.0], [30.0, 95.0]])], (40, 100))
     0.0
     """
-    from .metrics import raster_counts, render_chains
+    from .metrics import pixels_within, render_chains
 
     # the ridge pixels play the truth of the raster scores (8.5)-(8.6): A is their "recall"
-    _, _, confirmed, ridge = raster_counts(render_chains(learned_chains, shape_px),
-                                           render_chains(ridge_chains, shape_px),
-                                           tolerance_px=radius_px)
+    confirmed, ridge = pixels_within(render_chains(ridge_chains, shape_px),
+                                     render_chains(learned_chains, shape_px), radius_px)
     return confirmed / ridge if ridge else 0.0
 
 
@@ -1220,19 +1219,38 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         # own, so that the grids' joint scores are compared at one width
         return min(width_work, learned_width) if level == 1 else learned_width
 
-    def detect(detector, image, detector_clock, level=1):  # level > 1: a coarser grid (§3.4)
-        width = learned_width_on(level) if detector == "learned" else width_work
-        level_mask, shape = mask, work_shape
-        if level > 1:
-            image, level_mask, shape = grid_levels.coarsen(image, mask, level)
-        return _detect(image, params.for_detector(detector).on_grid(scale_of_grid), width,
-                       level_mask, band_px / level, shape, detector_clock)
-
     uses_learned = params.detector in (AUTO, "learned")
     levels = (grid_levels.usable_levels(params.learned_levels, work_shape)
               if uses_learned and trace_score.scoring() else ())
+
+    def trace_map(run: _Found, detector: str, width_px: float):  # input pixels or metres
+        rows, cols = run.flat.shape
+        grid_factor = float(np.sqrt(rows / h * cols / w))
+        chains_in = grid_levels.to_grid(run.chains, (rows, cols), (h, w))
+        traces = vectorize.to_trace_map(
+            chains_in, height_px=h, m_per_px=scale, window_uv_m=window,
+            tolerance_px=given_params.for_detector(detector).on_grid(scale_of_grid)
+            .simplify_tolerance_px / grid_factor,
+            frame="face", attributes={"confidence": vectorize.mean_along(run.chains, run.response),
+                                      "contrast": run.contrast,
+                                      "band_width_px": run.band_px / grid_factor})
+        return _with_joint_score(traces, detector, m_per_px=scale,
+                                 joint_width_px=width_px / grid_factor)
+
+    def detect(detector, image, detector_clock, level=1):  # (the run, its traces)
+        width = learned_width_on(level) if detector == "learned" else width_work
+        level_mask, shape = mask, work_shape
+        if level > 1:  # a coarser grid (§3.4)
+            image, level_mask, shape = grid_levels.coarsen(image, mask, level)
+        run = _detect(image, params.for_detector(detector).on_grid(scale_of_grid), width,
+                      level_mask, band_px / level, shape, detector_clock)
+        traces = trace_map(run, detector, width)
+        detector_clock.lap("vectorize")
+        return run, traces
+
     # the ridge chain of "auto" and the coarser grids run beside the working grid's learned
-    # chain, on the other core
+    # chain, on the other core, each with its traces (the ridge filter's are made whether "auto"
+    # keeps them or not: the other core would wait for the main chain meanwhile)
     from concurrent.futures import ThreadPoolExecutor
 
     side_clocks = []
@@ -1258,25 +1276,13 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     for side_clock in side_clocks:
         clock.add(side_clock)
     del grey
+    maps = {detector: traces for detector, (_, traces) in found.items()}
+    found = {detector: run for detector, (run, _) in found.items()}
 
-    def trace_map(run: _Found, detector: str, width_px: float):  # input pixels or metres
-        rows, cols = run.flat.shape
-        grid_factor = float(np.sqrt(rows / h * cols / w))
-        chains_in = grid_levels.to_grid(run.chains, (rows, cols), (h, w))
-        traces = vectorize.to_trace_map(
-            chains_in, height_px=h, m_per_px=scale, window_uv_m=window,
-            tolerance_px=given_params.for_detector(detector).on_grid(scale_of_grid)
-            .simplify_tolerance_px / grid_factor,
-            frame="face", attributes={"confidence": vectorize.mean_along(run.chains, run.response),
-                                      "contrast": run.contrast,
-                                      "band_width_px": run.band_px / grid_factor})
-        return _with_joint_score(traces, detector, m_per_px=scale,
-                                 joint_width_px=width_px / grid_factor)
-
-    maps, level_record, level = {}, None, 1
+    level_record, level = None, 1
     if uses_learned:
-        runs = {1: found["learned"], **coarser}
-        by_level = {f: trace_map(run, "learned", learned_width_on(f)) for f, run in runs.items()}
+        runs = {1: found["learned"], **{f: run for f, (run, _) in coarser.items()}}
+        by_level = {1: maps["learned"], **{f: traces for f, (_, traces) in coarser.items()}}
         if coarser:
             scores = {f: grid_levels.mean_joint_score(m) for f, m in by_level.items()}
             lengths = {f: float(m.lengths_m().sum()) for f, m in by_level.items()}
@@ -1311,7 +1317,7 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     params = given_params.for_detector(kept).on_grid(scale_of_grid)
     chains, contrast, band, flat, response, binary, skeleton, pruned, face_contrast = found[kept]
     notes += _low_contrast_notes(face_contrast, params)
-    traces = maps[kept] if kept in maps else trace_map(found[kept], kept, width_work)
+    traces = maps[kept]
     clock.lap("vectorize")
 
     debug_images = {}

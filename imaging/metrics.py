@@ -21,7 +21,7 @@ import numpy as np
 from .frame import check_scale, uv_to_rc
 
 __all__ = ["Accuracy", "trace_accuracy", "buffered_match", "raster_match", "raster_counts",
-           "render_chains", "render_traces", "count_nodes", "set_mean_angles"]
+           "pixels_within", "render_chains", "render_traces", "count_nodes", "set_mean_angles"]
 
 
 @dataclass(frozen=True)
@@ -155,9 +155,14 @@ def raster_counts(extracted, truth, *, tolerance_px: float = 5.0) -> tuple[int, 
                          f"and {true.shape}")
     if not (np.isfinite(tolerance_px) and tolerance_px >= 0):
         raise ValueError(f"tolerance_px must be a finite distance >= 0, got {tolerance_px!r}")
-    matched_pred = int((_distance_to(true)[pred] <= tolerance_px).sum()) if true.any() else 0
-    matched_true = int((_distance_to(pred)[true] <= tolerance_px).sum()) if pred.any() else 0
-    return matched_pred, int(pred.sum()), matched_true, int(true.sum())
+    return (*pixels_within(pred, true, tolerance_px), *pixels_within(true, pred, tolerance_px))
+
+
+def pixels_within(mask, reference, tolerance_px: float) -> tuple[int, int]:
+    """(pixels of ``mask`` within ``tolerance_px`` of a pixel of ``reference``, pixels of ``mask``),
+    two boolean masks of one shape: one distance transform, of ``reference``."""
+    matched = int((_distance_to(reference)[mask] <= tolerance_px).sum()) if reference.any() else 0
+    return matched, int(mask.sum())
 
 
 def _sample(trace_map, height_px, m_per_px, step_px=0.5):
