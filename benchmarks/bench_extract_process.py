@@ -33,10 +33,11 @@ wall time is start-up, imports and writing the overlay, rose and files) and, fro
 ``traces.geojson`` against the truth: dP21, dP20 (both over the truth's window) and buffered F1 at
 a 15 mm tolerance (3 px of a 5 mm scoring grid, the same grid at every size). A first run on the
 smallest photo per detector is reported apart (imports, numba cache load; not with ``--quick``).
-Python's bytecode cache is on for the children (in the run's temporary folder), as it is for a
-package installed by pip, which compiles the modules at install; this machine sets
-``PYTHONDONTWRITEBYTECODE``, under which an editable install would compile rockmass's modules in
-every run (about 0.1 s). The first run fills it (with ``--quick``, which has none, the first row).
+Python's bytecode cache is on for the children, as it is for a package installed by pip, which
+compiles the modules at install: this machine sets ``PYTHONDONTWRITEBYTECODE``, under which an
+editable install compiles rockmass's modules in every run (about 0.1 s); without it they are
+compiled once, into ``__pycache__`` beside the sources. With ``--quick`` one untimed run goes
+first, for the numba and bytecode caches.
 Targets (issue 20): >= 2 MP/s whole process at 12-24 MP on 2 cores, <= 2 GB, and dP21 / dP20 that
 do not drift with resolution. Rows also go to benchmarks/results/bench_extract_process.json
 (``..._quick.json`` with ``--quick``).
@@ -133,7 +134,7 @@ def run_command(photo: Path, out: Path, m_per_px: float, extra: list[str]) -> di
 
     exe = shutil.which("rockmass", path=str(Path(sys.executable).parent)) or shutil.which("rockmass")
     cmd = [exe, "extract", str(photo), "--out", str(out), "--m-per-px", repr(m_per_px), *extra]
-    env = {**os.environ, "ROCKMASS_QUIET": "1", "PYTHONPYCACHEPREFIX": str(out.parent / "pycache")}
+    env = {**os.environ, "ROCKMASS_QUIET": "1"}
     env.pop("PYTHONDONTWRITEBYTECODE", None)  # compiled modules, as an installed package has them
     if out.exists():
         shutil.rmtree(out)
@@ -191,6 +192,9 @@ def main(argv=None) -> int:
         print(f"rendered in {time.perf_counter() - t0:.1f} s; truth: {truth.n_traces} traces, "
               f"P21 {truth.total_length_m() / (FACE_WIDTH_M * FACE_HEIGHT_M):.3f} m/m2")
         out = folder / "out"
+        if args.quick:  # no first-run rows: one untimed run fills the caches
+            path, m_per_px, _ = photos[sizes[0]]
+            run_command(path, out, m_per_px, ["--detector", detectors[0]])
         for detector in detectors if not args.quick else ():  # first run per detector, apart
             path, m_per_px, _ = photos[sizes[0]]
             res = run_command(path, out, m_per_px, ["--detector", detector])

@@ -36,18 +36,21 @@ COLUMNS = [("model", "s"), ("photos", "d"), ("train_s", ".1f"), ("model_bytes", 
            ("moderate_F1", ".3f"), ("moderate_dP21_%", "+.1f")]
 
 
-def train(photos: list[Path], folder: Path, *, synthetic: bool) -> tuple[Path, float]:
-    """Train a pixel model on ``photos`` (their labels beside them in ``train/labels``), with or
-    without the shipped recipe's synthetic faces; (model path, seconds)."""
+def train(photos: list[Path], folder: Path, *, synthetic: bool, label_of=None) -> tuple[Path, float]:
+    """Train a pixel model on ``photos``, with or without the shipped recipe's synthetic faces;
+    (model path, seconds). ``label_of(photo)`` is the label file of a photo (default: the one
+    beside it in the labelled set's ``train/labels``)."""
     from rockmass.imaging.train_pixel_model import main as train_pixel_model
 
+    if label_of is None:
+        label_of = lambda photo: DATA / "train" / "labels" / f"{photo.stem}.png"  # noqa: E731
     images, labels = folder / f"images_{len(photos)}", folder / f"labels_{len(photos)}"
-    images.mkdir()
+    images.mkdir(parents=True)
     labels.mkdir()
     for photo in photos:  # symbolic links: the photos themselves are not copied
         (images / photo.name).symlink_to(photo)
-        label = DATA / "train" / "labels" / f"{photo.stem}.png"
-        (labels / label.name).symlink_to(label)
+        label = label_of(photo)
+        (labels / f"{photo.stem}{label.suffix}").symlink_to(label)
     out = folder / f"model_{len(photos)}_{'mixed' if synthetic else 'photos'}.npz"
     args = ["--photos", str(images), "--labels", str(labels), "--out", str(out)]
     t0 = time.perf_counter()

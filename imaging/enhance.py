@@ -24,6 +24,12 @@ LUMA_601 = (0.299, 0.587, 0.114)
 FLATTEN_METHODS = ("divide", "subtract", "none")
 
 
+#: Largest piece of a file handed to Pillow's decoder at once, bytes (:func:`read_photo`): a
+#: 100 MP JPEG is about 50 MB; a larger file (trailing data, an uncompressed TIFF) is decoded in
+#: pieces of this size.
+_DECODE_BLOCK_MAX = 1 << 28
+
+
 def read_photo(path, max_pixels: int | None = None) -> np.ndarray:
     """Read a JPEG / PNG / TIFF photograph as stored, after applying its EXIF orientation.
 
@@ -66,10 +72,12 @@ def read_photo(path, max_pixels: int | None = None) -> np.ndarray:
         raise FileNotFoundError(f"{path}: no such file")
     try:
         with _pillow_pixel_limit(Image, max_pixels), Image.open(path) as img:
-            # the whole file to the decoder in one call: Pillow hands it 64 kB at a time, and takes
-            # the GIL back between the pieces, which lets another thread (``rockmass extract``
-            # imports matplotlib meanwhile) double the decoding time of a 12 MP JPEG
-            img.decodermaxblock = max(img.decodermaxblock, path.stat().st_size)
+            # the file to the decoder in one call (up to _DECODE_BLOCK_MAX bytes): Pillow hands it
+            # 64 kB at a time, and takes the GIL back between the pieces, which lets another
+            # thread (``rockmass extract`` imports matplotlib meanwhile) double the decoding time
+            # of a 12 MP JPEG. ``decodermaxblock`` is Pillow's block size for its decoders
+            block = getattr(img, "decodermaxblock", 1 << 16)
+            img.decodermaxblock = max(block, min(path.stat().st_size, _DECODE_BLOCK_MAX))
             img.load()
             img = ImageOps.exif_transpose(img)
             mode = img.mode

@@ -748,14 +748,17 @@ class _Clock:
     def __init__(self, progress: Callable[[str], None] | None = None):
         self.timings: dict[str, float] = {}
         self.progress = progress
+        self._reported: set[str] = set()
         self._t = time.perf_counter()
 
-    def lap(self, name: str) -> None:
+    def lap(self, name: str, *, report: bool = True) -> None:
+        """End the running step ``name``; ``report=False``: not yet its end for the progress bar
+        (it runs again later, as "vectorize" does after the side tasks)."""
         now = time.perf_counter()
-        first = name not in self.timings
         self.timings[name] = self.timings.get(name, 0.0) + now - self._t
         self._t = now
-        if self.progress is not None and first:
+        if self.progress is not None and report and name not in self._reported:
+            self._reported.add(name)
             self.progress(name)
 
     def skip(self) -> None:
@@ -1245,7 +1248,7 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         run = _detect(image, params.for_detector(detector).on_grid(scale_of_grid), width,
                       level_mask, band_px / level, shape, detector_clock)
         traces = trace_map(run, detector, width)
-        detector_clock.lap("vectorize")
+        detector_clock.lap("vectorize", report=False)  # the step ends once a detector is kept
         return run, traces
 
     # the ridge chain of "auto" and the coarser grids run beside the working grid's learned

@@ -148,19 +148,39 @@ def raster_counts(extracted, truth, *, tolerance_px: float = 5.0) -> tuple[int, 
         Extracted pixels within the tolerance of a true pixel, extracted pixels, true pixels within
         the tolerance of an extracted pixel, true pixels.
     """
-    pred = np.asarray(extracted, dtype=bool)
-    true = np.asarray(truth, dtype=bool)
-    if pred.shape != true.shape or pred.ndim != 2:
-        raise ValueError(f"extracted and truth must be 2-D masks of one shape, got {pred.shape} "
-                         f"and {true.shape}")
-    if not (np.isfinite(tolerance_px) and tolerance_px >= 0):
-        raise ValueError(f"tolerance_px must be a finite distance >= 0, got {tolerance_px!r}")
-    return (*pixels_within(pred, true, tolerance_px), *pixels_within(true, pred, tolerance_px))
+    pred, true = _checked_masks(extracted, truth, tolerance_px, "extracted and truth")
+    return (*_pixels_within(pred, true, tolerance_px), *_pixels_within(true, pred, tolerance_px))
 
 
 def pixels_within(mask, reference, tolerance_px: float) -> tuple[int, int]:
-    """(pixels of ``mask`` within ``tolerance_px`` of a pixel of ``reference``, pixels of ``mask``),
-    two boolean masks of one shape: one distance transform, of ``reference``."""
+    """(pixels of ``mask`` within ``tolerance_px`` of a pixel of ``reference``, pixels of ``mask``).
+
+    ``mask`` and ``reference`` are 2-D masks of one shape (any nonzero value is True); one distance
+    transform, of ``reference``. A ``reference`` without pixels matches none.
+
+    Examples
+    --------
+    >>> a = np.zeros((5, 9), bool); a[2, 1:8] = True
+    >>> b = np.zeros((5, 9), bool); b[4, 1:4] = True
+    >>> pixels_within(a, b, 2.0), pixels_within(a, b, 3.0), pixels_within(b, a, 2.0)
+    ((3, 7), (5, 7), (3, 3))
+    """
+    return _pixels_within(*_checked_masks(mask, reference, tolerance_px, "mask and reference"),
+                          tolerance_px)
+
+
+def _checked_masks(a, b, tolerance_px, names: str):
+    """``a`` and ``b`` as bool arrays, after checking they are 2-D of one shape and the tolerance
+    a finite distance >= 0 (ValueError naming ``names`` otherwise)."""
+    a, b = np.asarray(a, dtype=bool), np.asarray(b, dtype=bool)
+    if a.shape != b.shape or a.ndim != 2:
+        raise ValueError(f"{names} must be 2-D masks of one shape, got {a.shape} and {b.shape}")
+    if not (np.isfinite(tolerance_px) and tolerance_px >= 0):
+        raise ValueError(f"tolerance_px must be a finite distance >= 0, got {tolerance_px!r}")
+    return a, b
+
+
+def _pixels_within(mask, reference, tolerance_px):
     matched = int((_distance_to(reference)[mask] <= tolerance_px).sum()) if reference.any() else 0
     return matched, int(mask.sum())
 

@@ -69,6 +69,22 @@ def test_auto_reports_each_step_once_in_chain_order():
     assert len(steps) == len(set(steps)) and steps == list(result.timings_s)
 
 
+def test_the_last_step_is_reported_once_a_detector_is_kept(monkeypatch):
+    # "vectorize" (the last step of the bar) runs in each detection task and again after the
+    # side tasks: the bar must not reach its end before the two detectors are compared
+    import importlib
+
+    module = importlib.import_module("rockmass.imaging.extract")
+    events = []
+    compare = module.detector_agreement
+    monkeypatch.setattr(module, "detector_agreement",
+                        lambda *a, **k: events.append("agreement") or compare(*a, **k))
+    face = synthetic_face("easy", seed=3, shape_px=(200, 300), m_per_px=0.02)
+    extract(face.image, m_per_px=0.02, progress=events.append)
+    assert events.count("vectorize") == 1
+    assert events.index("agreement") < events.index("vectorize")
+
+
 @pytest.mark.parametrize("kwargs, message", [
     (dict(detector="auto", line_polarity="bright"), "needs params.detector = 'ridge'"),
     (dict(auto_agreement=1.5), "auto_agreement must be a share in 0-1"),

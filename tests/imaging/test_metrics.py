@@ -5,7 +5,8 @@ import pytest
 
 from rockmass.accuracy import trace_accuracy
 from rockmass.dfn import TraceMap
-from rockmass.imaging.metrics import buffered_match, count_nodes, set_mean_angles
+from rockmass.imaging.metrics import (buffered_match, count_nodes, pixels_within, raster_counts,
+                                      set_mean_angles)
 
 WINDOW = [[0, 0], [10, 0], [10, 10], [0, 10]]
 
@@ -93,3 +94,27 @@ def test_raster_match_with_nothing_extracted_has_recall_zero():
     truth[5, 2:8] = True
     precision, recall, f1 = raster_match(np.zeros_like(truth), truth)
     assert np.isnan(precision) and recall == 0.0 and f1 == 0.0
+
+
+def test_pixels_within_counts_one_direction_of_the_raster_scores():
+    rng = np.random.default_rng(5)
+    a, b = rng.random((40, 60)) < 0.05, rng.random((40, 60)) < 0.02
+    counts = raster_counts(a, b, tolerance_px=2.5)
+    assert pixels_within(a, b, 2.5) == counts[:2]
+    assert pixels_within(b, a, 2.5) == counts[2:]
+    # by brute force: the pixels of a with a pixel of b within 2.5 px
+    ra, rb = np.argwhere(a), np.argwhere(b)
+    near = (np.hypot(*(ra[:, None, :] - rb[None, :, :]).transpose(2, 0, 1)) <= 2.5).any(axis=1)
+    assert pixels_within(a, b, 2.5) == (int(near.sum()), int(a.sum()))
+    # a reference without pixels matches none; any nonzero value is a pixel
+    assert pixels_within(a, np.zeros_like(b), 2.5) == (0, int(a.sum()))
+    assert pixels_within(a.astype(np.uint8) * 255, b, 2.5) == counts[:2]
+
+
+@pytest.mark.parametrize("tolerance", [float("nan"), -1.0, float("inf")])
+def test_pixels_within_refuses_a_tolerance_that_is_no_distance(tolerance):
+    a = np.ones((4, 4), bool)
+    with pytest.raises(ValueError, match="tolerance_px must be a finite distance"):
+        pixels_within(a, a, tolerance)
+    with pytest.raises(ValueError, match="mask and reference must be 2-D masks of one shape"):
+        pixels_within(a, np.ones((4, 5), bool), 1.0)

@@ -2,6 +2,7 @@
 
 import matplotlib.image
 import numpy as np
+import pytest
 
 from rockmass.dfn import TraceMap
 from rockmass.imaging.overlay import plot_overlay
@@ -34,3 +35,27 @@ def test_a_large_photo_is_shown_area_averaged_not_strided(tmp_path):
     h, w = grey.shape
     inside = grey[int(0.25 * h):int(0.4 * h), int(0.3 * w):int(0.7 * w)]  # above the trace
     assert abs(float(np.median(inside)) - 0.5) < 0.1
+
+
+def test_the_photo_fills_the_figure_width_below_a_title_band(tmp_path):
+    # a white photo on the white figure, framed by reading where its traces' colour reaches: a
+    # trace along each edge of the photo marks its extent in the PNG
+    h, w = 300, 900
+    image = np.full((h, w), 255, dtype=np.uint8)
+    # v up: the top edge is v = h - 0.5, the bottom v = -0.5; traces 1 px inside the edges
+    traces = TraceMap.from_segments([[0.5, h - 1.5, w - 1.5, h - 1.5], [0.5, 0.5, w - 1.5, 0.5],
+                                     [0.5, 0.5, 0.5, h - 1.5], [w - 1.5, 0.5, w - 1.5, h - 1.5]],
+                                    {"confidence": [1.0] * 4})
+    path = tmp_path / "overlay.png"
+    plot_overlay(image, traces, path, m_per_px=1.0, title="t")
+    rgb = matplotlib.image.imread(path)[..., :3]
+    blue = (rgb[..., 2] > 0.4) & (rgb[..., 2] > rgb[..., 0] + 0.2)
+    rows, cols = np.flatnonzero(blue.any(axis=1)), np.flatnonzero(blue.any(axis=0))
+    height_px, width_px = rgb.shape[:2]
+    assert width_px == 1100  # 10 in at 110 dpi
+    # the photo spans the width but for a margin of about 0.05 in (5.5 px) each side
+    assert cols.min() <= 10 and cols.max() >= width_px - 11
+    # ... keeps its aspect ...
+    assert (rows.max() - rows.min()) / (cols.max() - cols.min()) == pytest.approx(h / w, rel=0.03)
+    # ... and sits at the bottom, below a band for the title
+    assert height_px - rows.max() <= 10 and rows.min() > 30
