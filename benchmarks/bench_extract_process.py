@@ -35,7 +35,7 @@ a 15 mm tolerance (3 px of a 5 mm scoring grid, the same grid at every size). A 
 smallest photo per detector is reported apart (imports, numba cache load; not with ``--quick``).
 Python's bytecode cache is on for the children, as it is for a package installed by pip, which
 compiles the modules at install: this machine sets ``PYTHONDONTWRITEBYTECODE``, under which an
-editable install compiles rockmass's modules in every run (about 0.1 s); without it they are
+editable install compiles rockmass's modules in every run; without it they are
 compiled once, into ``__pycache__`` beside the sources. With ``--quick`` one untimed run goes
 first, for the numba and bytecode caches.
 Targets (issue 20): >= 2 MP/s whole process at 12-24 MP on 2 cores, <= 2 GB, and dP21 / dP20 that
