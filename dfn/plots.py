@@ -41,13 +41,14 @@ def _segment_colours(trace_map, set_ids, unassigned: str) -> np.ndarray:
     return palette.reshape(-1, 4)[index.reshape(-1)]
 
 
-def _set_legend(ax, set_ids) -> None:
-    """A legend entry per assigned set, in the colours of :func:`_segment_colours` (none without sets)."""
+def _set_legend(ax, set_ids, **placement) -> None:
+    """A legend entry per assigned set, in the colours of :func:`_segment_colours` (none without
+    sets); ``placement``: matplotlib's legend placement (default: the axes' upper right)."""
     if set_ids is None:
         return
     for s in sorted(set(int(v) for v in np.asarray(set_ids) if v >= 0)):
         ax.plot([], [], color=f"C{s % 10}", label=f"set {s}")
-    ax.legend(fontsize=8, loc="upper right")
+    ax.legend(fontsize=8, **({"loc": "upper right"} | placement))
 
 
 def rose_petals(angles_deg, weights, bin_deg: float = 10.0):

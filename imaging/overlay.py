@@ -25,6 +25,9 @@ __all__ = ["plot_overlay"]
 
 #: Margin round the photo and height of the title band above it, inches.
 _MARGIN_IN, _TITLE_IN = 0.05, 0.4
+#: A photo band lower than this holds no legend column (ten sets at 8 pt), inches; the legend's
+#: single row below it then takes a band of this height.
+_LEGEND_COLUMN_IN, _LEGEND_ROW_IN = 2.2, 0.35
 
 
 def _shade_key(trace_map) -> str | None:
@@ -68,9 +71,13 @@ def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title
     width_in = 10.0
     photo_w_in = width_in - 2 * _MARGIN_IN
     photo_h_in = photo_w_in * h / w
-    height_in = photo_h_in + 2 * _MARGIN_IN + _TITLE_IN
+    # a photo band too low for the legend's column (a panorama): the legend goes in one row
+    # below the photo, in a band of its own
+    legend_below = set_ids is not None and photo_h_in < _LEGEND_COLUMN_IN
+    bottom_in = _MARGIN_IN + (_LEGEND_ROW_IN if legend_below else 0.0)
+    height_in = photo_h_in + bottom_in + _MARGIN_IN + _TITLE_IN
     fig = _figure((width_in, height_in), layout=None)
-    ax = fig.add_axes((_MARGIN_IN / width_in, _MARGIN_IN / height_in, photo_w_in / width_in,
+    ax = fig.add_axes((_MARGIN_IN / width_in, bottom_in / height_in, photo_w_in / width_in,
                        photo_h_in / height_in))
     ax.imshow(shown, cmap="gray", extent=(-0.5, w - 0.5, h - 0.5, -0.5), interpolation="antialiased")
     segments, shade_key = trace_map.segments(), _shade_key(trace_map)
@@ -90,7 +97,8 @@ def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title
         area = 0.5 * abs(np.dot(x[:-1], y[1:]) - np.dot(x[1:], y[:-1]))
         if area < 0.995 * h * w:
             ax.plot(x, y, color="#ffd400", linewidth=1.0, linestyle="--", label="_window")
-    _set_legend(ax, set_ids)
+    _set_legend(ax, set_ids, **(dict(loc="upper right", bbox_to_anchor=(1.0, 0.0), ncols=10)
+                                if legend_below else {}))
     ax.set_xlim(-0.5, w - 0.5)
     ax.set_ylim(h - 0.5, -0.5)
     ax.set_axis_off()

@@ -59,3 +59,23 @@ def test_the_photo_fills_the_figure_width_below_a_title_band(tmp_path):
     assert (rows.max() - rows.min()) / (cols.max() - cols.min()) == pytest.approx(h / w, rel=0.03)
     # ... and sits at the bottom, below a band for the title
     assert height_px - rows.max() <= 10 and rows.min() > 30
+
+
+@pytest.mark.parametrize("shape", [(40, 2000), (600, 900)])
+def test_the_legend_stays_inside_the_figure_of_a_panorama_or_a_photo(tmp_path, monkeypatch, shape):
+    # a 50:1 panorama leaves the photo band 0.2 in high, lower than a legend of ten sets
+    from matplotlib.figure import Figure
+
+    saved = []
+    original = Figure.savefig
+    monkeypatch.setattr(Figure, "savefig", lambda fig, *a, **k: saved.append(fig) or original(fig, *a, **k))
+    h, w = shape
+    segments = [[w * k / 12, 5, w * (k + 1) / 12, h - 5] for k in range(10)]
+    traces = TraceMap.from_segments(segments, {"confidence": [1.0] * 10})
+    plot_overlay(np.full(shape, 128, np.uint8), traces, tmp_path / "overlay.png", m_per_px=1.0,
+                 set_ids=np.arange(10))
+    fig = saved[-1]
+    legend = fig.axes[0].get_legend()
+    assert len(legend.get_texts()) == 10
+    box, frame = legend.get_window_extent(), fig.bbox
+    assert box.x0 >= frame.x0 and box.y0 >= frame.y0 and box.x1 <= frame.x1 and box.y1 <= frame.y1
