@@ -192,11 +192,10 @@ def main(argv=None) -> int:
         print(f"rendered in {time.perf_counter() - t0:.1f} s; truth: {truth.n_traces} traces, "
               f"P21 {truth.total_length_m() / (FACE_WIDTH_M * FACE_HEIGHT_M):.3f} m/m2")
         out = folder / "out"
+        path, m_per_px, _ = photos[sizes[0]]
         if args.quick:  # no first-run rows: one untimed run fills the caches
-            path, m_per_px, _ = photos[sizes[0]]
             run_command(path, out, m_per_px, ["--detector", detectors[0]])
         for detector in detectors if not args.quick else ():  # first run per detector, apart
-            path, m_per_px, _ = photos[sizes[0]]
             res = run_command(path, out, m_per_px, ["--detector", detector])
             first.append({"detector": detector, "setting": "first run", "MP": sizes[0], **res,
                           **score(out, truth)})

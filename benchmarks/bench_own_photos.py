@@ -36,14 +36,17 @@ COLUMNS = [("model", "s"), ("photos", "d"), ("train_s", ".1f"), ("model_bytes", 
            ("moderate_F1", ".3f"), ("moderate_dP21_%", "+.1f")]
 
 
-def train(photos: list[Path], folder: Path, *, synthetic: bool, label_of=None) -> tuple[Path, float]:
+def train_label(photo: Path) -> Path:
+    """The label of a photo of the labelled set's ``train/``."""
+    return DATA / "train" / "labels" / f"{photo.stem}.png"
+
+
+def train(photos: list[Path], folder: Path, *, synthetic: bool,
+          label_of=train_label) -> tuple[Path, float]:
     """Train a pixel model on ``photos``, with or without the shipped recipe's synthetic faces;
-    (model path, seconds). ``label_of(photo)`` is the label file of a photo (default: the one
-    beside it in the labelled set's ``train/labels``)."""
+    (model path, seconds). ``label_of(photo)`` is the label file of a photo."""
     from rockmass.imaging.train_pixel_model import main as train_pixel_model
 
-    if label_of is None:
-        label_of = lambda photo: DATA / "train" / "labels" / f"{photo.stem}.png"  # noqa: E731
     images, labels = folder / f"images_{len(photos)}", folder / f"labels_{len(photos)}"
     images.mkdir(parents=True)
     labels.mkdir()

@@ -1226,28 +1226,23 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     levels = (grid_levels.usable_levels(params.learned_levels, work_shape)
               if uses_learned and trace_score.scoring() else ())
 
-    def trace_map(run: _Found, detector: str, width_px: float):  # input pixels or metres
-        rows, cols = run.flat.shape
-        grid_factor = float(np.sqrt(rows / h * cols / w))
-        chains_in = grid_levels.to_grid(run.chains, (rows, cols), (h, w))
-        traces = vectorize.to_trace_map(
-            chains_in, height_px=h, m_per_px=scale, window_uv_m=window,
-            tolerance_px=given_params.for_detector(detector).on_grid(scale_of_grid)
-            .simplify_tolerance_px / grid_factor,
-            frame="face", attributes={"confidence": vectorize.mean_along(run.chains, run.response),
-                                      "contrast": run.contrast,
-                                      "band_width_px": run.band_px / grid_factor})
-        return _with_joint_score(traces, detector, m_per_px=scale,
-                                 joint_width_px=width_px / grid_factor)
-
     def detect(detector, image, detector_clock, level=1):  # (the run, its traces)
         width = learned_width_on(level) if detector == "learned" else width_work
         level_mask, shape = mask, work_shape
         if level > 1:  # a coarser grid (§3.4)
             image, level_mask, shape = grid_levels.coarsen(image, mask, level)
-        run = _detect(image, params.for_detector(detector).on_grid(scale_of_grid), width,
-                      level_mask, band_px / level, shape, detector_clock)
-        traces = trace_map(run, detector, width)
+        grid_params = given_params.for_detector(detector).on_grid(scale_of_grid)
+        run = _detect(image, grid_params, width, level_mask, band_px / level, shape, detector_clock)
+        # the traces in input pixels or metres
+        grid_factor = float(np.sqrt(shape[0] / h * shape[1] / w))
+        traces = vectorize.to_trace_map(
+            grid_levels.to_grid(run.chains, shape, (h, w)), height_px=h, m_per_px=scale,
+            window_uv_m=window, tolerance_px=grid_params.simplify_tolerance_px / grid_factor,
+            frame="face", attributes={"confidence": vectorize.mean_along(run.chains, run.response),
+                                      "contrast": run.contrast,
+                                      "band_width_px": run.band_px / grid_factor})
+        traces = _with_joint_score(traces, detector, m_per_px=scale,
+                                   joint_width_px=width / grid_factor)
         detector_clock.lap("vectorize", report=False)  # the step ends once a detector is kept
         return run, traces
 
@@ -1265,13 +1260,13 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     with ThreadPoolExecutor(max_workers=1) as pool:
         try:
             ridge = pool.submit(timed, detect, "ridge", grey) if params.detector == AUTO else None
-            coarser = {level: pool.submit(timed, detect, "learned", grey, level=level)
+            pending = {level: pool.submit(timed, detect, "learned", grey, level=level)
                        for level in levels}
             main_detector = "learned" if uses_learned else params.detector
-            found = {main_detector: detect(main_detector, grey, clock)}
+            detected = {main_detector: detect(main_detector, grey, clock)}  # (run, traces)
             if ridge is not None:
-                found["ridge"] = ridge.result()
-            coarser = {level: future.result() for level, future in coarser.items()}
+                detected["ridge"] = ridge.result()
+            coarser = {level: future.result() for level, future in pending.items()}
         except BaseException:  # an error or Ctrl-C: the side tasks not begun are dropped
             pool.shutdown(wait=True, cancel_futures=True)
             raise
@@ -1279,8 +1274,8 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     for side_clock in side_clocks:
         clock.add(side_clock)
     del grey
-    maps = {detector: traces for detector, (_, traces) in found.items()}
-    found = {detector: run for detector, (run, _) in found.items()}
+    found = {detector: run for detector, (run, _) in detected.items()}
+    maps = {detector: traces for detector, (_, traces) in detected.items()}
 
     level_record, level = None, 1
     if uses_learned:

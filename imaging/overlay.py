@@ -97,8 +97,7 @@ def plot_overlay(image, trace_map, path, *, m_per_px: float, set_ids=None, title
         area = 0.5 * abs(np.dot(x[:-1], y[1:]) - np.dot(x[1:], y[:-1]))
         if area < 0.995 * h * w:
             ax.plot(x, y, color="#ffd400", linewidth=1.0, linestyle="--", label="_window")
-    _set_legend(ax, set_ids, **(dict(loc="upper right", bbox_to_anchor=(1.0, 0.0), ncols=10)
-                                if legend_below else {}))
+    _set_legend(ax, set_ids, **(dict(bbox_to_anchor=(1.0, 0.0), ncols=10) if legend_below else {}))
     ax.set_xlim(-0.5, w - 0.5)
     ax.set_ylim(h - 0.5, -0.5)
     ax.set_axis_off()
