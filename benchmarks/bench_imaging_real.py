@@ -97,6 +97,8 @@ import numpy as np
 
 from _common import header, save, table
 
+from rockmass.imaging.metrics import summarise_counts
+
 DATA = Path(os.environ.get("ROCKMASS_REAL_DATA",
                            Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
                            / "rock-face-fractures")).resolve()
@@ -202,21 +204,6 @@ def _extraction_real(image_path: Path, shape, params, joint_width_px, upsample: 
                          params=params)
         _EXTRACTIONS[key] = (result, time.perf_counter() - t0)
     return _EXTRACTIONS[key]
-
-
-def summarise_counts(counts) -> dict:
-    """Scores of a set of images from their :func:`~rockmass.imaging.metrics.raster_counts`
-    (matched drawn, drawn, matched true, true pixels per image): the means over images of F1,
-    precision and recall (F1 = 0 for an image with nothing drawn), the pooled F1 over all pixels,
-    and dP21 = drawn / true line length - 1 over all images, %."""
-    c = np.array(counts, dtype=float).reshape(-1, 4)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        p, r = c[:, 0] / c[:, 1], c[:, 2] / c[:, 3]
-        f = np.where(p + r > 0, 2 * p * r / (p + r), 0.0)
-    pp, pr = c[:, 0].sum() / max(c[:, 1].sum(), 1), c[:, 2].sum() / max(c[:, 3].sum(), 1)
-    return dict(F1=float(np.nanmean(f)), P=float(np.nanmean(p)), R=float(np.nanmean(r)),
-                F1_pooled=float(2 * pp * pr / max(pp + pr, 1e-12)),
-                dP21_pct=float(100 * (c[:, 1].sum() / max(c[:, 3].sum(), 1) - 1)))
 
 
 def score_real(pairs, params, joint_width_px: float | None, min_joint_score=None,

@@ -10,7 +10,9 @@ that user with ``../shared/data/rock-face-fractures`` (AGPL-3.0, read from the s
 models it trains stay in a temporary folder and are never shipped): it trains on the first n
 photos of ``train/`` (sorted by name; photos only, ``--faces 0``; and all 99 with the synthetic
 faces of the shipped recipe too) and scores each model on the 44 photos of ``val/`` at the
-detector's default thresholds and filters (chosen for the shipped model), F1 / P / R at 5 px,
+detector's default thresholds and filters (chosen for the shipped model), and the photos-only
+model of all 99 at the hysteresis levels and length floor ``--choose-back-end 5`` chose for it
+on ``train/`` (:mod:`rockmass.imaging.site_back_end`; not with ``--quick``), F1 / P / R at 5 px,
 ΔP21 and ΔP20 as in ``bench_imaging_real.py``, beside the shipped model (synthetic faces only);
 then on the plain synthetic moderate faces (seeds 1-3, buffered F1 at 3 px). Prints the training
 time and the model size. Skips (exit 0) when the data folder is absent.
@@ -33,7 +35,11 @@ from bench_imaging_real import DATA, real_pairs, score_real, score_synthetic  # 
 
 COLUMNS = [("model", "s"), ("photos", "d"), ("train_s", ".1f"), ("model_bytes", "d"), ("F1", ".3f"),
            ("P", ".3f"), ("R", ".3f"), ("dP21_pct", "+.0f"), ("dP20_pct", "+.0f"),
-           ("moderate_F1", ".3f"), ("moderate_dP21_%", "+.1f")]
+           ("moderate_F1", ".3f"), ("moderate_dP21_%", "+.1f"), ("chosen", "s"), ("cv_F1", ".3f")]
+#: Folds of the back-end choice on train/ (train_pixel_model --choose-back-end).
+BACK_END_FOLDS = 5
+#: The settings it chooses, in the order the table prints them.
+CHOSEN = ("prob_low", "prob_high", "min_trace_length_px")
 
 
 def train_label(photo: Path) -> Path:
@@ -41,10 +47,12 @@ def train_label(photo: Path) -> Path:
     return DATA / "train" / "labels" / f"{photo.stem}.png"
 
 
-def train(photos: list[Path], folder: Path, *, synthetic: bool,
-          label_of=train_label) -> tuple[Path, float]:
+def train(photos: list[Path], folder: Path, *, synthetic: bool, label_of=train_label,
+          choose_back_end: int | None = None) -> tuple[Path, float]:
     """Train a pixel model on ``photos``, with or without the shipped recipe's synthetic faces;
-    (model path, seconds). ``label_of(photo)`` is the label file of a photo."""
+    (model path, seconds). ``label_of(photo)`` is the label file of a photo. With
+    ``choose_back_end`` = K the back end is chosen for it by K-fold cross-validation on the photos
+    (``--choose-back-end K``; the model's ``info["back_end"]``)."""
     from rockmass.imaging.train_pixel_model import main as train_pixel_model
 
     images, labels = folder / f"images_{len(photos)}", folder / f"labels_{len(photos)}"
@@ -56,8 +64,10 @@ def train(photos: list[Path], folder: Path, *, synthetic: bool,
         (labels / f"{photo.stem}{label.suffix}").symlink_to(label)
     out = folder / f"model_{len(photos)}_{'mixed' if synthetic else 'photos'}.npz"
     args = ["--photos", str(images), "--labels", str(labels), "--out", str(out)]
+    if choose_back_end is not None:
+        args += ["--choose-back-end", str(choose_back_end)]
     t0 = time.perf_counter()
-    with contextlib.redirect_stdout(io.StringIO()):  # its report of the fit
+    with contextlib.redirect_stdout(io.StringIO()):  # its report of the fit (progress goes to stderr)
         train_pixel_model(args if synthetic else ["--faces", "0", *args])
     return out, time.perf_counter() - t0
 
@@ -66,7 +76,7 @@ def main(argv=None) -> int:
     import cv2
 
     from rockmass.imaging.extract import ExtractParams
-    from rockmass.imaging.learned import MODEL_FILE
+    from rockmass.imaging.learned import MODEL_FILE, load_model
     from rockmass.imaging.synthetic import synthetic_face
 
     cv2.setNumThreads(1)
@@ -89,8 +99,8 @@ def main(argv=None) -> int:
     def moderate(seed):
         return synthetic_face("moderate", seed=seed, shape_px=(1000, 1500), m_per_px=0.008)
 
-    def row(label, model, n_photos, seconds):
-        params = ExtractParams(pixel_model=None if model is None else str(model))
+    def row(label, model, n_photos, seconds, settings=None):
+        params = ExtractParams(pixel_model=None if model is None else str(model), **(settings or {}))
         real = score_real(val, params, 3.0)
         plain = score_synthetic(moderate, seeds, params)
         path = MODEL_FILE if model is None else model
@@ -107,9 +117,22 @@ def main(argv=None) -> int:
         (folder / "mixed").mkdir()
         model, seconds = train(photos, folder / "mixed", synthetic=True)
         rows.append(row("all train/ photos + synthetic faces", model, len(photos), seconds))
+        if not args.quick:  # the back end chosen for the photos-only model on train/
+            (folder / "chosen").mkdir()
+            model, seconds = train(photos, folder / "chosen", synthetic=False,
+                                   choose_back_end=BACK_END_FOLDS)
+            back_end = load_model(model).info["back_end"]
+            chosen = back_end["settings"]
+            rows.append({**row(f"all train/ photos, back end chosen ({BACK_END_FOLDS}-fold)", model,
+                               len(photos), seconds, chosen),
+                         "chosen": "/".join(f"{chosen[name]:g}" for name in CHOSEN),
+                         "cv_F1": back_end["cross_validated"]["F1"]})
     print(f"\nval/ ({len(val)} photos, never trained on; 5 px; detector defaults) and plain synthetic "
           f"moderate faces (seeds {seeds}, 3 px)")
     print(table(rows, COLUMNS))
+    print(f"\nchosen: {'/'.join(CHOSEN)} chosen by --choose-back-end {BACK_END_FOLDS} on train/ (the "
+          "row is scored with them); cv_F1: the F1 its cross-validation reported on train/ (the "
+          "best of the settings tried: optimistic)")
     path = save("bench_own_photos_quick" if args.quick else "bench_own_photos", {"rows": rows})
     print(f"\nrows saved to {path}")
     return 0

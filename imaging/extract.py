@@ -1315,6 +1315,12 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     params = given_params.for_detector(kept).on_grid(scale_of_grid)
     chains, contrast, band, flat, response, binary, skeleton, pruned, face_contrast = found[kept]
     notes += _low_contrast_notes(face_contrast, params)
+    if kept == "learned":
+        from .site_back_end import unused_settings_note
+
+        note = unused_settings_note(learned.load_model(given_params.pixel_model).info,
+                                    given_params.for_detector("learned"))
+        notes += [] if note is None else [note]
     traces = maps[kept]
     clock.lap("vectorize")
 

@@ -229,7 +229,9 @@ def model_record(path=None) -> dict:
     """Which model a result came from, for its summary: ``file`` (resolved path), ``shipped``
     (bool: the model of the package), ``sha256`` of the file, ``trained_on`` (the ``data`` entry
     of its ``info``) and ``input_stretch`` (``min_face_spread`` and ``max_stretch`` of the stretch
-    its training faces went through, :attr:`PixelModel.input_stretch`; None when not recorded).
+    its training faces went through, :attr:`PixelModel.input_stretch`; None when not recorded) and
+    ``back_end`` (the settings chosen for it by ``train_pixel_model --choose-back-end``, docs/imaging.md
+    §3.2; None when not chosen).
     The model is loaded (and checked) as :func:`load_model` does; the file is hashed once per
     path, like the model it caches."""
     import hashlib
@@ -241,7 +243,8 @@ def model_record(path=None) -> dict:
                          "sha256": hashlib.sha256(Path(key).read_bytes()).hexdigest(),
                          "trained_on": model.info.get("data"),
                          "input_stretch": None if model.input_stretch is None
-                         else dict(zip(("min_face_spread", "max_stretch"), model.input_stretch))}
+                         else dict(zip(("min_face_spread", "max_stretch"), model.input_stretch)),
+                         "back_end": (model.info.get("back_end") or {}).get("settings")}
     return dict(_RECORDS[key])
 
 

@@ -21,7 +21,8 @@ import numpy as np
 from .frame import check_scale, uv_to_rc
 
 __all__ = ["Accuracy", "trace_accuracy", "buffered_match", "raster_match", "raster_counts",
-           "pixels_within", "render_chains", "render_traces", "count_nodes", "set_mean_angles"]
+           "pixels_within", "summarise_counts", "image_f1", "render_chains", "render_traces",
+           "count_nodes", "set_mean_angles"]
 
 
 @dataclass(frozen=True)
@@ -150,6 +151,61 @@ def raster_counts(extracted, truth, *, tolerance_px: float = 5.0) -> tuple[int, 
     """
     pred, true = _checked_masks(extracted, truth, tolerance_px, "extracted and truth")
     return (*_pixels_within(pred, true, tolerance_px), *_pixels_within(true, pred, tolerance_px))
+
+
+def summarise_counts(counts) -> dict:
+    """Scores of a set of labelled images from their :func:`raster_counts` (matched drawn, drawn,
+    matched true, true pixels per image).
+
+    Returns
+    -------
+    dict
+        ``F1``, ``P``, ``R``: the means over the images of the F1, precision and recall of
+        :func:`raster_match` (F1 = 0 for an image with nothing drawn; an image without drawn
+        or true pixels leaves its precision or recall out of the mean, NaN when no image has
+        any); ``F1_pooled``: the F1 of
+        the pixels pooled over all images; ``dP21_pct``: drawn / true line length - 1 over all
+        images, in % (the length of 1-px lines is their pixel count, to a constant factor that
+        cancels).
+
+    Examples
+    --------
+    >>> s = summarise_counts([(8, 10, 8, 8), (0, 0, 0, 4)])
+    >>> round(s["F1"], 3), round(s["P"], 3), s["R"], s["dP21_pct"]
+    (0.444, 0.8, 0.5, -16.666666666666664)
+    """
+    c = np.array(counts, dtype=float).reshape(-1, 4)
+    p, r, f = _image_scores(c)
+    pp, pr = c[:, 0].sum() / max(c[:, 1].sum(), 1), c[:, 2].sum() / max(c[:, 3].sum(), 1)
+    return dict(F1=float(np.mean(f)), P=_mean_defined(p), R=_mean_defined(r),
+                F1_pooled=float(2 * pp * pr / max(pp + pr, 1e-12)),
+                dP21_pct=float(100 * (c[:, 1].sum() / max(c[:, 3].sum(), 1) - 1)))
+
+
+def image_f1(counts) -> np.ndarray:
+    """The F1 of each image from its :func:`raster_counts` (rows of four), 0 for an image with
+    nothing drawn: the values :func:`summarise_counts` averages.
+
+    Examples
+    --------
+    >>> image_f1([(8, 10, 8, 8), (0, 0, 0, 4)]).round(3).tolist()
+    [0.889, 0.0]
+    """
+    return _image_scores(np.array(counts, dtype=float).reshape(-1, 4))[2]
+
+
+def _image_scores(c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-image precision, recall (NaN when undefined) and F1 (0 then) of (n, 4) counts."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        p, r = c[:, 0] / c[:, 1], c[:, 2] / c[:, 3]
+        f = np.where(p + r > 0, 2 * p * r / (p + r), 0.0)
+    return p, r, f
+
+
+def _mean_defined(values: np.ndarray) -> float:
+    """The mean of the values that are not NaN; NaN (without a warning) when none is."""
+    defined = values[~np.isnan(values)]
+    return float(defined.mean()) if defined.size else float("nan")
 
 
 def pixels_within(mask, reference, tolerance_px: float) -> tuple[int, int]:

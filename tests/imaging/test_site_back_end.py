@@ -1,0 +1,248 @@
+"""The learned detector's back end chosen for a site model by cross-validation
+(rockmass.imaging.site_back_end, train_pixel_model --choose-back-end), and what extract says when a
+model's chosen settings are not used."""
+
+import json
+import os
+import subprocess
+import sys
+import tomllib
+
+import cv2
+import numpy as np
+import pytest
+
+from rockmass.imaging.extract import ExtractParams, extract
+from rockmass.imaging.learned import MODEL_FILE, load_model, model_record
+from rockmass.imaging.site_back_end import (BACK_END_GRID, BackEndScore, choose_back_end,
+                                            choose_setting, fold_of)
+from rockmass.imaging.train_pixel_model import main as train
+
+JOINT_PX = 40  # every joint of the photos below is this long: a length floor above it drops all
+CELL_PX = 70
+
+
+def _short_joint_photo(seed, cells=(3, 4)):
+    """A textured grey face with one dark straight joint 3 px wide and JOINT_PX long in each
+    CELL_PX cell, at a random angle (none touches another), and its label (white on black)."""
+    rng = np.random.default_rng(seed)
+    shape = (cells[0] * CELL_PX, cells[1] * CELL_PX)
+    rock = cv2.GaussianBlur(rng.normal(0, 1, shape).astype(np.float32), (0, 0), 2.0)
+    image = 0.55 + 0.05 * rock / rock.std()
+    label = np.zeros(shape, np.uint8)
+    for row in range(cells[0]):
+        for col in range(cells[1]):
+            centre = np.array([(col + 0.5) * CELL_PX, (row + 0.5) * CELL_PX])
+            angle = rng.uniform(0, np.pi)
+            half = 0.5 * JOINT_PX * np.array([np.cos(angle), np.sin(angle)])
+            a, b = (tuple(int(round(v)) for v in centre - half),
+                    tuple(int(round(v)) for v in centre + half))
+            cv2.line(image, a, b, 0.2, 3)
+            cv2.line(label, a, b, 255, 3)
+    return (np.clip(image, 0, 1) * 255).astype(np.uint8), label
+
+
+@pytest.fixture(scope="module")
+def short_joints(tmp_path_factory):
+    root = tmp_path_factory.mktemp("short_joints")
+    (root / "photos").mkdir()
+    (root / "labels").mkdir()
+    pairs = []
+    for seed in range(10):
+        image, label = _short_joint_photo(seed)
+        photo, mask = root / "photos" / f"s{seed}.png", root / "labels" / f"s{seed}.png"
+        cv2.imwrite(str(photo), image)
+        cv2.imwrite(str(mask), label)
+        pairs.append((photo, mask))
+    return root, pairs
+
+
+FLOORS = [{"prob_low": 0.8, "prob_high": 0.97, "min_trace_length_px": floor}
+          for floor in (70.0, 50.0, 30.0)]
+
+
+def test_a_length_floor_longer_than_every_joint_is_replaced_by_one_that_keeps_them(short_joints):
+    _, pairs = short_joints
+    calls = []
+
+    def shipped(train_pairs, fold):  # any model will do: the floor decides
+        calls.append((fold, [p for p, _ in train_pairs]))
+        return MODEL_FILE
+
+    choice = choose_back_end(pairs, shipped, folds=3, grid=FLOORS)
+    # the defaults (70 px) draw next to nothing on joints 40 px long (a few traces are joined
+    # across cells); only the 30 px floor keeps them
+    assert choice.site_defaults.f1 < 0.1 and choice.site_defaults.dp21_pct < -90
+    assert choice.scores[1].f1 < 0.5 * choice.chosen.f1
+    assert choice.settings["min_trace_length_px"] == 30.0
+    assert choice.chosen.f1 > 0.8 and abs(choice.chosen.dp21_pct) < 25
+    # each photo is scored once, by the fold that left it out of training
+    assert len(choice.chosen.photo_f1) == len(pairs) == choice.photos
+    photos = [p for p, _ in pairs]
+    for fold, trained_on in calls:
+        held = {photos[k] for k in range(len(photos)) if fold_of(k, 3) == fold}
+        assert held.isdisjoint(trained_on) and held | set(trained_on) == set(photos)
+    # the shipped model at the given settings is the same model here: the same scores
+    assert choice.shipped.photo_f1 == choice.site_defaults.photo_f1
+
+
+def test_the_given_settings_stay_unless_a_setting_beats_them_by_more_than_one_standard_error():
+    given = BackEndScore({"s": "given"}, 0.60, 0.6, 0.6, -5.0, (0.5, 0.6, 0.7, 0.6))
+    tiny = BackEndScore({"s": "tiny"}, 0.61, 0.6, 0.6, -5.0, (0.7, 0.4, 0.72, 0.62))
+    clear = BackEndScore({"s": "clear"}, 0.65, 0.6, 0.6, -5.0, (0.56, 0.64, 0.76, 0.64))
+    assert choose_setting([tiny], given) is given  # mean gain 0.01, standard error 0.1
+    assert choose_setting([tiny, clear], given) is clear
+    # a length error within 15 % wins over the given settings' outside it, at any F1 gain
+    long_given = BackEndScore({"s": "given"}, 0.60, 0.6, 0.6, +40.0, given.photo_f1)
+    level = BackEndScore({"s": "level"}, 0.60, 0.6, 0.6, +10.0, given.photo_f1)
+    assert choose_setting([level], long_given) is level
+    with pytest.raises(ValueError, match="no settings"):
+        choose_setting([], given)
+
+
+def test_a_score_with_nothing_drawn_is_recorded_as_json_without_nan():
+    nothing = BackEndScore({"s": 1}, 0.0, float("nan"), 0.0, -100.0, (0.0, 0.0))
+    record = nothing.record()
+    assert record["P"] is None and record["F1"] == 0.0
+    json.dumps(record, allow_nan=False)
+
+
+def test_folds_must_be_between_two_and_the_number_of_photos(short_joints):
+    _, pairs = short_joints
+    for folds in (1, 11, 2.5):
+        with pytest.raises(ValueError, match="folds must be an integer from 2 to the number"):
+            choose_back_end(pairs, lambda p, f: MODEL_FILE, folds=folds)
+
+
+def test_the_default_grid_holds_the_defaults_and_keeps_the_levels_ordered():
+    defaults = ExtractParams(detector="learned")
+    given = {name: defaults.resolved(name) for name in BACK_END_GRID[0]}
+    assert given in [dict(s) for s in BACK_END_GRID]
+    assert all(s["prob_low"] <= s["prob_high"] for s in BACK_END_GRID)
+    assert len({tuple(s.values()) for s in BACK_END_GRID}) == len(BACK_END_GRID)
+
+
+@pytest.fixture(scope="module")
+def chosen_model(short_joints):
+    """A photos-only site model whose back end the command chose, and its printed report."""
+    root, _ = short_joints
+    out = root / "site.npz"
+    config = root / "base.toml"
+    config.write_text('[imaging.params]\nmin_trace_contrast = 0.1\npixel_model = "ignored.npz"\n')
+    done = subprocess.run(
+        [sys.executable, "-m", "rockmass.imaging.train_pixel_model", "--faces", "0", "--epochs", "3",
+         "--photos", str(root / "photos"), "--labels", str(root / "labels"), "--out", str(out),
+         "--choose-back-end", "2", "--config", str(config)],
+        capture_output=True, text=True, env={**os.environ, "OMP_NUM_THREADS": "1"}, check=True)
+    return out, done.stdout, done.stderr
+
+
+def test_the_command_records_the_choice_and_prints_a_config_that_reproduces_it(chosen_model):
+    out, stdout, stderr = chosen_model
+    back_end = load_model(out).info["back_end"]
+    assert back_end["folds"] == 2 and back_end["photos"] == 10
+    assert back_end["settings"]["min_trace_length_px"] == 30.0  # the joints are 40 px long
+    assert back_end["site_model_at_given_settings"]["F1"] < 0.1
+    assert back_end["cross_validated"]["F1"] > 0.5
+    assert "fold 2/2" in stderr
+    assert model_record(out)["back_end"] == back_end["settings"]
+    # the snippet is TOML whose settings ExtractParams takes, the model path and the choice
+    snippet = stdout[stdout.index("[imaging.params]"):stdout.index("\nwrote ")]
+    params = tomllib.loads(snippet)["imaging"]["params"]
+    assert params.pop("pixel_model") == str(out)
+    assert params == back_end["settings"]
+    ExtractParams(**params)
+
+
+def test_extract_warns_when_the_settings_chosen_for_its_model_are_not_used(chosen_model):
+    out, _, _ = chosen_model
+    image, _ = _short_joint_photo(50)
+    default = extract(image, m_per_px=0.01, params=ExtractParams(pixel_model=str(out)))
+    [note] = [w for w in default.warnings if "chosen for it by cross-validation" in w]
+    assert "min_trace_length_px = 70" in note and "set them in [imaging.params]" in note
+    settings = load_model(out).info["back_end"]["settings"]
+    used = extract(image, m_per_px=0.01, params=ExtractParams(pixel_model=str(out), **settings))
+    assert not [w for w in used.warnings if "cross-validation" in w]
+    assert used.traces.n_traces > default.traces.n_traces
+    shipped = extract(image, m_per_px=0.01, params=ExtractParams(detector="learned"))
+    assert not [w for w in shipped.warnings if "cross-validation" in w]
+
+
+@pytest.mark.parametrize("config, message", [
+    ('[imaging.params]\nmin_trace_contrst = 0.1\n',
+     "imaging.params.min_trace_contrst is not a setting of rockmass extract"),
+    ('[imaging.params]\nprob_low = 2\n', "imaging.params.prob_low must be a probability in 0-1"),
+    ('[imaging.params\n', "cannot read it as TOML"),
+])
+def test_a_config_the_choice_cannot_start_from_is_refused_by_file_and_field(config, message,
+                                                                          short_joints, tmp_path,
+                                                                          capsys):
+    root, _ = short_joints
+    path = tmp_path / "bad.toml"
+    path.write_text(config)
+    with pytest.raises(SystemExit) as stop:
+        train(["--faces", "0", "--photos", str(root / "photos"), "--labels", str(root / "labels"),
+               "--out", str(tmp_path / "m.npz"), "--choose-back-end", "2", "--config", str(path)])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert f"--config {path}" in err and message in err
+    assert not (tmp_path / "m.npz").exists()
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--choose-back-end"], "chooses settings on your labelled --photos"),
+    (["--config", "c.toml"], "--config goes with --choose-back-end"),
+    (["--choose-back-end", "11"], "FOLDS must be from 2 to the number of labelled photos (10)"),
+])
+def test_back_end_options_that_cannot_work_are_refused(args, message, short_joints, tmp_path, capsys):
+    root, _ = short_joints
+    photos = ["--photos", str(root / "photos"), "--labels", str(root / "labels"),
+              "--out", str(tmp_path / "m.npz")]
+    with pytest.raises(SystemExit) as stop:
+        train(["--faces", "0", *(photos if "11" in args else []), *args])
+    assert stop.value.code == 2
+    assert message in capsys.readouterr().err
+
+
+FIT_SCRIPT = """
+import numpy as np
+from rockmass.imaging.train_pixel_model import fit_mlp
+rng = np.random.default_rng(0)
+x = rng.normal(size=(6000, 27)).astype(np.float32)
+y = (x[:, 0] + 0.5 * x[:, 1] > 0).astype(np.float32)
+mean, std, weights, biases = fit_mlp(x, y, epochs=2, seed=1)
+print(np.concatenate([w.ravel() for w in weights + biases]).astype(np.float32).tobytes().hex())
+"""
+
+
+def test_a_fit_gives_the_same_weights_whatever_the_number_of_blas_threads():
+    fits = []
+    for threads in ("1", "2"):
+        env = {**os.environ, "OPENBLAS_NUM_THREADS": threads, "OMP_NUM_THREADS": threads}
+        done = subprocess.run([sys.executable, "-c", FIT_SCRIPT], capture_output=True, text=True,
+                              env=env, check=True)
+        fits.append(done.stdout.strip())
+    assert fits[0] == fits[1]
+
+
+def test_model_records_are_json(chosen_model):
+    out, _, _ = chosen_model
+    json.dumps(model_record(out), allow_nan=False)
+
+
+def test_the_printed_config_runs_rockmass_extract_with_the_chosen_settings(chosen_model, tmp_path):
+    from rockmass.cli import main as cli
+
+    out, stdout, _ = chosen_model
+    snippet = stdout[stdout.index("[imaging.params]"):stdout.index("\nwrote ")]
+    config = tmp_path / "site.toml"
+    config.write_text(snippet + "\n")
+    image, _ = _short_joint_photo(51)
+    photo = tmp_path / "face.png"
+    cv2.imwrite(str(photo), image)
+    assert cli(["extract", str(photo), "--m-per-px", "0.01", "--config", str(config),
+                "--out", str(tmp_path / "out"), "--json"]) == 0
+    extraction = json.loads((tmp_path / "out" / "summary.json").read_text())["extraction"]
+    assert extraction["detector_model"]["file"] == str(out.resolve())
+    assert extraction["params"]["min_trace_length_px"] == 30.0
+    assert not [w for w in extraction["warnings"] if "cross-validation" in w]
