@@ -30,11 +30,13 @@ in two folds fixed beforehand: a pixel model is trained on the first ten tiles b
 pixels at least two geologists marked; photos only, ``--faces 0``, and with the shipped recipe's
 synthetic faces) and scored on the other ten against each geologist, then the other way round,
 beside the shipped model on the same tiles, at the learned detector's default thresholds and
-filters; each site model is trained with ``--choose-back-end 5``, which also chooses its
+filters. Each site model is trained with ``--choose-back-end 5``, which also chooses its
 hysteresis levels and length floor by cross-validation on its ten training tiles
-(:mod:`rockmass.imaging.site_back_end`), and is scored again with them, the F1 the choice
-reported on the training tiles beside the held-out one. The models stay in a temporary folder. Rows also go to
-benchmarks/results/bench_imaging_outcrop.json (``..._site_models.json`` with ``--site-models``).
+(:mod:`rockmass.imaging.site_back_end`), and is scored again with them; the shipped model too
+gets its back end chosen on the training tiles (no model trained). The F1 each choice reported
+on the training tiles is printed beside the held-out one. The models stay in a temporary
+folder. Rows also go to benchmarks/results/bench_imaging_outcrop.json
+(``..._site_models.json`` with ``--site-models``).
 """
 
 from __future__ import annotations
@@ -56,8 +58,6 @@ DATA = Path(__file__).resolve().parent / "data" / "marques2022"
 GEOLOGISTS = ("O1", "O2", "O3")
 #: Folds of the back-end choice on a site model's ten training tiles (two tiles each).
 SITE_FOLDS = 5
-#: The settings chosen, in the order the table prints them.
-CHOSEN = ("prob_low", "prob_high", "min_trace_length_px")
 
 
 def tiles() -> list[Path]:
@@ -136,13 +136,14 @@ def auto_choice(params) -> dict:
 
 def site_model_rows(folder: Path, majority: Path) -> list[dict]:
     """Two-fold site models (see the module notes): per fold and model, the scores on the held-out
-    ten tiles against each geologist, with the training time; for the models whose back end was
-    chosen on their ten training tiles, the settings chosen and the F1 the choice's
-    cross-validation reported there (optimistic) beside the held-out F1."""
-    from bench_own_photos import train
+    ten tiles against each geologist, with the training time; for the back ends chosen on the ten
+    training tiles, the settings chosen and the F1 the choice's cross-validation reported there
+    (optimistic) beside the held-out F1."""
+    from bench_own_photos import chosen_text, train
 
     from rockmass.imaging.extract import ExtractParams
-    from rockmass.imaging.learned import load_model
+    from rockmass.imaging.learned import MODEL_FILE, load_model
+    from rockmass.imaging.site_back_end import choose_back_end
 
     ordered = tiles()
     half = len(ordered) // 2
@@ -151,8 +152,16 @@ def site_model_rows(folder: Path, majority: Path) -> list[dict]:
     for k, (trained_on, held_out) in enumerate(folds):
         each = [(t, DATA / "labels" / g / t.name) for g in GEOLOGISTS for t in held_out]
         fold = f"tiles {held_out[0].stem}-{held_out[-1].stem}"
+        shipped = ExtractParams(detector="learned")
         rows.append({"split": fold, "detector": "learned", "setting": "shipped model",
-                     **score_real(each, ExtractParams(detector="learned"), 3.0)})
+                     **score_real(each, shipped, 3.0)})
+        # the shipped model's own back end chosen on the training tiles (no model is trained)
+        choice = choose_back_end([(t, majority / t.name) for t in trained_on],
+                                 lambda pairs, fold: MODEL_FILE, folds=SITE_FOLDS)
+        rows.append({"split": fold, "detector": "learned",
+                     "setting": "shipped model, back end chosen", "chosen": chosen_text(choice.settings),
+                     "cv_F1": choice.chosen.f1, **score_real(each, replace(shipped, **choice.settings),
+                                                             3.0)})
         for synthetic in (False, True):
             recipe = "tiles + synthetic faces" if synthetic else "tiles only"
             model, seconds = train(trained_on, folder / f"fold{k}_{synthetic}", synthetic=synthetic,
@@ -162,12 +171,11 @@ def site_model_rows(folder: Path, majority: Path) -> list[dict]:
             rows.append({"split": fold, "detector": "learned", "setting": f"site model, {recipe}",
                          "train_s": seconds, **score_real(each, params, 3.0)})
             back_end = load_model(model).info["back_end"]
-            chosen = back_end["settings"]
             rows.append({"split": fold, "detector": "learned",
                          "setting": f"site model, {recipe}, back end chosen", "train_s": seconds,
-                         "chosen": "/".join(f"{chosen[name]:g}" for name in CHOSEN),
+                         "chosen": chosen_text(back_end["settings"]),
                          "cv_F1": back_end["cross_validated"]["F1"],
-                         **score_real(each, replace(params, **chosen), 3.0)})
+                         **score_real(each, replace(params, **back_end["settings"]), 3.0)})
     return rows
 
 
@@ -234,12 +242,13 @@ def _site_models() -> int:
         rows = site_model_rows(Path(tmp), two_of_three(Path(tmp) / "two_of_three"))
     print(f"\n{DATA}: trained on ten tiles (labels: two of three geologists), scored on the other "
           f"ten against each geologist ('split' names them; {TOLERANCE_PX:g} px, joint width 3 px, "
-          "the learned detector's default thresholds and filters)")
+          "the learned detector's default thresholds and filters unless 'back end chosen')")
     print(table(rows, [*REAL_COLUMNS[:3], ("train_s", ".0f"), *REAL_COLUMNS[3:],
                        ("chosen", "s"), ("cv_F1", ".3f")]))
-    print(f"\nchosen: {'/'.join(CHOSEN)} chosen by train_pixel_model "
-          f"--choose-back-end {SITE_FOLDS} on the ten training tiles; cv_F1: the F1 its "
-          "cross-validation reported there (the best of the settings tried: optimistic)")
+    print(f"\nchosen: prob_low/prob_high/min_trace_length_px chosen on the ten training tiles "
+          f"({SITE_FOLDS} folds; for a site model by train_pixel_model --choose-back-end, for the "
+          f"shipped model by rockmass.imaging.site_back_end.choose_back_end with it in every fold); "
+          f"cv_F1: the F1 the choice reported there (the best of the settings tried: optimistic)")
     # the folds hold as many (tile, geologist) pairs each: the mean of their F1 is the mean over all
     both = {setting: float(np.mean([r["F1"] for r in rows if r["setting"] == setting]))
             for setting in dict.fromkeys(r["setting"] for r in rows)}

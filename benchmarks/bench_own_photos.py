@@ -38,8 +38,13 @@ COLUMNS = [("model", "s"), ("photos", "d"), ("train_s", ".1f"), ("model_bytes", 
            ("moderate_F1", ".3f"), ("moderate_dP21_%", "+.1f"), ("chosen", "s"), ("cv_F1", ".3f")]
 #: Folds of the back-end choice on train/ (train_pixel_model --choose-back-end).
 BACK_END_FOLDS = 5
-#: The settings it chooses, in the order the table prints them.
+#: The settings it chooses, in the order the tables print them.
 CHOSEN = ("prob_low", "prob_high", "min_trace_length_px")
+
+
+def chosen_text(settings) -> str:
+    """The chosen settings as the tables print them: prob_low/prob_high/min_trace_length_px."""
+    return "/".join(f"{settings[name]:g}" for name in CHOSEN)
 
 
 def train_label(photo: Path) -> Path:
@@ -125,10 +130,10 @@ def main(argv=None) -> int:
             chosen = back_end["settings"]
             rows.append({**row(f"all train/ photos, back end chosen ({BACK_END_FOLDS}-fold)", model,
                                len(photos), seconds, chosen),
-                         "chosen": "/".join(f"{chosen[name]:g}" for name in CHOSEN),
+                         "chosen": chosen_text(chosen),
                          "cv_F1": back_end["cross_validated"]["F1"]})
-    print(f"\nval/ ({len(val)} photos, never trained on; 5 px; detector defaults) and plain synthetic "
-          f"moderate faces (seeds {seeds}, 3 px)")
+    print(f"\nval/ ({len(val)} photos, never trained on; 5 px; detector defaults unless chosen) "
+          f"and plain synthetic moderate faces (seeds {seeds}, 3 px)")
     print(table(rows, COLUMNS))
     print(f"\nchosen: {'/'.join(CHOSEN)} chosen by --choose-back-end {BACK_END_FOLDS} on train/ (the "
           "row is scored with them); cv_F1: the F1 its cross-validation reported on train/ (the "

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["label_mask", "label_centre_lines", "labelled_pairs"]
+__all__ = ["label_mask", "label_centre_lines", "photo_centre_lines", "labelled_pairs"]
 
 #: Image file suffixes read as photographs when pairing a folder of photos with its labels.
 PHOTO_SUFFIXES = (".jpg", ".jpeg", ".png", ".tif", ".tiff", ".bmp")
@@ -60,6 +60,22 @@ def label_centre_lines(label) -> np.ndarray:
     from .skeleton_graph import skeletonize
 
     return skeletonize(label_mask(label))
+
+
+def photo_centre_lines(label, photo, photo_shape) -> np.ndarray:
+    """:func:`label_centre_lines` of the label of ``photo`` (a path, for the message), whose image
+    is ``photo_shape`` (rows, cols, ...) pixels.
+
+    Raises
+    ------
+    ValueError
+        The label's size differs from the photograph's (the message names both files).
+    """
+    lines = label_centre_lines(label)
+    if lines.shape != tuple(photo_shape[:2]):
+        raise ValueError(f"{label}: label is {lines.shape[1]} x {lines.shape[0]} px, its photo "
+                         f"{Path(photo).name} {photo_shape[1]} x {photo_shape[0]} px")
+    return lines
 
 
 def labelled_pairs(photos_dir, labels_dir) -> list[tuple[Path, Path]]:

@@ -20,6 +20,7 @@ processor's cache (:meth:`Stage.predict`).
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -30,7 +31,7 @@ from .features import CONTEXT_NAMES, FEATURE_NAMES, context_features, pixel_feat
 
 __all__ = ["MODEL_FILE", "MODEL_LINE_WIDTH_PX", "MIN_SPREAD", "MAX_STRETCH", "Stage", "PixelModel",
            "load_model", "model_record", "flattened", "model_input", "stretch_gain",
-           "stretch_flat_face", "joint_probability"]
+           "stretch_flat_face", "joint_probability", "reused_probabilities"]
 
 #: The shipped model, inside the installed package.
 MODEL_FILE = Path(__file__).resolve().parent / "models" / "joint_pixel_mlp.npz"
@@ -236,6 +237,8 @@ def model_record(path=None) -> dict:
     path, like the model it caches."""
     import hashlib
 
+    from .site_back_end import chosen_settings
+
     key = _resolved(path)
     if key not in _RECORDS:
         model = load_model(path)
@@ -244,7 +247,7 @@ def model_record(path=None) -> dict:
                          "trained_on": model.info.get("data"),
                          "input_stretch": None if model.input_stretch is None
                          else dict(zip(("min_face_spread", "max_stretch"), model.input_stretch)),
-                         "back_end": (model.info.get("back_end") or {}).get("settings")}
+                         "back_end": chosen_settings(model.info)}
     return dict(_RECORDS[key])
 
 
@@ -341,6 +344,9 @@ def stretch_flat_face(flat, *, min_spread: float = MIN_SPREAD, max_stretch: floa
 def joint_probability(flat, model: PixelModel | None = None) -> np.ndarray:
     """Probability map (H, W) float32 in [0, 1] of joint centre lines in a :func:`model_input` image.
 
+    Inside :func:`reused_probabilities`, a map already computed for the same model and an identical
+    image is returned (a copy) instead of being computed again.
+
     Examples
     --------
     >>> img = np.ones((64, 64), np.float32); img[:, 30:33] = 0.5
@@ -349,4 +355,34 @@ def joint_probability(flat, model: PixelModel | None = None) -> np.ndarray:
     True
     """
     model = model or load_model()
-    return model.probability(pixel_features(flat))
+    if _REUSED is None:
+        return model.probability(pixel_features(flat))
+    import hashlib
+
+    image = np.ascontiguousarray(flat)
+    key = (id(model), image.shape, image.dtype.str,
+           hashlib.blake2b(image.data, digest_size=16).digest())
+    if key not in _REUSED:  # the model is kept with its map, so that its id stays its own
+        _REUSED[key] = (model, model.probability(pixel_features(image)))
+    return _REUSED[key][1].copy()
+
+
+#: (model id, shape, dtype, digest of the image) -> (model, probability map), while
+#: :func:`reused_probabilities` is on; None otherwise.
+_REUSED: dict | None = None
+
+
+@contextmanager
+def reused_probabilities():
+    """Within this block :func:`joint_probability` computes a map once per model and input image:
+    for extracting one photograph with several back-end settings, which change nothing before the
+    probability map (:mod:`rockmass.imaging.site_back_end`). The maps are dropped when the block
+    ends; blocks do not nest."""
+    global _REUSED
+    if _REUSED is not None:
+        raise RuntimeError("reused_probabilities() blocks do not nest")
+    _REUSED = {}
+    try:
+        yield
+    finally:
+        _REUSED = None

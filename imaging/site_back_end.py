@@ -1,51 +1,53 @@
-r"""The learned detector's back-end settings for a site's own pixel model, chosen by cross-validation
-on the site's labelled photographs (docs/imaging.md §3.2).
+r"""The learned detector's back-end settings for a pixel model, chosen by cross-validation on a
+site's labelled photographs (docs/imaging.md §3.2).
 
 The hysteresis levels on the joint probability (``prob_low`` / ``prob_high``) and the trace length
 floor (``min_trace_length_px``) of :class:`rockmass.imaging.extract.ExtractParams` were chosen for
 the shipped model on one public set of rock faces (§3.1). A model trained on a site's photographs
 gives probabilities of another calibration, and the site's labels may mark shorter or fainter
-traces; on the drone tiles of §8.2 these settings, not the pixel model, held recall down. So
-``train_pixel_model --photos ... --choose-back-end`` chooses them on the user's photos:
+traces. So ``train_pixel_model --photos ... --choose-back-end`` chooses them on the user's photos:
 
-1. the labelled photos, sorted by name, are dealt into K folds (photo k into fold k mod K);
+1. the labelled photos, sorted by name, are cut into K folds of consecutive photos (photo k of n
+   into fold ⌊kK/n⌋), so that overlapping shots taken one after another stay in one fold;
 2. for each fold, a pixel model is trained on the other folds' photos (the caller's recipe) and
    every photo of the fold is extracted with each setting of :data:`BACK_END_GRID` (the other
    settings as given), its traces drawn as 1-px lines and scored against the label's centre lines
-   at 5 px (:func:`rockmass.imaging.metrics.raster_counts`, eqs. (8.5)-(8.6));
-3. each setting's score is the mean F1 over all photos, each scored by a model that did not see
-   it, with the trace length error dP21 over all of them
+   at :data:`TOLERANCE_PX` pixels of the photograph (:func:`rockmass.imaging.metrics.raster_counts`,
+   eqs. (8.5)-(8.6)); a photo whose label marks nothing is not scored;
+3. each setting's score is the mean F1 over the scored photos, each scored by a model that did
+   not see it, with the trace length error dP21 over all of them
    (:func:`rockmass.imaging.metrics.summarise_counts`);
 4. the candidate is the setting of best mean F1 among those whose |dP21| is within
    :data:`LENGTH_TOLERANCE_PCT` (the rule that chose the shipped defaults, §3.1), or among all when
    none is (ties: the earlier setting of the grid, i.e. the higher levels and the longer floor);
 5. the given settings (the defaults, chosen on 99 photographs of another set) are kept unless the
    candidate beats them by more than one standard error of the photos' paired F1 differences,
-   :math:`\bar d > s_d / \sqrt{n}`, :math:`d_i = F1_i^{cand} - F1_i^{given}` (a form of the
-   one-standard-error rule of cross-validation: Breiman et al. 1984; Hastie, Tibshirani &
-   Friedman 2009, §7.10), which keeps the grid's near-ties from being taken for gains, or when
-   they are not within the length tolerance and the candidate is.
+   :math:`\bar d > s_d / \sqrt{n}`, :math:`d_i = F1_i^{cand} - F1_i^{given}`: in the spirit of
+   the one-standard-error rule of cross-validation (Breiman et al. 1984; Hastie, Tibshirani &
+   Friedman 2009, §7.10), it keeps the grid's near-ties from being taken for gains.
 
 The kept setting's cross-validated F1 is the best of ``len(BACK_END_GRID)`` on the same folds, so
 it is an optimistic estimate; photographs kept out of the whole choice give an unbiased one
 (``benchmarks/bench_imaging_outcrop.py --site-models`` does that). The same photos are also
-extracted with the shipped model at the given settings, for comparison.
+extracted with the shipped model at the given settings, for comparison. The probability map of a
+photo is computed once per model for all the settings
+(:func:`rockmass.imaging.learned.reused_probabilities`): they change nothing before it.
 """
 
 from __future__ import annotations
 
 import itertools
 import math
-import warnings
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from types import MappingProxyType
+from typing import Any
 
 import numpy as np
 
 __all__ = ["BACK_END_GRID", "LENGTH_TOLERANCE_PCT", "TOLERANCE_PX", "BackEndScore", "BackEndChoice",
-           "fold_of", "choose_setting", "choose_back_end", "recommended_settings",
+           "fold_of", "choose_setting", "choose_back_end", "chosen_settings", "recommended_settings",
            "unused_settings_note"]
 
 #: The settings tried, in order; the defaults of ExtractParams (0.8, 0.97, 70 px) are among them.
@@ -101,47 +103,65 @@ class BackEndChoice:
     Attributes
     ----------
     chosen : BackEndScore
-        The setting kept, with its (optimistic) cross-validated scores.
-    site_defaults : BackEndScore
-        The site models at the given settings (ExtractParams' defaults unless changed).
+        The setting kept, with its cross-validated scores (optimistic when it is not the given
+        one: the best of the grid on the same folds).
+    at_given : BackEndScore
+        The fold models at the given settings.
     shipped : BackEndScore
         The shipped model at the given settings, on the same photos.
     scores : tuple of BackEndScore
         Every setting of the grid, in grid order.
-    folds, photos : int
-        K, and the number of labelled photos.
+    folds : int
+        K.
+    photos : int
+        Photos scored (those whose label marks something).
+    skipped : tuple of str
+        Photos not scored: their label marks nothing.
+    base : mapping
+        The other settings the choice was made with, where they differ from ExtractParams'
+        defaults (``max_megapixels``, ``min_trace_contrast``, ...).
     """
 
     chosen: BackEndScore
-    site_defaults: BackEndScore
+    at_given: BackEndScore
     shipped: BackEndScore
     scores: tuple[BackEndScore, ...] = field(repr=False)
-    folds: int = 0
-    photos: int = 0
+    folds: int
+    photos: int
+    skipped: tuple[str, ...] = ()
+    base: Mapping[str, Any] = field(default_factory=dict)
 
     @property
     def settings(self) -> dict:
         """The chosen settings."""
         return dict(self.chosen.settings)
 
+    @property
+    def kept_given(self) -> bool:
+        """The given settings were kept (no setting beat them by more than a standard error)."""
+        return self.chosen is self.at_given
+
     def record(self) -> dict:
-        """What the model file keeps in ``info["back_end"]``: the settings, how they were chosen
-        and the scores behind the choice."""
-        return {"settings": self.settings, "folds": self.folds, "photos": self.photos,
+        """What the model file keeps in ``info["back_end"]``: the settings chosen, the other
+        settings they were chosen with, how, and the scores behind the choice."""
+        return {"settings": self.settings, "with": dict(self.base), "folds": self.folds,
+                "photos": self.photos, "skipped_photos": list(self.skipped),
                 "rule": f"best mean F1 at {TOLERANCE_PX:g} px among the settings with |dP21| <= "
-                        f"{LENGTH_TOLERANCE_PCT:g} % (else among all), kept when it beats the "
-                        "given settings by more than one standard error "
+                        f"{LENGTH_TOLERANCE_PCT:g} % (else among all), taken over the given "
+                        "settings when its paired F1 gain exceeds one standard error "
                         "(rockmass.imaging.site_back_end)",
+                "kept_given": self.kept_given,
                 "cross_validated": self.chosen.record(),
-                "site_model_at_given_settings": self.site_defaults.record(),
+                "fold_models_at_given_settings": self.at_given.record(),
                 "shipped_model_at_given_settings": self.shipped.record()}
 
     def config_snippet(self, model_path) -> str:
-        """The ``[imaging.params]`` table of a rockmass config that uses the model with the
-        chosen settings (TOML)."""
-        lines = ["[imaging.params]", f"pixel_model = {_toml_string(str(model_path))}"]
-        lines += [f"{name} = {value!r}" for name, value in self.settings.items()]
-        return "\n".join(lines)
+        """The ``[imaging.params]`` table of a rockmass config that extracts with the model as it
+        was chosen: its absolute path, the other settings of the choice and the chosen ones
+        (TOML)."""
+        values = {"pixel_model": str(Path(model_path).resolve()), **self.base, **self.settings}
+        return "\n".join(["[imaging.params]",
+                          *(f"{name} = {_toml_value(value)}" for name, value in values.items())])
 
 
 def _rounded(value: float, digits: int) -> float | None:
@@ -150,18 +170,42 @@ def _rounded(value: float, digits: int) -> float | None:
     return round(value, digits) if math.isfinite(value) else None
 
 
-def _toml_string(text: str) -> str:
-    """A TOML basic string."""
-    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+def _toml_value(value) -> str:
+    r"""A setting's value as TOML: a bool, a basic string, a number (inf and nan as TOML spells
+    them) or an array of them.
+
+    Examples
+    --------
+    >>> [_toml_value(v) for v in (True, 'a "b"', -math.inf, 0.5, (2, 4))]
+    ['true', '"a \\"b\\""', '-inf', '0.5', '[2, 4]']
+    """
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    if isinstance(value, float) and not math.isfinite(value):
+        return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    return repr(value)
 
 
-def fold_of(k: int, folds: int) -> int:
-    """The fold of the k-th photo (sorted by name)."""
-    return k % folds
+def fold_of(k: int, n: int, folds: int) -> int:
+    """The fold of the k-th of n photos (sorted by name): consecutive photos, ⌊kK/n⌋.
+
+    Examples
+    --------
+    >>> [fold_of(k, 10, 4) for k in range(10)]
+    [0, 0, 0, 1, 1, 2, 2, 2, 3, 3]
+    """
+    return k * folds // n
 
 
 def choose_setting(scores: Sequence[BackEndScore], given: BackEndScore) -> BackEndScore:
-    """Rules 4 and 5 of the module notes: the candidate among ``scores``, or ``given``.
+    """Rules 4 and 5 of the module notes: the candidate among ``scores`` (the best mean F1 among
+    the settings whose |dP21| <= :data:`LENGTH_TOLERANCE_PCT`, or among all), kept only when its
+    paired F1 gain over ``given`` photo by photo, d_i, has a mean above its standard error,
+    d̄ > s_d / √n; else ``given``.
 
     Examples
     --------
@@ -179,14 +223,13 @@ def choose_setting(scores: Sequence[BackEndScore], given: BackEndScore) -> BackE
     pool = [s for s in scores if s.within_length_tolerance] or list(scores)
     best = max(s.f1 for s in pool)
     candidate = next(s for s in pool if s.f1 == best)
-    if candidate.within_length_tolerance and not given.within_length_tolerance:
-        return candidate
     gain = np.subtract(candidate.photo_f1, given.photo_f1)
     error = gain.std(ddof=1) / np.sqrt(gain.size) if gain.size > 1 else np.inf
     return candidate if gain.mean() > error else given
 
 
 def _score(settings, counts) -> BackEndScore:
+    """The :class:`BackEndScore` of one setting from the photos' raster_counts (in photo order)."""
     from .metrics import image_f1, summarise_counts
 
     summary = summarise_counts(counts)
@@ -199,9 +242,7 @@ def _photo_counts(image, lines, params) -> tuple[int, int, int, int]:
     from .extract import extract
     from .metrics import raster_counts, render_traces
 
-    with warnings.catch_warnings():  # no scale: the traces are in pixels, as wanted
-        warnings.simplefilter("ignore", UserWarning)
-        result = extract(image, params=params)
+    result = extract(image, m_per_px=1.0, params=params)  # "metres" = pixels of the photo
     drawn = render_traces(result.traces, lines.shape, 1.0)
     return raster_counts(drawn, lines, tolerance_px=TOLERANCE_PX)
 
@@ -209,87 +250,110 @@ def _photo_counts(image, lines, params) -> tuple[int, int, int, int]:
 def _read_pair(photo, label):
     """(RGB or grey image, label centre lines at the photo's size) of one labelled photo."""
     from .enhance import read_photo
-    from .labels import label_centre_lines
+    from .labels import photo_centre_lines
 
     image = read_photo(photo)
-    lines = label_centre_lines(label)
-    if lines.shape != image.shape[:2]:
-        raise ValueError(f"{label}: label is {lines.shape[1]} x {lines.shape[0]} px, its photo "
-                         f"{Path(photo).name} {image.shape[1]} x {image.shape[0]} px")
-    return image, lines
+    return image, photo_centre_lines(label, photo, image.shape)
 
 
 def choose_back_end(pairs: Sequence[tuple], train: Callable[[list, int], Path], *, folds: int = 5,
                     base=None, grid: Sequence[Mapping[str, float]] = BACK_END_GRID,
                     progress: Callable[[str], None] | None = None) -> BackEndChoice:
-    """Choose the learned detector's back-end settings for a site model by K-fold
+    """Choose the learned detector's back-end settings for a pixel model by K-fold
     cross-validation (module notes).
 
     Parameters
     ----------
     pairs : sequence of (photo path, label path)
-        The labelled photographs, in the order folds are dealt (sorted by name).
+        The labelled photographs, in the order folds are cut (sorted by name).
     train : callable
         ``train(pairs_to_train_on, fold)`` trains a pixel model on those pairs and returns the
-        path of its file.
+        path of its file (a fixed model's path chooses the back end for that model).
     folds : int, default 5
         K, at least 2 and at most the number of photos.
     base : ExtractParams, optional
         The other settings (default ``ExtractParams()``); its detector is set to "learned".
     grid : sequence of mappings
-        The settings tried (default :data:`BACK_END_GRID`).
+        The settings tried (default :data:`BACK_END_GRID`), each of the same names.
     progress : callable, optional
         Called with a line of text after each fold.
 
     Returns
     -------
     BackEndChoice
+
+    Raises
+    ------
+    ValueError
+        Bad ``folds`` or ``grid``; a label of another size than its photo; no label marks
+        anything.
     """
+    from . import learned
     from .extract import ExtractParams
 
-    if not (isinstance(folds, int) and 2 <= folds <= len(pairs)):
+    n = len(pairs)
+    if isinstance(folds, bool) or not (isinstance(folds, int) and 2 <= folds <= n):
         raise ValueError(f"folds must be an integer from 2 to the number of labelled photos "
-                         f"({len(pairs)}), got {folds!r}")
-    if not grid:
-        raise ValueError("grid: no settings to try")
+                         f"({n}), got {folds!r}")
+    if not grid or any(set(settings) != set(grid[0]) for settings in grid):
+        raise ValueError("grid: give one or more settings, each of the same names")
     base = replace(base or ExtractParams(), detector="learned")
     shipped_params = replace(base, pixel_model=None)
     given = {name: base.resolved(name) for name in grid[0]}
     # the given settings are usually a setting of the grid (the defaults are): not extracted twice
     given_index = next((i for i, settings in enumerate(grid) if dict(settings) == given), None)
-    site_counts = [[] for _ in grid]
-    default_counts, shipped_counts = [], []
+    counts = {"grid": [[] for _ in grid], "given": [], "shipped": []}  # per photo, in photo order
+    skipped = []
     for fold in range(folds):
-        held = [k for k in range(len(pairs)) if fold_of(k, folds) == fold]
-        model = str(train([p for k, p in enumerate(pairs) if fold_of(k, folds) != fold], fold))
-        site = replace(base, pixel_model=model)
+        held = [k for k in range(n) if fold_of(k, n, folds) == fold]
+        model = str(train([pair for k, pair in enumerate(pairs) if k not in held], fold))
+        fold_params = replace(base, pixel_model=model)
         for k in held:
             image, lines = _read_pair(*pairs[k])
-            for counts, settings in zip(site_counts, grid):
-                counts.append(_photo_counts(image, lines, replace(site, **settings)))
-            default_counts.append(site_counts[given_index][-1] if given_index is not None
-                                  else _photo_counts(image, lines, site))
-            shipped_counts.append(_photo_counts(image, lines, shipped_params))
+            if not lines.any():
+                skipped.append(str(pairs[k][0]))
+                continue
+            with learned.reused_probabilities():  # one map per model: the settings come after it
+                for photo_counts, settings in zip(counts["grid"], grid):
+                    photo_counts.append(_photo_counts(image, lines, replace(fold_params, **settings)))
+                counts["given"].append(counts["grid"][given_index][-1] if given_index is not None
+                                       else _photo_counts(image, lines, fold_params))
+                counts["shipped"].append(_photo_counts(image, lines, shipped_params))
         if progress is not None:
             progress(f"fold {fold + 1}/{folds}: {len(held)} photos scored with {len(grid)} settings")
-    scores = tuple(_score(settings, counts) for settings, counts in zip(grid, site_counts))
-    at_given = _score(given, default_counts)
-    return BackEndChoice(chosen=choose_setting(scores, at_given), site_defaults=at_given,
-                         shipped=_score(given, shipped_counts), scores=scores, folds=folds,
-                         photos=len(pairs))
+    if not counts["given"]:
+        raise ValueError("no label marks any trace: nothing to choose the settings on")
+    scores = tuple(_score(settings, c) for settings, c in zip(grid, counts["grid"]))
+    at_given = _score(given, counts["given"])
+    defaults = ExtractParams(detector="learned")
+    differ = {f.name: getattr(base, f.name) for f in fields(base)
+              if f.name not in ("detector", "pixel_model", *grid[0])
+              and getattr(base, f.name) != getattr(defaults, f.name)}
+    return BackEndChoice(chosen=choose_setting(scores, at_given), at_given=at_given,
+                         shipped=_score(given, counts["shipped"]), scores=scores, folds=folds,
+                         photos=len(counts["given"]), skipped=tuple(skipped),
+                         base=MappingProxyType(differ))
 
 
-def recommended_settings(model_info: Mapping) -> dict | None:
+def chosen_settings(model_info: Mapping) -> dict | None:
     """The back-end settings a model file's ``info`` records as chosen for it
     (``train_pixel_model --choose-back-end``), or None."""
-    entry = model_info.get("back_end") or {}
-    settings = entry.get("settings")
+    settings = (model_info.get("back_end") or {}).get("settings")
     return dict(settings) if settings else None
 
 
+def recommended_settings(model_info: Mapping) -> dict | None:
+    """:func:`chosen_settings` and the other settings the choice was made with (``with``), or
+    None."""
+    chosen = chosen_settings(model_info)
+    return None if chosen is None else {**model_info["back_end"].get("with", {}), **chosen}
+
+
 def unused_settings_note(model_info: Mapping, params) -> str | None:
-    """A warning when the settings chosen for a pixel model (:func:`recommended_settings`) differ
-    from those of ``params`` (ExtractParams of the learned detector), else None.
+    """A warning when settings a pixel model's back end was chosen with
+    (:func:`recommended_settings`) differ from those of ``params`` (ExtractParams of the learned
+    detector, as given: pixel lengths of the reference grid), else None. Names this rockmass does
+    not know are left out.
 
     Examples
     --------
@@ -303,12 +367,30 @@ def unused_settings_note(model_info: Mapping, params) -> str | None:
     settings = recommended_settings(model_info)
     if not settings:
         return None
-    differ = [name for name, value in settings.items()
-              if not math.isclose(float(params.resolved(name)), float(value))]
+    known = {f.name for f in fields(params)}
+    settings = {name: value for name, value in settings.items() if name in known}
+    differ = [name for name, value in settings.items() if not _same(_used(params, name), value)]
     if not differ:
         return None
-    chosen = ", ".join(f"{name} = {value:g}" for name, value in settings.items())
-    used = ", ".join(f"{name} = {params.resolved(name):g}" for name in differ)
+    chosen = ", ".join(f"{name} = {_toml_value(value)}" for name, value in settings.items())
+    used = ", ".join(f"{name} = {_toml_value(_used(params, name))}" for name in differ)
     return (f"the pixel model's back end was chosen for it by cross-validation on its photographs "
             f"({chosen}); this run uses {used}: set them in [imaging.params] to extract as the "
             f"model was validated (train_pixel_model printed them; docs/imaging.md §3.2)")
+
+
+def _used(params, name: str):
+    """The value of setting ``name`` in ``params``, a detector default resolved."""
+    from .extract import DETECTOR_DEFAULTS
+
+    return params.resolved(name) if name in DETECTOR_DEFAULTS else getattr(params, name)
+
+
+def _same(a, b) -> bool:
+    """Two setting values agree (numbers to rounding, lists element by element)."""
+    if isinstance(a, (list, tuple)) or isinstance(b, (list, tuple)):
+        return (isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)) and len(a) == len(b)
+                and all(_same(x, y) for x, y in zip(a, b)))
+    if isinstance(a, (int, float)) and isinstance(b, (int, float)) and not isinstance(a, bool):
+        return a == b or math.isclose(a, b)
+    return a == b

@@ -52,9 +52,9 @@ Each perceptron (eq. (3.2)) is fitted by minimising the class-balanced binary cr
 (Kingma & Ba 2015) on mini-batches, from a fixed seed. The default ``--seed`` (10 000) keeps the
 training faces apart from the seeds tests and benchmarks use (0-999). The matrix products of the
 fit sum in one fixed order (:func:`_product`, since session 20), so a model is the same whatever
-the machine's number of BLAS threads. The shipped file was fitted in session 15; run today, the
-command gives a model of about the same held-out loss (0.390 against 0.394) with other weights
-(docs/imaging.md §3.1): the shipped file is the one every benchmark measures.
+the machine's number of BLAS threads. The shipped file was fitted in session 15 and is the one
+every benchmark measures; run today, the command gives a model of other weights
+(docs/imaging.md §3.1).
 """
 
 from __future__ import annotations
@@ -151,14 +151,11 @@ def labelled_photo(photo, label, max_megapixels: float) -> tuple[np.ndarray, np.
 
     from .enhance import read_photo, to_grey
     from .extract import working_grid
-    from .labels import label_centre_lines
+    from .labels import photo_centre_lines
     from .skeleton_graph import skeletonize
 
     grey = to_grey(read_photo(photo), name=str(photo))
-    lines = label_centre_lines(label)
-    if lines.shape != grey.shape:
-        raise ValueError(f"{label}: label is {lines.shape[1]} x {lines.shape[0]} px, its photo "
-                         f"{Path(photo).name} {grey.shape[1]} x {grey.shape[0]} px")
+    lines = photo_centre_lines(label, photo, grey.shape)
     grey, (h, w), _ = working_grid(grey, max_megapixels, [])
     if lines.shape != (h, w):
         coverage = cv2.resize(lines.astype(np.float32), (w, h), interpolation=cv2.INTER_AREA)
@@ -317,7 +314,8 @@ def main(argv=None) -> int:
         parser.error(f"--choose-back-end: FOLDS must be from 2 to the number of labelled photos "
                      f"({len(photos)}), got {args.choose_back_end}")
     fit = dict(hidden=tuple(args.hidden), epochs=args.epochs, seed=args.seed)
-    base = None if args.config is None else _config_params(args.config, parser)
+    base = None if args.config is None else _config_params(args.config, parser,
+                                                           args.max_megapixels)
 
     t0 = time.perf_counter()
     rng = np.random.default_rng(args.seed)
@@ -396,30 +394,37 @@ def main(argv=None) -> int:
     return 0
 
 
-def _config_params(path, parser):
-    """ExtractParams of the ``[imaging.params]`` table of a rockmass config file (its
-    ``pixel_model`` left out: the model is the one being trained); a parser error naming the file
-    and the setting when it cannot be read or a setting is refused."""
+def _config_params(path, parser, max_megapixels: float):
+    """ExtractParams of the ``[imaging.params]`` table of a rockmass config file, the settings the
+    back-end choice starts from: its ``pixel_model`` left out (the model is the one being trained),
+    ``max_megapixels`` the training's. A parser error (exit 2) naming the file and the setting when
+    the file cannot be read, a setting is unknown or refused, the learned detector cannot run with
+    them, or the config's ``max_megapixels`` differs from the training's."""
     import tomllib
 
     from .extract import ExtractParams
 
-    try:
-        with open(path, "rb") as handle:
-            document = tomllib.load(handle)
-    except (OSError, tomllib.TOMLDecodeError) as error:
+    try:  # as rockmass reads configs: UTF-8, a byte-order mark allowed
+        document = tomllib.loads(Path(path).read_bytes().decode("utf-8-sig"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
         parser.error(f"--config {path}: cannot read it as TOML ({error})")
-    table = document.get("imaging", {}).get("params", {})
+    imaging = document.get("imaging", {})
+    table = imaging.get("params", {}) if isinstance(imaging, dict) else None
     if not isinstance(table, dict):
-        parser.error(f"--config {path}: imaging.params must be a table")
+        parser.error(f"--config {path}: {'imaging.params' if isinstance(imaging, dict) else 'imaging'}"
+                     f" must be a table")
     table = {name: value for name, value in table.items() if name != "pixel_model"}
-    known = {f.name for f in fields(ExtractParams)}
-    unknown = sorted(set(table) - known)
+    unknown = sorted(set(table) - {f.name for f in fields(ExtractParams)})
     if unknown:
         parser.error(f"--config {path}: imaging.params.{unknown[0]} is not a setting of "
                      f"rockmass extract (docs/config.md)")
+    if table.get("max_megapixels", max_megapixels) != max_megapixels:
+        parser.error(f"--config {path}: imaging.params.max_megapixels = {table['max_megapixels']} "
+                     f"differs from the training's --max-megapixels {max_megapixels:g}: give the "
+                     f"same to both, so the model is trained on the grid it will run on")
     try:
-        return ExtractParams(**table)
+        params = ExtractParams(**table)
+        return replace(params, detector="learned", max_megapixels=max_megapixels)
     except ValueError as error:
         parser.error(f"--config {path}: imaging.{error}")
 
@@ -427,41 +432,55 @@ def _config_params(path, parser):
 def _choose_back_end(photos, synthetic, folds, seed, max_megapixels, input_record, fit, base):
     """:func:`rockmass.imaging.site_back_end.choose_back_end` with fold models of this recipe: the
     same synthetic samples, the fold's training photos sampled from a stream of their own
-    (seed, fold)."""
+    (seed, fold), no photo held out for a loss (the final model holds out every tenth).
+    ``base``: the settings to start from (None: the defaults), at ``max_megapixels``."""
     import tempfile
 
+    from .extract import ExtractParams
     from .site_back_end import choose_back_end
-
-    def train_fold(pairs, fold):
-        own = sample_faces(_photo_faces(pairs, max_megapixels), np.random.default_rng([seed, fold]))
-        model = PixelModel(stages=(_stage(*_joined(synthetic, own), **fit),),
-                           feature_names=FEATURE_NAMES, info={"input": input_record})
-        return model.save(Path(folder) / f"fold_{fold}.npz")
 
     def report(line):
         print(f"train_pixel_model: back end: {line}", file=sys.stderr, flush=True)
 
+    base = replace(base or ExtractParams(detector="learned"), max_megapixels=max_megapixels)
     with tempfile.TemporaryDirectory() as folder:
+        def train_fold(pairs, fold):
+            own = sample_faces(_photo_faces(pairs, max_megapixels),
+                               np.random.default_rng([seed, fold]))
+            model = PixelModel(stages=(_stage(*_joined(synthetic, own), **fit),),
+                               feature_names=FEATURE_NAMES, info={"input": input_record})
+            return model.save(Path(folder) / f"fold_{fold}.npz")
+
         return choose_back_end(photos, train_fold, folds=folds, base=base, progress=report)
 
 
 def _back_end_report(choice, path) -> str:
     """The back-end choice as a user reads it: the scores, then the config snippet."""
+    from .site_back_end import TOLERANCE_PX
+
     def line(name, score):
-        return (f"  {name:<44} F1 {score.f1:.3f}  P {score.precision:.3f}  R {score.recall:.3f}  "
+        precision = "-" if score.precision != score.precision else f"{score.precision:.3f}"
+        return (f"  {name}\n      F1 {score.f1:.3f}  P {precision}  R {score.recall:.3f}  "
                 f"dP21 {score.dp21_pct:+.0f} %")
 
     settings = ", ".join(f"{name} = {value:g}" for name, value in choice.settings.items())
-    return "\n".join([
-        f"back end chosen by {choice.folds}-fold cross-validation on {choice.photos} photographs "
-        f"(each scored by a model that did not see it; F1 at 5 px, docs/imaging.md §3.2):",
-        line("shipped model, given settings", choice.shipped),
-        line("this recipe's models, given settings", choice.site_defaults),
-        line(f"this recipe's models, {settings}", choice.chosen),
-        "  (the last is the best of the settings tried on these folds: an optimistic estimate;",
-        "   score photographs kept out of training to know what the model does)",
-        "to extract with it, put in the config of rockmass extract / run (--config):",
-        choice.config_snippet(path)])
+    skipped = (f"; {len(choice.skipped)} photos whose label marks nothing not scored"
+               if choice.skipped else "")
+    lines = [f"back end chosen by {choice.folds}-fold cross-validation on {choice.photos} "
+             f"photographs (each scored by a model of this recipe that did not see it; F1 at "
+             f"{TOLERANCE_PX:g} px, docs/imaging.md §3.2{skipped}):",
+             line("shipped model, given settings", choice.shipped),
+             line("this recipe, given settings", choice.at_given)]
+    if choice.kept_given:
+        lines.append("  no setting tried beat the given settings by more than a standard error: "
+                     "they are kept")
+    else:
+        lines += [line(f"this recipe, {settings}", choice.chosen),
+                  "  (the best of the settings tried on these folds: an optimistic estimate;",
+                  "   score photographs kept out of training to know what the model does)"]
+    lines += ["to extract with it, put in the config of rockmass extract / run (--config):",
+              choice.config_snippet(path)]
+    return "\n".join(lines)
 
 
 def sample_faces(faces, rng) -> tuple[np.ndarray, np.ndarray]:

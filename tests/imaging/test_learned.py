@@ -239,3 +239,34 @@ def test_contrast_filter_drops_a_faint_line_and_keeps_the_dark_one():
     filtered = extract(image, m_per_px=1.0, params=fixed).traces
     rows = [float(np.median(160 - 0.5 - filtered.polyline(i)[:, 1])) for i in range(filtered.n_traces)]
     assert any(abs(r - 50) <= 3 for r in rows) and not any(abs(r - 109.5) <= 3 for r in rows)
+
+
+def test_reused_probabilities_compute_a_map_once_per_model_and_image_and_change_nothing(monkeypatch):
+    from rockmass.imaging import learned
+
+    rng = np.random.default_rng(3)
+    image = (0.6 + 0.05 * rng.normal(size=(160, 200))).astype(np.float32)
+    cv2.line(image, (10, 20), (190, 140), 0.3, 3)
+    photo = (np.clip(image, 0, 1) * 255).astype(np.uint8)
+    settings = [ExtractParams(detector="learned", prob_low=low, min_trace_length_px=floor)
+                for low, floor in ((0.8, 70.0), (0.5, 30.0), (0.65, 50.0))]
+    alone = [extract(photo, m_per_px=1.0, params=p) for p in settings]
+    calls = []
+    probability = learned.PixelModel.probability
+    monkeypatch.setattr(learned.PixelModel, "probability",
+                        lambda self, features: calls.append(features.shape) or
+                        probability(self, features))
+    with learned.reused_probabilities():
+        reused = [extract(photo, m_per_px=1.0, params=p) for p in settings]
+        with pytest.raises(RuntimeError, match="do not nest"):
+            with learned.reused_probabilities():
+                pass
+    # one map per grid the learned detector reads (the working grid and the coarser ones)
+    assert len(calls) == len(set(calls)) == 1 + len(alone[0].learned_levels["levels"][1:])
+    for a, b in zip(alone, reused):
+        np.testing.assert_array_equal(a.traces.xy_m, b.traces.xy_m)
+        np.testing.assert_array_equal(a.traces.offsets, b.traces.offsets)
+    assert alone[0].traces.xy_m.shape != alone[1].traces.xy_m.shape  # the settings do differ here
+    n_calls = len(calls)
+    extract(photo, m_per_px=1.0, params=settings[0])  # the maps were dropped with the block
+    assert len(calls) == 2 * n_calls

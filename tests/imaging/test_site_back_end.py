@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from rockmass.imaging.extract import ExtractParams, extract
+from rockmass.imaging.labels import label_centre_lines
 from rockmass.imaging.learned import MODEL_FILE, load_model, model_record
 from rockmass.imaging.site_back_end import (BACK_END_GRID, BackEndScore, choose_back_end,
                                             choose_setting, fold_of)
@@ -72,30 +73,84 @@ def test_a_length_floor_longer_than_every_joint_is_replaced_by_one_that_keeps_th
     choice = choose_back_end(pairs, shipped, folds=3, grid=FLOORS)
     # the defaults (70 px) draw next to nothing on joints 40 px long (a few traces are joined
     # across cells); only the 30 px floor keeps them
-    assert choice.site_defaults.f1 < 0.1 and choice.site_defaults.dp21_pct < -90
+    assert choice.at_given.f1 < 0.1 and choice.at_given.dp21_pct < -90
     assert choice.scores[1].f1 < 0.5 * choice.chosen.f1
-    assert choice.settings["min_trace_length_px"] == 30.0
+    assert choice.settings["min_trace_length_px"] == 30.0 and not choice.kept_given
     assert choice.chosen.f1 > 0.8 and abs(choice.chosen.dp21_pct) < 25
     # each photo is scored once, by the fold that left it out of training
     assert len(choice.chosen.photo_f1) == len(pairs) == choice.photos
     photos = [p for p, _ in pairs]
     for fold, trained_on in calls:
-        held = {photos[k] for k in range(len(photos)) if fold_of(k, 3) == fold}
+        held = {photos[k] for k in range(len(photos)) if fold_of(k, len(photos), 3) == fold}
         assert held.isdisjoint(trained_on) and held | set(trained_on) == set(photos)
     # the shipped model at the given settings is the same model here: the same scores
-    assert choice.shipped.photo_f1 == choice.site_defaults.photo_f1
+    assert choice.shipped.photo_f1 == choice.at_given.photo_f1
+    assert choice.base == {}  # the defaults: nothing else to record
+
+
+def test_each_photo_is_scored_by_the_model_of_its_own_fold(short_joints, monkeypatch):
+    from rockmass.imaging import site_back_end
+
+    _, pairs = short_joints
+    scored = []
+
+    def counts(image, lines, params):  # which model scored which photo (by its label's pixels)
+        scored.append((int(lines.sum()), params.pixel_model))
+        return (1, 1, 1, 1)
+
+    monkeypatch.setattr(site_back_end, "_photo_counts", counts)
+    choose_back_end(pairs, lambda train_pairs, fold: f"fold{fold}.npz", folds=4, grid=FLOORS[:1])
+    lines = [int(label_centre_lines(label).sum()) for _, label in pairs]
+    assert len(set(lines)) == len(lines)  # the label pixel counts name the photos
+    for k, n_lines in enumerate(lines):
+        models = {model for n, model in scored if n == n_lines and model is not None}
+        assert models == {f"fold{fold_of(k, len(pairs), 4)}.npz"}
+
+
+def test_folds_are_consecutive_photos_of_near_equal_size():
+    for n, folds in ((10, 3), (7, 7), (23, 5)):
+        assignment = [fold_of(k, n, folds) for k in range(n)]
+        assert assignment == sorted(assignment) and set(assignment) == set(range(folds))
+        sizes = np.bincount(assignment)
+        assert sizes.max() - sizes.min() <= 1
+
+
+def test_given_settings_outside_the_grid_are_scored_and_recorded(short_joints):
+    _, pairs = short_joints
+    base = ExtractParams(prob_low=0.7, min_trace_length_px=25.0, min_trace_contrast=0.1)
+    choice = choose_back_end(pairs[:4], lambda p, f: MODEL_FILE, folds=2, base=base,
+                             grid=FLOORS[:1])
+    assert dict(choice.at_given.settings) == {"prob_low": 0.7, "prob_high": 0.97,
+                                              "min_trace_length_px": 25.0}
+    assert choice.at_given.f1 > 0.8  # the 25 px floor keeps the 40 px joints; 70 px does not
+    assert choice.kept_given and choice.chosen is choice.at_given
+    assert dict(choice.base) == {"min_trace_contrast": 0.1}
+
+
+def test_a_photo_whose_label_marks_nothing_is_not_scored(short_joints, tmp_path):
+    _, pairs = short_joints
+    empty = tmp_path / "empty.png"
+    cv2.imwrite(str(empty), np.zeros((3 * CELL_PX, 4 * CELL_PX), np.uint8))
+    with_empty = [*pairs[:3], (pairs[3][0], empty)]
+    choice = choose_back_end(with_empty, lambda p, f: MODEL_FILE, folds=2, grid=FLOORS)
+    assert choice.photos == 3 and choice.skipped == (str(pairs[3][0]),)
+    assert len(choice.chosen.photo_f1) == 3
+    with pytest.raises(ValueError, match="no label marks any trace"):
+        choose_back_end([(pairs[0][0], empty)] * 2, lambda p, f: MODEL_FILE, folds=2, grid=FLOORS)
 
 
 def test_the_given_settings_stay_unless_a_setting_beats_them_by_more_than_one_standard_error():
     given = BackEndScore({"s": "given"}, 0.60, 0.6, 0.6, -5.0, (0.5, 0.6, 0.7, 0.6))
     tiny = BackEndScore({"s": "tiny"}, 0.61, 0.6, 0.6, -5.0, (0.7, 0.4, 0.72, 0.62))
     clear = BackEndScore({"s": "clear"}, 0.65, 0.6, 0.6, -5.0, (0.56, 0.64, 0.76, 0.64))
-    assert choose_setting([tiny], given) is given  # mean gain 0.01, standard error 0.1
+    # tiny: gains (0.2, -0.2, 0.02, 0.02), mean 0.01 < standard error 0.08; clear: 0.04 each
+    assert choose_setting([tiny], given) is given
     assert choose_setting([tiny, clear], given) is clear
-    # a length error within 15 % wins over the given settings' outside it, at any F1 gain
-    long_given = BackEndScore({"s": "given"}, 0.60, 0.6, 0.6, +40.0, given.photo_f1)
-    level = BackEndScore({"s": "level"}, 0.60, 0.6, 0.6, +10.0, given.photo_f1)
-    assert choose_setting([level], long_given) is level
+    # a setting within the length tolerance is the candidate even at a lower F1 ...
+    level = BackEndScore({"s": "level"}, 0.55, 0.6, 0.6, +10.0, (0.45, 0.55, 0.65, 0.55))
+    long = BackEndScore({"s": "long"}, 0.70, 0.6, 0.6, +40.0, (0.6, 0.7, 0.8, 0.7))
+    assert choose_setting([long, level], given) is given  # ... and must still beat the given F1
+    assert choose_setting([long], given) is long  # none within: the best F1
     with pytest.raises(ValueError, match="no settings"):
         choose_setting([], given)
 
@@ -109,7 +164,7 @@ def test_a_score_with_nothing_drawn_is_recorded_as_json_without_nan():
 
 def test_folds_must_be_between_two_and_the_number_of_photos(short_joints):
     _, pairs = short_joints
-    for folds in (1, 11, 2.5):
+    for folds in (1, 11, 2.5, True):
         with pytest.raises(ValueError, match="folds must be an integer from 2 to the number"):
             choose_back_end(pairs, lambda p, f: MODEL_FILE, folds=folds)
 
@@ -142,15 +197,17 @@ def test_the_command_records_the_choice_and_prints_a_config_that_reproduces_it(c
     back_end = load_model(out).info["back_end"]
     assert back_end["folds"] == 2 and back_end["photos"] == 10
     assert back_end["settings"]["min_trace_length_px"] == 30.0  # the joints are 40 px long
-    assert back_end["site_model_at_given_settings"]["F1"] < 0.1
+    assert back_end["fold_models_at_given_settings"]["F1"] < 0.1
     assert back_end["cross_validated"]["F1"] > 0.5
+    assert back_end["with"] == {"min_trace_contrast": 0.1}  # the config's, pixel_model left out
     assert "fold 2/2" in stderr
     assert model_record(out)["back_end"] == back_end["settings"]
-    # the snippet is TOML whose settings ExtractParams takes, the model path and the choice
+    # the snippet is TOML whose settings ExtractParams takes: the model's absolute path, the
+    # config's other settings and the chosen ones
     snippet = stdout[stdout.index("[imaging.params]"):stdout.index("\nwrote ")]
     params = tomllib.loads(snippet)["imaging"]["params"]
-    assert params.pop("pixel_model") == str(out)
-    assert params == back_end["settings"]
+    assert params.pop("pixel_model") == str(out.resolve())
+    assert params == {**back_end["with"], **back_end["settings"]}
     ExtractParams(**params)
 
 
@@ -160,7 +217,9 @@ def test_extract_warns_when_the_settings_chosen_for_its_model_are_not_used(chose
     default = extract(image, m_per_px=0.01, params=ExtractParams(pixel_model=str(out)))
     [note] = [w for w in default.warnings if "chosen for it by cross-validation" in w]
     assert "min_trace_length_px = 70" in note and "set them in [imaging.params]" in note
-    settings = load_model(out).info["back_end"]["settings"]
+    assert "min_trace_contrast = 0.25" in note  # the config's setting the choice was made with
+    back_end = load_model(out).info["back_end"]
+    settings = {**back_end["with"], **back_end["settings"]}
     used = extract(image, m_per_px=0.01, params=ExtractParams(pixel_model=str(out), **settings))
     assert not [w for w in used.warnings if "cross-validation" in w]
     assert used.traces.n_traces > default.traces.n_traces
@@ -173,6 +232,10 @@ def test_extract_warns_when_the_settings_chosen_for_its_model_are_not_used(chose
      "imaging.params.min_trace_contrst is not a setting of rockmass extract"),
     ('[imaging.params]\nprob_low = 2\n', "imaging.params.prob_low must be a probability in 0-1"),
     ('[imaging.params\n', "cannot read it as TOML"),
+    ('imaging = 3\n', "imaging must be a table"),
+    ('[imaging.params]\nline_polarity = "bright"\n', "needs params.detector = 'ridge'"),
+    ('[imaging.params]\nmax_megapixels = 8.0\n',
+     "max_megapixels = 8.0 differs from the training's --max-megapixels 4"),
 ])
 def test_a_config_the_choice_cannot_start_from_is_refused_by_file_and_field(config, message,
                                                                           short_joints, tmp_path,
@@ -187,6 +250,15 @@ def test_a_config_the_choice_cannot_start_from_is_refused_by_file_and_field(conf
     err = capsys.readouterr().err
     assert f"--config {path}" in err and message in err
     assert not (tmp_path / "m.npz").exists()
+
+
+def test_a_config_with_a_byte_order_mark_is_read_as_rockmass_reads_configs(short_joints, tmp_path):
+    from rockmass.imaging.train_pixel_model import _config_params
+
+    path = tmp_path / "bom.toml"
+    path.write_bytes("\ufeff[imaging.params]\nmin_trace_contrast = -inf\n".encode("utf-8"))
+    params = _config_params(path, None, 4.0)
+    assert params.min_trace_contrast == float("-inf") and params.detector == "learned"
 
 
 @pytest.mark.parametrize("args, message", [
