@@ -36,7 +36,8 @@ shipped recipe.
 
 Your own photographs (docs/imaging.md §3.2): ``--photos DIR --labels DIR --out FILE`` adds the
 labelled photographs of DIR (labels of the same name and size, traces painted red or white on
-black, :mod:`rockmass.imaging.labels`) to the first lot, every tenth held out for the loss;
+black, :mod:`rockmass.imaging.labels`) to the first lot, every tenth held out for the loss (with
+fewer than ten photos and no synthetic faces there is no held-out loss, and the command says so);
 ``--faces 0`` trains on them alone. Each photo is read when it is used (not all held in memory)
 and put on the working grid extraction runs the model on (``--max-megapixels``, the default of
 :class:`rockmass.imaging.extract.ExtractParams`): a model trained on full-size 24 MP photos would
@@ -353,9 +354,15 @@ def main(argv=None) -> int:
             xs.append(features.reshape(features.shape[0], -1)[:, index].T)
             ys.append(labels)
             held.append(np.ones(len(labels), dtype=bool))
-    if not xs:
-        raise SystemExit("train_pixel_model: no held-out faces (train on at least ten faces or "
-                         "photos to have a held-out loss)")
+    if not xs and args.stages == 2:
+        parser.error("--stages 2 fits its second stage on the second lot of faces: give at least "
+                     "ten --faces")
+    if not xs:  # fewer than ten photos and faces: the model is fitted, its loss not measured
+        print("train_pixel_model: no held-out faces or photos (fewer than ten of each): no "
+              "held-out loss; --choose-back-end scores the model on photos it did not see",
+              file=sys.stderr)
+        xs, ys = [np.empty((0, len(FEATURE_NAMES)), np.float32)], [np.empty(0, np.float32)]
+        held = [np.empty(0, bool)]
     x, y, held = np.concatenate(xs), np.concatenate(ys), np.concatenate(held)
     n_features = len(FEATURE_NAMES)
     if args.stages == 2:
@@ -367,9 +374,9 @@ def main(argv=None) -> int:
             "plain_faces_per_stage": n_plain,
             "samples": [n_stage1, int((~held).sum())], "held_out_samples": int(held.sum()),
             "hidden": list(args.hidden), "epochs": args.epochs,
-            "held_out_log_loss": [round(_log_loss(stage.predict(x[held][:, :len(names) if i else
-                                                                       n_features].T), y[held]), 4)
-                                  for i, stage in enumerate(stages)],
+            "held_out_log_loss": None if not held.any() else
+            [round(_log_loss(stage.predict(x[held][:, :len(names) if i else n_features].T), y[held]), 4)
+             for i, stage in enumerate(stages)],
             "stage1_s": round(t_stage1, 1), "total_s": round(time.perf_counter() - t0, 1),
             "python": platform.python_version(), "numpy": np.__version__,
             "data": _data_note(args.faces + n_plain, photos, args.photos),

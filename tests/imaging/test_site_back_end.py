@@ -318,3 +318,20 @@ def test_the_printed_config_runs_rockmass_extract_with_the_chosen_settings(chose
     assert extraction["detector_model"]["file"] == str(out.resolve())
     assert extraction["params"]["min_trace_length_px"] == 30.0
     assert not [w for w in extraction["warnings"] if "cross-validation" in w]
+
+
+def test_a_model_is_trained_on_fewer_than_ten_photos_without_a_held_out_loss(short_joints, tmp_path,
+                                                                               capsys):
+    root, pairs = short_joints
+    (tmp_path / "photos").mkdir()
+    (tmp_path / "labels").mkdir()
+    for photo, label in pairs[:3]:
+        (tmp_path / "photos" / photo.name).symlink_to(photo)
+        (tmp_path / "labels" / label.name).symlink_to(label)
+    out = tmp_path / "three.npz"
+    assert train(["--faces", "0", "--epochs", "1", "--photos", str(tmp_path / "photos"),
+                  "--labels", str(tmp_path / "labels"), "--out", str(out)]) == 0
+    info = load_model(out).info
+    assert info["held_out_log_loss"] is None and info["held_out_samples"] == 0
+    assert "3 labelled photographs" in info["data"] and "(0 held out)" in info["data"]
+    assert "no held-out loss" in capsys.readouterr().err
