@@ -113,8 +113,6 @@ class BackEndChoice:
         Every setting of the grid, in grid order.
     folds : int
         K.
-    photos : int
-        Photos scored (those whose label marks something).
     skipped : tuple of str
         Photos not scored: their label marks nothing.
     base : mapping
@@ -127,7 +125,6 @@ class BackEndChoice:
     shipped: BackEndScore
     scores: tuple[BackEndScore, ...] = field(repr=False)
     folds: int
-    photos: int
     skipped: tuple[str, ...] = ()
     base: Mapping[str, Any] = field(default_factory=dict)
 
@@ -135,6 +132,11 @@ class BackEndChoice:
     def settings(self) -> dict:
         """The chosen settings."""
         return dict(self.chosen.settings)
+
+    @property
+    def photos(self) -> int:
+        """Photos scored (those whose label marks something)."""
+        return len(self.at_given.photo_f1)
 
     @property
     def kept_given(self) -> bool:
@@ -331,7 +333,7 @@ def choose_back_end(pairs: Sequence[tuple], train: Callable[[list, int], Path], 
               and getattr(base, f.name) != getattr(defaults, f.name)}
     return BackEndChoice(chosen=choose_setting(scores, at_given), at_given=at_given,
                          shipped=_score(given, counts["shipped"]), scores=scores, folds=folds,
-                         photos=len(counts["given"]), skipped=tuple(skipped),
+                         skipped=tuple(skipped),
                          base=MappingProxyType(differ))
 
 

@@ -62,10 +62,11 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import platform
 import sys
 import time
-from dataclasses import fields, replace
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -286,7 +287,7 @@ def main(argv=None) -> int:
     parser.add_argument("--config", metavar="FILE",
                         help="with --choose-back-end: the [imaging.params] of this rockmass config "
                              "are the settings the choice starts from (e.g. min_trace_contrast = "
-                             "-inf for joints that show bright); pixel_model there is ignored")
+                             "-1 for joints that show bright); pixel_model there is ignored")
     args = parser.parse_args(argv)
     if args.config is not None and args.choose_back_end is None:
         parser.error("--config goes with --choose-back-end")
@@ -402,36 +403,28 @@ def main(argv=None) -> int:
 
 
 def _config_params(path, parser, max_megapixels: float):
-    """ExtractParams of the ``[imaging.params]`` table of a rockmass config file, the settings the
-    back-end choice starts from: its ``pixel_model`` left out (the model is the one being trained),
-    ``max_megapixels`` the training's. A parser error (exit 2) naming the file and the setting when
-    the file cannot be read, a setting is unknown or refused, the learned detector cannot run with
-    them, or the config's ``max_megapixels`` differs from the training's."""
-    import tomllib
-
+    """ExtractParams of the ``[imaging.params]`` of a rockmass config file
+    (:func:`rockmass.config.load_config`, which names the file and the field of any problem), the
+    settings the back-end choice starts from: its ``pixel_model`` left out (the model is the one
+    being trained), ``max_megapixels`` the training's. A parser error (exit 2) when the config is
+    refused, the learned detector cannot run with it, or its ``max_megapixels`` differs from the
+    training's."""
+    from ..config import load_config
+    from ..errors import ConfigError
     from .extract import ExtractParams
 
-    try:  # as rockmass reads configs: UTF-8, a byte-order mark allowed
-        document = tomllib.loads(Path(path).read_bytes().decode("utf-8-sig"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
-        parser.error(f"--config {path}: cannot read it as TOML ({error})")
-    imaging = document.get("imaging", {})
-    table = imaging.get("params", {}) if isinstance(imaging, dict) else None
-    if not isinstance(table, dict):
-        parser.error(f"--config {path}: {'imaging.params' if isinstance(imaging, dict) else 'imaging'}"
-                     f" must be a table")
-    table = {name: value for name, value in table.items() if name != "pixel_model"}
-    unknown = sorted(set(table) - {f.name for f in fields(ExtractParams)})
-    if unknown:
-        parser.error(f"--config {path}: imaging.params.{unknown[0]} is not a setting of "
-                     f"rockmass extract (docs/config.md)")
+    try:
+        document = load_config(path)
+    except ConfigError as error:
+        parser.error(f"--config {error}")
+    table = {} if document.imaging is None else dict(document.imaging.params)
+    table.pop("pixel_model", None)
     if table.get("max_megapixels", max_megapixels) != max_megapixels:
         parser.error(f"--config {path}: imaging.params.max_megapixels = {table['max_megapixels']} "
                      f"differs from the training's --max-megapixels {max_megapixels:g}: give the "
                      f"same to both, so the model is trained on the grid it will run on")
     try:
-        params = ExtractParams(**table)
-        return replace(params, detector="learned", max_megapixels=max_megapixels)
+        return replace(ExtractParams(**table), detector="learned", max_megapixels=max_megapixels)
     except ValueError as error:
         parser.error(f"--config {path}: imaging.{error}")
 
@@ -466,7 +459,7 @@ def _back_end_report(choice, path) -> str:
     from .site_back_end import TOLERANCE_PX
 
     def line(name, score):
-        precision = "-" if score.precision != score.precision else f"{score.precision:.3f}"
+        precision = "-" if math.isnan(score.precision) else f"{score.precision:.3f}"
         return (f"  {name}\n      F1 {score.f1:.3f}  P {precision}  R {score.recall:.3f}  "
                 f"dP21 {score.dp21_pct:+.0f} %")
 

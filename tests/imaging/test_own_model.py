@@ -16,21 +16,21 @@ from rockmass.imaging.learned import MAX_STRETCH, MIN_SPREAD, MODEL_FILE, load_m
 from rockmass.imaging.metrics import raster_counts, render_traces
 from rockmass.imaging.train_pixel_model import labelled_photo, main as train
 
+from ._photos import as_photo, draw_joint, rock_texture
+
 
 def _vein_photo(seed, shape=(240, 320), n=5):
     """A grey rock texture crossed by ``n`` straight *bright* veins 3 px wide, and their label
     (white on black). The shipped model is trained on dark joints only."""
     rng = np.random.default_rng(seed)
-    rock = cv2.GaussianBlur(rng.normal(0, 1, shape).astype(np.float32), (0, 0), 2.0)
-    image = 0.45 + 0.06 * rock / rock.std()
+    image = rock_texture(rng, shape, 0.45, 0.06)
     label = np.zeros(shape, np.uint8)
     for _ in range(n):
         centre, angle = rng.uniform([0, 0], shape[::-1]), rng.uniform(0, np.pi)
         reach = np.array([np.cos(angle), np.sin(angle)]) * 400
         a, b = (tuple(int(v) for v in centre - reach), tuple(int(v) for v in centre + reach))
-        cv2.line(image, a, b, 0.8, 3)
-        cv2.line(label, a, b, 255, 3)
-    return (np.clip(image, 0, 1) * 255).astype(np.uint8), label
+        draw_joint(image, label, a, b, 0.8)
+    return as_photo(image), label
 
 
 @pytest.fixture(scope="module")

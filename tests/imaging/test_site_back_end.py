@@ -19,6 +19,8 @@ from rockmass.imaging.site_back_end import (BACK_END_GRID, BackEndScore, choose_
                                             choose_setting, fold_of)
 from rockmass.imaging.train_pixel_model import main as train
 
+from ._photos import as_photo, draw_joint, rock_texture
+
 JOINT_PX = 40  # every joint of the photos below is this long: a length floor above it drops all
 CELL_PX = 70
 
@@ -28,8 +30,7 @@ def _short_joint_photo(seed, cells=(3, 4)):
     CELL_PX cell, at a random angle (none touches another), and its label (white on black)."""
     rng = np.random.default_rng(seed)
     shape = (cells[0] * CELL_PX, cells[1] * CELL_PX)
-    rock = cv2.GaussianBlur(rng.normal(0, 1, shape).astype(np.float32), (0, 0), 2.0)
-    image = 0.55 + 0.05 * rock / rock.std()
+    image = rock_texture(rng, shape, 0.55, 0.05)
     label = np.zeros(shape, np.uint8)
     for row in range(cells[0]):
         for col in range(cells[1]):
@@ -38,9 +39,8 @@ def _short_joint_photo(seed, cells=(3, 4)):
             half = 0.5 * JOINT_PX * np.array([np.cos(angle), np.sin(angle)])
             a, b = (tuple(int(round(v)) for v in centre - half),
                     tuple(int(round(v)) for v in centre + half))
-            cv2.line(image, a, b, 0.2, 3)
-            cv2.line(label, a, b, 255, 3)
-    return (np.clip(image, 0, 1) * 255).astype(np.uint8), label
+            draw_joint(image, label, a, b, 0.2)
+    return as_photo(image), label
 
 
 @pytest.fixture(scope="module")
@@ -229,10 +229,11 @@ def test_extract_warns_when_the_settings_chosen_for_its_model_are_not_used(chose
 
 @pytest.mark.parametrize("config, message", [
     ('[imaging.params]\nmin_trace_contrst = 0.1\n',
-     "imaging.params.min_trace_contrst is not a setting of rockmass extract"),
-    ('[imaging.params]\nprob_low = 2\n', "imaging.params.prob_low must be a probability in 0-1"),
-    ('[imaging.params\n', "cannot read it as TOML"),
-    ('imaging = 3\n', "imaging must be a table"),
+     "imaging.params: unknown key(s) min_trace_contrst (allowed: max_megapixels,"),
+    ('[imaging.params]\nprob_low = 2\n',
+     "imaging.params: params.prob_low must be a probability in 0-1, got 2"),
+    ('[imaging.params\n', "<file>: invalid TOML: Expected ']' at the end of a table declaration"),
+    ('imaging = 3\n', "imaging: must be a table ([section] or {key = value}), got 3"),
     ('[imaging.params]\nline_polarity = "bright"\n', "needs params.detector = 'ridge'"),
     ('[imaging.params]\nmax_megapixels = 8.0\n',
      "max_megapixels = 8.0 differs from the training's --max-megapixels 4"),
@@ -256,9 +257,9 @@ def test_a_config_with_a_byte_order_mark_is_read_as_rockmass_reads_configs(short
     from rockmass.imaging.train_pixel_model import _config_params
 
     path = tmp_path / "bom.toml"
-    path.write_bytes("\ufeff[imaging.params]\nmin_trace_contrast = -inf\n".encode("utf-8"))
+    path.write_bytes("\ufeff[imaging.params]\nmin_trace_contrast = -1.0\n".encode("utf-8"))
     params = _config_params(path, None, 4.0)
-    assert params.min_trace_contrast == float("-inf") and params.detector == "learned"
+    assert params.min_trace_contrast == -1.0 and params.detector == "learned"
 
 
 @pytest.mark.parametrize("args, message", [
