@@ -49,7 +49,8 @@ import numpy as np
 from .frame import check_scale, rc_to_uv
 from .vectorize import image_window_uv_m
 
-__all__ = ["ExtractParams", "ScaleInfo", "Extraction", "extract", "scale_from_control_points"]
+__all__ = ["ExtractParams", "ScaleInfo", "Extraction", "extract", "scale_from_control_points",
+           "infinities_as_text"]
 
 #: Smallest image side the chain accepts, pixels.
 MIN_SIDE_PX = 16
@@ -642,7 +643,7 @@ class Extraction:
     def summary(self) -> dict:
         """A JSON-ready dict of the scale, parameters, timings and warnings (no arrays)."""
         return {"n_traces": self.traces.n_traces, "units": self.scale.units,
-                "scale": asdict(self.scale), "params": asdict(self.params),
+                "scale": asdict(self.scale), "params": infinities_as_text(asdict(self.params)),
                 "joint_width_px": self.joint_width_px,
                 "joint_width_source": self.joint_width_source,
                 "face_orientation": self.face_orientation,
@@ -650,9 +651,25 @@ class Extraction:
                 "detector_model": None if self.detector_model is None else dict(self.detector_model),
                 "detector_choice": None if self.detector_choice is None
                 else {**self.detector_choice, "traces": dict(self.detector_choice["traces"])},
-                "face_contrast": None if self.face_contrast is None else dict(self.face_contrast),
+                "face_contrast": None if self.face_contrast is None
+                else infinities_as_text(self.face_contrast),
                 "learned_levels": None if self.learned_levels is None else dict(self.learned_levels),
                 "timings_s": dict(self.timings_s), "warnings": list(self.warnings)}
+
+
+def infinities_as_text(record: Mapping[str, Any]) -> dict:
+    """A flat record (``asdict`` of :class:`ExtractParams`, a config's ``[imaging.params]``,
+    ``Extraction.face_contrast``) with its infinities as the strings "inf" / "-inf": JSON has no
+    infinity, and ``float()`` reads these back (``min_trace_contrast = -inf`` turns the contrast
+    filter off, and the contrast floor is then ``-inf``).
+
+    Examples
+    --------
+    >>> infinities_as_text({"min_trace_contrast": float("-inf"), "prob_low": 0.8, "detector": "auto"})
+    {'min_trace_contrast': '-inf', 'prob_low': 0.8, 'detector': 'auto'}
+    """
+    return {name: str(value) if isinstance(value, float) and np.isinf(value) else value
+            for name, value in record.items()}
 
 
 def scale_from_control_points(control_points, shape_px: tuple[int, int] | None = None) -> float:

@@ -287,7 +287,7 @@ def main(argv=None) -> int:
     parser.add_argument("--config", metavar="FILE",
                         help="with --choose-back-end: the [imaging.params] of this rockmass config "
                              "are the settings the choice starts from (e.g. min_trace_contrast = "
-                             "-1 for joints that show bright); pixel_model there is ignored")
+                             "-inf for joints that show bright); pixel_model there is ignored")
     args = parser.parse_args(argv)
     if args.config is not None and args.choose_back_end is None:
         parser.error("--config goes with --choose-back-end")

@@ -57,8 +57,8 @@ import typing
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import (AfterValidator, BaseModel, Field, ValidationError, field_validator, model_serializer,
-                      model_validator)
+from pydantic import (AfterValidator, AllowInfNan, BaseModel, Field, ValidationError,
+                      field_serializer, field_validator, model_serializer, model_validator)
 
 from .canonical import canonical_json, config_hash  # here too: their home before they moved
 from .errors import ConfigError
@@ -152,6 +152,10 @@ class ImagingConfig(StrictModel):
     params : table, optional
         Any field of :class:`rockmass.imaging.ExtractParams` (``low_k = 2.0``,
         ``max_megapixels = 8.0``, ...); unknown keys and out-of-range values are errors.
+        Infinities are allowed here (``min_trace_contrast = -inf`` turns the contrast filter off,
+        ``face_contrast_share = inf`` keeps the fixed floor); ExtractParams refuses them, and NaN,
+        where they make no sense. In the config's JSON form (its canonical text and hash) they
+        are the strings "inf" / "-inf".
     """
 
     m_per_px: float | None = Field(None, gt=0)
@@ -159,7 +163,8 @@ class ImagingConfig(StrictModel):
     joint_width_m: float | None = Field(None, gt=0)
     face_dip_deg: float | None = Field(None, ge=0, le=90)
     face_dip_direction_deg: float | None = Field(None, ge=0, lt=360)
-    params: dict[str, bool | int | float | str | list[int]] = Field(default_factory=dict)
+    params: dict[str, bool | int | Annotated[float, AllowInfNan(True)] | str | list[int]] = Field(
+        default_factory=dict)
 
     @field_validator("params")
     @classmethod
@@ -174,6 +179,13 @@ class ImagingConfig(StrictModel):
             raise ValueError(f"unknown key(s) {', '.join(unknown)} (allowed: {', '.join(allowed)})")
         ExtractParams(**value)  # its own range checks; the message names the key
         return value
+
+    @field_serializer("params", when_used="json")
+    def _infinities_as_text(self, value: dict) -> dict:
+        """JSON has no infinity (:func:`rockmass.imaging.extract.infinities_as_text`)."""
+        from rockmass.imaging.extract import infinities_as_text
+
+        return infinities_as_text(value)
 
     @model_validator(mode="after")
     def _one_joint_width(self) -> ImagingConfig:

@@ -216,6 +216,7 @@ def produce(args, out_dir, document=None):
     summary, result, traces, image, set_ids, timings, settings = compute(args, document)
     plotting.join()
     from .atomic import atomic_path, atomic_write_json
+    from .imaging.extract import infinities_as_text
     from .dfn import write_traces
     from .dfn.plots import rose_diagram
     from .imaging.overlay import plot_overlay
@@ -247,7 +248,8 @@ def produce(args, out_dir, document=None):
         atomic_write_json(paths["summary.json"], summary)
         atomic_write_json(paths["manifest.json"], build_manifest(
             command=args.argv, inputs=[args.photo] + [p for p in (args.roi, args.roi_px, args.config) if p],
-            config={"imaging": settings}, timings_s=timings))
+            config={"imaging": {**settings, "params": infinities_as_text(settings["params"])}},
+            timings_s=timings))
     return summary
 
 

@@ -183,7 +183,7 @@ def chosen_model(short_joints):
     root, _ = short_joints
     out = root / "site.npz"
     config = root / "base.toml"
-    config.write_text('[imaging.params]\nmin_trace_contrast = 0.1\npixel_model = "ignored.npz"\n')
+    config.write_text('[imaging.params]\nmin_trace_contrast = -inf\npixel_model = "ignored.npz"\n')
     done = subprocess.run(
         [sys.executable, "-m", "rockmass.imaging.train_pixel_model", "--faces", "0", "--epochs", "3",
          "--photos", str(root / "photos"), "--labels", str(root / "labels"), "--out", str(out),
@@ -199,7 +199,7 @@ def test_the_command_records_the_choice_and_prints_a_config_that_reproduces_it(c
     assert back_end["settings"]["min_trace_length_px"] == 30.0  # the joints are 40 px long
     assert back_end["fold_models_at_given_settings"]["F1"] < 0.1
     assert back_end["cross_validated"]["F1"] > 0.5
-    assert back_end["with"] == {"min_trace_contrast": 0.1}  # the config's, pixel_model left out
+    assert back_end["with"] == {"min_trace_contrast": float("-inf")}  # the config's, pixel_model left out
     assert "fold 2/2" in stderr
     assert model_record(out)["back_end"] == back_end["settings"]
     # the snippet is TOML whose settings ExtractParams takes: the model's absolute path, the
@@ -257,9 +257,9 @@ def test_a_config_with_a_byte_order_mark_is_read_as_rockmass_reads_configs(short
     from rockmass.imaging.train_pixel_model import _config_params
 
     path = tmp_path / "bom.toml"
-    path.write_bytes("\ufeff[imaging.params]\nmin_trace_contrast = -1.0\n".encode("utf-8"))
+    path.write_bytes("\ufeff[imaging.params]\nmin_trace_contrast = -inf\n".encode("utf-8"))
     params = _config_params(path, None, 4.0)
-    assert params.min_trace_contrast == -1.0 and params.detector == "learned"
+    assert params.min_trace_contrast == float("-inf") and params.detector == "learned"
 
 
 @pytest.mark.parametrize("args, message", [
@@ -318,6 +318,9 @@ def test_the_printed_config_runs_rockmass_extract_with_the_chosen_settings(chose
     extraction = json.loads((tmp_path / "out" / "summary.json").read_text())["extraction"]
     assert extraction["detector_model"]["file"] == str(out.resolve())
     assert extraction["params"]["min_trace_length_px"] == 30.0
+    # the config's -inf (no contrast floor) went through, and JSON holds it as text
+    assert extraction["params"]["min_trace_contrast"] == "-inf"
+    assert extraction["face_contrast"]["contrast_floor"] == "-inf"
     assert not [w for w in extraction["warnings"] if "cross-validation" in w]
 
 
