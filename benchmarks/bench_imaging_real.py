@@ -97,12 +97,12 @@ import numpy as np
 
 from _common import header, save, table
 
+from rockmass.imaging.label_scores import TOLERANCE_PX, label_trace_count
 from rockmass.imaging.metrics import summarise_counts
 
 DATA = Path(os.environ.get("ROCKMASS_REAL_DATA",
                            Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
                            / "rock-face-fractures")).resolve()
-TOLERANCE_PX = 5.0
 
 REAL_COLUMNS = [("split", "s"), ("detector", "s"), ("setting", "s"), ("images", "d"), ("F1", ".3f"),
                 ("P", ".3f"), ("R", ".3f"), ("F1_pooled", ".3f"), ("dP21_pct", "+.0f"),
@@ -128,8 +128,6 @@ LEARNED_SETTINGS = (
 #: The rows of LEARNED_SETTINGS also run on the synthetic faces: the oldest setting and the steps
 #: of the last two sessions.
 SYNTHETIC_SETTINGS = (LEARNED_SETTINGS[0], LEARNED_SETTINGS[-2], LEARNED_SETTINGS[-1])
-#: Labelled branches shorter than this are not counted as traces (pixels).
-LABEL_MIN_TRACE_PX = 10.0
 
 
 def label_skeleton(path: Path, upsample: float = 1.0) -> np.ndarray:
@@ -146,18 +144,6 @@ def label_skeleton(path: Path, upsample: float = 1.0) -> np.ndarray:
         raise OSError(f"{path}: cannot read the label image")
     big = cv2.resize(bgr, None, fx=upsample, fy=upsample, interpolation=cv2.INTER_NEAREST)
     return label_centre_lines(np.ascontiguousarray(big[..., ::-1]))
-
-
-def label_trace_count(truth: np.ndarray) -> int:
-    """Number of labelled traces: the skeleton's branches, spurs under 5 px pruned, chained straight
-    through junctions as the extraction chain does (its default turn limit), those of at least
-    :data:`LABEL_MIN_TRACE_PX`."""
-    from rockmass.imaging import link, skeleton_graph
-    from rockmass.imaging.extract import ExtractParams
-
-    graph = skeleton_graph.prune_spurs(skeleton_graph.build_graph(truth), 5.0)
-    chains = skeleton_graph.chain_traces(graph, max_turn_deg=ExtractParams().max_turn_deg)
-    return sum(link.polyline_length_px(c) >= LABEL_MIN_TRACE_PX for c in chains)
 
 
 def real_pairs(split: str = "val") -> list[tuple[Path, Path]]:

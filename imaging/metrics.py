@@ -21,7 +21,7 @@ import numpy as np
 from .frame import check_scale, uv_to_rc
 
 __all__ = ["Accuracy", "trace_accuracy", "buffered_match", "raster_match", "raster_counts",
-           "pixels_within", "summarise_counts", "image_f1", "render_chains", "render_traces",
+           "matched_pixels", "pixels_within", "summarise_counts", "image_f1", "render_chains", "render_traces",
            "count_nodes", "set_mean_angles"]
 
 
@@ -150,7 +150,24 @@ def raster_counts(extracted, truth, *, tolerance_px: float = 5.0) -> tuple[int, 
         the tolerance of an extracted pixel, true pixels.
     """
     pred, true = _checked_masks(extracted, truth, tolerance_px, "extracted and truth")
-    return (*_pixels_within(pred, true, tolerance_px), *_pixels_within(true, pred, tolerance_px))
+    pred_near, true_near = _near(pred, true, tolerance_px), _near(true, pred, tolerance_px)
+    return int(pred_near.sum()), int(pred.sum()), int(true_near.sum()), int(true.sum())
+
+
+def matched_pixels(extracted, truth, *, tolerance_px: float = 5.0) -> tuple[np.ndarray, np.ndarray]:
+    """The pixels :func:`raster_counts` counts as matched, as masks: (extracted pixels within the
+    tolerance of a true pixel, true pixels within the tolerance of an extracted pixel).
+
+    Examples
+    --------
+    >>> a = np.zeros((9, 30), bool); a[4, 0:20] = True
+    >>> b = np.zeros((9, 30), bool); b[6, 10:30] = True
+    >>> near_a, near_b = matched_pixels(a, b, tolerance_px=3.0)
+    >>> int(near_a.sum()), int(near_b.sum()), int(np.flatnonzero(near_b[6]).min())
+    (12, 12, 10)
+    """
+    pred, true = _checked_masks(extracted, truth, tolerance_px, "extracted and truth")
+    return _near(pred, true, tolerance_px), _near(true, pred, tolerance_px)
 
 
 def summarise_counts(counts) -> dict:
@@ -221,8 +238,8 @@ def pixels_within(mask, reference, tolerance_px: float) -> tuple[int, int]:
     >>> pixels_within(a, b, 2.0), pixels_within(a, b, 3.0), pixels_within(b, a, 2.0)
     ((3, 7), (5, 7), (3, 3))
     """
-    return _pixels_within(*_checked_masks(mask, reference, tolerance_px, "mask and reference"),
-                          tolerance_px)
+    mask, reference = _checked_masks(mask, reference, tolerance_px, "mask and reference")
+    return int(_near(mask, reference, tolerance_px).sum()), int(mask.sum())
 
 
 def _checked_masks(a, b, tolerance_px, names: str):
@@ -236,9 +253,11 @@ def _checked_masks(a, b, tolerance_px, names: str):
     return a, b
 
 
-def _pixels_within(mask, reference, tolerance_px):
-    matched = int((_distance_to(reference)[mask] <= tolerance_px).sum()) if reference.any() else 0
-    return matched, int(mask.sum())
+def _near(mask, reference, tolerance_px) -> np.ndarray:
+    """The pixels of ``mask`` within ``tolerance_px`` of a pixel of ``reference`` (bool mask)."""
+    if not reference.any():
+        return np.zeros_like(mask)
+    return mask & (_distance_to(reference) <= tolerance_px)
 
 
 def _sample(trace_map, height_px, m_per_px, step_px=0.5):

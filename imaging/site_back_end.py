@@ -46,6 +46,8 @@ from typing import Any
 
 import numpy as np
 
+from . import label_scores
+
 __all__ = ["BACK_END_GRID", "LENGTH_TOLERANCE_PCT", "TOLERANCE_PX", "BackEndScore", "BackEndChoice",
            "fold_of", "choose_setting", "choose_back_end", "chosen_settings", "recommended_settings",
            "unused_settings_note"]
@@ -57,8 +59,8 @@ BACK_END_GRID: tuple[Mapping[str, float], ...] = tuple(
 #: A setting is preferred when its trace length error is within this (%).
 LENGTH_TOLERANCE_PCT = 15.0
 #: Scoring tolerance: a drawn (labelled) pixel is matched within this distance of a labelled
-#: (drawn) one, pixels of the photograph.
-TOLERANCE_PX = 5.0
+#: (drawn) one, pixels of the photograph (the scores of ``rockmass score``).
+TOLERANCE_PX = label_scores.TOLERANCE_PX
 
 
 @dataclass(frozen=True)
@@ -242,11 +244,10 @@ def _score(settings, counts) -> BackEndScore:
 def _photo_counts(image, lines, params) -> tuple[int, int, int, int]:
     """raster_counts of one photo's traces (``params``) against its label's centre lines."""
     from .extract import extract
-    from .metrics import raster_counts, render_traces
+    from .label_scores import score_traces
 
     result = extract(image, m_per_px=1.0, params=params)  # "metres" = pixels of the photo
-    drawn = render_traces(result.traces, lines.shape, 1.0)
-    return raster_counts(drawn, lines, tolerance_px=TOLERANCE_PX)
+    return score_traces(result.traces, lines, tolerance_px=TOLERANCE_PX)[0]
 
 
 def _read_pair(photo, label):

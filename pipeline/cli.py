@@ -21,7 +21,7 @@ __all__ = ["build_parser", "main"]
 
 # The module of every subcommand; each has ``add_parser(subparsers)``, which registers ``run(args)
 # -> int`` as the handler. They are imported when the parser is built: keep them light at import.
-_SUBCOMMANDS = ("extract_cmd", "traces_cmd", "boxcount_cmd", "scanline_cmd", "dfn_cmd", "blocks_cmd",
+_SUBCOMMANDS = ("extract_cmd", "score_cmd", "traces_cmd", "boxcount_cmd", "scanline_cmd", "dfn_cmd", "blocks_cmd",
                "blocks3d_cmd", "solve_cmd", "run_cmd", "study_cmd", "warmup")
 
 

@@ -22,13 +22,13 @@ from .inputs import read_polygon_file
 from .outputs import output_set, plot_text
 from .traces_stage import dimension_entry
 
-__all__ = ["compute", "produce"]
+__all__ = ["compute", "produce", "imaging_settings", "read_photograph", "extract_params"]
 
 #: names ``rockmass extract`` may write besides those of the new set (``--debug-images``).
 _OWNED = (r"debug_.+\.png", r"traces_map\.geojson")
 
 
-def _settings(args, document=None):
+def imaging_settings(args, document=None):
     """The ``[imaging]`` settings as a dict: from ``document`` (a validated RockmassConfig, e.g. the
     one ``rockmass run`` planned with) when given, else from ``--config`` (or the defaults), then
     overridden by the flags given."""
@@ -78,6 +78,42 @@ def _check_pixel_model(path) -> None:
         raise InputError(f"imaging.params.pixel_model / --pixel-model: {error}") from error
 
 
+def read_photograph(path: Path, max_pixels_option: int | None = None):
+    """(image, pixel limit in force): the photograph at ``path`` read as
+    :func:`rockmass.imaging.enhance.read_photo` reads it, refused from its header before decoding
+    when it has more pixels than the limit (``--max-pixels``, :mod:`rockmass.image_limits`).
+
+    Raises
+    ------
+    InputError
+        The file cannot be read as a photograph, or is too large (the message names it).
+    """
+    from .image_limits import check_image_pixels, max_pixels
+    from .imaging.enhance import read_photo
+
+    check_image_pixels(path, max_pixels_option)  # from the header, before decoding
+    pixel_limit = max_pixels(max_pixels_option)
+    try:
+        return read_photo(path, pixel_limit), pixel_limit
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read the photograph: {exc.strerror or exc}") from exc
+    except ValueError as exc:
+        raise InputError(f"{path}: {exc}") from None
+
+
+def extract_params(settings: dict, config=None):
+    """The :class:`rockmass.imaging.ExtractParams` of ``settings["params"]`` (from
+    :func:`imaging_settings`); a refused value is bad input naming ``config`` (the file, when the
+    settings came from one) and the field."""
+    from .imaging.extract import ExtractParams
+
+    try:
+        return ExtractParams(**settings["params"])
+    except (TypeError, ValueError) as exc:
+        where = f"{config}: " if config else ""
+        raise InputError(f"{where}imaging.params: {exc}") from None
+
+
 @reads("photo")
 def compute(args, document=None):
     """Extract and analyse; return (summary, extraction, traces with sets, image, set ids, timings,
@@ -88,22 +124,13 @@ def compute(args, document=None):
     import numpy as np
 
     from .imaging import extract
-    from .image_limits import check_image_pixels, max_pixels
-    from .imaging.enhance import read_photo
     from .imaging.extract import STEPS, ExtractParams
     from .progress import step_bar
 
-    settings = _settings(args, document)
+    settings = imaging_settings(args, document)
     path = Path(args.photo)
     t0 = time.perf_counter()
-    check_image_pixels(path, getattr(args, "max_pixels", None))  # from the header, before decoding
-    pixel_limit = max_pixels(getattr(args, "max_pixels", None))
-    try:
-        image = read_photo(path, pixel_limit)
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read the photograph: {exc.strerror or exc}") from exc
-    except ValueError as exc:
-        raise InputError(f"{path}: {exc}") from None
+    image, pixel_limit = read_photograph(path, getattr(args, "max_pixels", None))
     roi = None
     if args.roi:
         with reading(args.roi, "--roi"):
