@@ -27,7 +27,7 @@ PHOTO_SUFFIXES = (".jpg", ".jpeg", ".png", ".tif", ".tiff", ".bmp")
 
 def label_mask(label) -> np.ndarray:
     """Bool mask of the traces of a label image (a path, or an (H, W) / (H, W, 3) uint8 array in
-    RGB order).
+    RGB order). Files of 16 bits are read at the same levels on 8; an alpha channel is ignored.
 
     Examples
     --------
@@ -37,16 +37,26 @@ def label_mask(label) -> np.ndarray:
     >>> label_mask(np.where(np.eye(4, dtype=bool), 255, 0).astype(np.uint8)).sum()
     np.int64(4)
     """
+    name = ""
     if isinstance(label, (str, Path)):
         import cv2
 
-        bgr = cv2.imread(str(label), cv2.IMREAD_UNCHANGED)
-        if bgr is None:
+        name = f"{label}: "
+        stored = cv2.imread(str(label), cv2.IMREAD_UNCHANGED)
+        if stored is None:
             raise OSError(f"{label}: cannot read the label image")
-        label = bgr[..., 2::-1] if bgr.ndim == 3 else bgr  # BGR(A) -> RGB
+        if stored.ndim == 3 and stored.shape[2] in (3, 4):
+            label = stored[..., 2::-1]  # BGR(A) -> RGB
+        elif stored.ndim == 3 and stored.shape[2] == 2:
+            label = stored[..., 0]  # grey and alpha: the grey
+        else:
+            label = stored
     array = np.asarray(label)
-    if array.dtype != np.uint8:
-        raise ValueError(f"label image must be 8 bit, got {array.dtype}")
+    if array.dtype == np.uint16:  # 16-bit masks: the same levels on 8 bits
+        array = (array // 257).astype(np.uint8)
+    if array.dtype != np.uint8 or array.ndim not in (2, 3):
+        raise ValueError(f"{name}a label image must be a grey or colour image of 8 or 16 bits, "
+                         f"got {array.dtype} of shape {array.shape}")
     if array.ndim == 3:
         red = (array[..., 0] > 128) & (array[..., 1] < 100) & (array[..., 2] < 100)
         if red.any():

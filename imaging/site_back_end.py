@@ -27,7 +27,12 @@ traces. So ``train_pixel_model --photos ... --choose-back-end`` chooses them on 
    Friedman 2009, §7.10), it keeps the grid's near-ties from being taken for gains.
 
 The kept setting's cross-validated F1 is the best of ``len(BACK_END_GRID)`` on the same folds, so
-it is an optimistic estimate; photographs kept out of the whole choice give an unbiased one
+it is an optimistic estimate. What the choice does on photos it did not see is estimated too
+(:func:`held_out_score`, since session 21): each fold's photos are scored at the setting chosen by
+rules 4-5 from the other folds' photos alone, the outer loop of a nested cross-validation (Varma &
+Simon 2006). For a fixed model (``rockmass score --choose-back-end``) nothing else saw the fold;
+for a trained one, the fold's photos still trained the models of the other folds, so a little of
+them reaches the choice. Photographs kept out of the whole choice give the unbiased figure
 (``benchmarks/bench_imaging_outcrop.py --site-models`` does that). The same photos are also
 extracted with the shipped model at the given settings, for comparison. The probability map of a
 photo is computed once per model for all the settings
@@ -49,8 +54,8 @@ import numpy as np
 from . import label_scores
 
 __all__ = ["BACK_END_GRID", "LENGTH_TOLERANCE_PCT", "TOLERANCE_PX", "BackEndScore", "BackEndChoice",
-           "fold_of", "choose_setting", "choose_back_end", "chosen_settings", "recommended_settings",
-           "unused_settings_note"]
+           "fold_of", "choose_setting", "held_out_score", "choose_back_end", "report_text",
+           "chosen_settings", "recommended_settings", "unused_settings_note"]
 
 #: The settings tried, in order; the defaults of ExtractParams (0.8, 0.97, 70 px) are among them.
 BACK_END_GRID: tuple[Mapping[str, float], ...] = tuple(
@@ -120,6 +125,12 @@ class BackEndChoice:
     base : mapping
         The other settings the choice was made with, where they differ from ExtractParams'
         defaults (``max_megapixels``, ``min_trace_contrast``, ...).
+    held_out : BackEndScore or None
+        What choosing does on photos the choice did not see (:func:`held_out_score`): each
+        fold's photos scored at the setting chosen on the other folds' photos by the same rule;
+        its ``settings`` are empty (they differ by fold: ``fold_settings``).
+    fold_settings : tuple of mappings
+        The setting chosen without each fold, in fold order.
     """
 
     chosen: BackEndScore
@@ -129,6 +140,8 @@ class BackEndChoice:
     folds: int
     skipped: tuple[str, ...] = ()
     base: Mapping[str, Any] = field(default_factory=dict)
+    held_out: BackEndScore | None = None
+    fold_settings: tuple[Mapping[str, float], ...] = ()
 
     @property
     def settings(self) -> dict:
@@ -156,14 +169,17 @@ class BackEndChoice:
                         "(rockmass.imaging.site_back_end)",
                 "kept_given": self.kept_given,
                 "cross_validated": self.chosen.record(),
+                "chosen_without_the_photos_scored": None if self.held_out is None else {
+                    **self.held_out.record(), "settings": [dict(f) for f in self.fold_settings]},
                 "fold_models_at_given_settings": self.at_given.record(),
                 "shipped_model_at_given_settings": self.shipped.record()}
 
     def config_snippet(self, model_path) -> str:
         """The ``[imaging.params]`` table of a rockmass config that extracts with the model as it
-        was chosen: its absolute path, the other settings of the choice and the chosen ones
-        (TOML)."""
-        values = {"pixel_model": str(Path(model_path).resolve()), **self.base, **self.settings}
+        was chosen: its absolute path (none for the shipped model: ``model_path`` None), the
+        other settings of the choice and the chosen ones (TOML)."""
+        model = {} if model_path is None else {"pixel_model": str(Path(model_path).resolve())}
+        values = {**model, **self.base, **self.settings}
         return "\n".join(["[imaging.params]",
                           *(f"{name} = {_toml_value(value)}" for name, value in values.items())])
 
@@ -232,6 +248,58 @@ def choose_setting(scores: Sequence[BackEndScore], given: BackEndScore) -> BackE
     return candidate if gain.mean() > error else given
 
 
+def held_out_score(grid_counts, given_counts, photo_folds, grid, given):
+    """What choosing the setting does on photographs the choice did not see: for each fold f,
+    the setting :func:`choose_setting` picks from the other folds' photos, scored on fold f's
+    photos; then those photos' counts, every photo at its own fold's choice, summarised as one
+    :class:`BackEndScore` (the outer loop of a nested cross-validation; the grid's best on the
+    same photos, :attr:`BackEndChoice.chosen`, is optimistic, this is not).
+
+    Parameters
+    ----------
+    grid_counts : sequence of sequences
+        Per setting of ``grid``, the raster_counts of each scored photo (photo order).
+    given_counts : sequence
+        The raster_counts of each scored photo at the given settings.
+    photo_folds : sequence of int
+        The fold of each scored photo.
+    grid : sequence of mappings
+    given : mapping
+        The given settings.
+
+    Returns
+    -------
+    (BackEndScore, tuple of mappings)
+        The score (empty ``settings``) and the setting chosen without each fold, in fold order
+        (folds without a scored photo left out).
+
+    Examples
+    --------
+    Two settings, four photos in two folds; "b" is better on every photo, so each fold's choice
+    made on the other fold is "b":
+
+    >>> a, b = (5, 10, 5, 10), (9, 10, 9, 10)
+    >>> score, chosen = held_out_score([[a] * 4, [b] * 4], [a] * 4, [0, 0, 1, 1],
+    ...                                [{"x": 1}, {"x": 2}], {"x": 1})
+    >>> round(score.f1, 3), [dict(c) for c in chosen]
+    (0.9, [{'x': 2}, {'x': 2}])
+    """
+    folds = np.asarray(photo_folds)
+    out = [None] * folds.size
+    chosen = []
+    for fold in np.unique(folds):
+        inside = np.flatnonzero(folds != fold)
+        scores = [_score(settings, [c[i] for i in inside]) for settings, c in zip(grid, grid_counts)]
+        at_given = _score(given, [given_counts[i] for i in inside])
+        pick = choose_setting(scores, at_given) if inside.size else at_given
+        chosen.append(MappingProxyType(dict(pick.settings)))
+        source = (given_counts if pick is at_given
+                  else grid_counts[next(k for k, sc in enumerate(scores) if sc is pick)])
+        for i in np.flatnonzero(folds == fold):
+            out[i] = source[i]
+    return _score({}, out), tuple(chosen)
+
+
 def _score(settings, counts) -> BackEndScore:
     """The :class:`BackEndScore` of one setting from the photos' raster_counts (in photo order)."""
     from .metrics import image_f1, summarise_counts
@@ -241,12 +309,13 @@ def _score(settings, counts) -> BackEndScore:
                         summary["dP21_pct"], tuple(float(f) for f in image_f1(counts)))
 
 
-def _photo_counts(image, lines, params) -> tuple[int, int, int, int]:
+def _photo_counts(image, lines, params, joint_width_px=None) -> tuple[int, int, int, int]:
     """raster_counts of one photo's traces (``params``) against its label's centre lines."""
     from .extract import extract
     from .label_scores import score_traces
 
-    result = extract(image, m_per_px=1.0, params=params)  # "metres" = pixels of the photo
+    result = extract(image, m_per_px=1.0, joint_width_px=joint_width_px,  # "metres" = pixels
+                     params=params)
     return score_traces(result.traces, lines, tolerance_px=TOLERANCE_PX)[0]
 
 
@@ -261,7 +330,8 @@ def _read_pair(photo, label):
 
 def choose_back_end(pairs: Sequence[tuple], train: Callable[[list, int], Path], *, folds: int = 5,
                     base=None, grid: Sequence[Mapping[str, float]] = BACK_END_GRID,
-                    progress: Callable[[str], None] | None = None) -> BackEndChoice:
+                    progress: Callable[[str], None] | None = None,
+                    joint_width_px: float | None = None) -> BackEndChoice:
     """Choose the learned detector's back-end settings for a pixel model by K-fold
     cross-validation (module notes).
 
@@ -280,6 +350,9 @@ def choose_back_end(pairs: Sequence[tuple], train: Callable[[list, int], Path], 
         The settings tried (default :data:`BACK_END_GRID`), each of the same names.
     progress : callable, optional
         Called with a line of text after each fold.
+    joint_width_px : float, optional
+        The expected joint width, pixels of the photographs (:func:`rockmass.imaging.extract`'s
+        default when None).
 
     Returns
     -------
@@ -302,14 +375,16 @@ def choose_back_end(pairs: Sequence[tuple], train: Callable[[list, int], Path], 
         raise ValueError("grid: give one or more settings, each of the same names")
     base = replace(base or ExtractParams(), detector="learned")
     shipped_params = replace(base, pixel_model=None)
+    shipped_model = Path(learned.MODEL_FILE).resolve()
     given = {name: base.resolved(name) for name in grid[0]}
     # the given settings are usually a setting of the grid (the defaults are): not extracted twice
     given_index = next((i for i, settings in enumerate(grid) if dict(settings) == given), None)
     counts = {"grid": [[] for _ in grid], "given": [], "shipped": []}  # per photo, in photo order
-    skipped = []
+    skipped, photo_folds = [], []
     for fold in range(folds):
         held = [k for k in range(n) if fold_of(k, n, folds) == fold]
         model = str(train([pair for k, pair in enumerate(pairs) if k not in held], fold))
+        is_shipped = Path(model).resolve() == shipped_model
         fold_params = replace(base, pixel_model=model)
         for k in held:
             image, lines = _read_pair(*pairs[k])
@@ -318,24 +393,66 @@ def choose_back_end(pairs: Sequence[tuple], train: Callable[[list, int], Path], 
                 continue
             with learned.reused_probabilities():  # one map per model: the settings come after it
                 for photo_counts, settings in zip(counts["grid"], grid):
-                    photo_counts.append(_photo_counts(image, lines, replace(fold_params, **settings)))
+                    photo_counts.append(_photo_counts(image, lines, replace(fold_params, **settings),
+                                                      joint_width_px))
                 counts["given"].append(counts["grid"][given_index][-1] if given_index is not None
-                                       else _photo_counts(image, lines, fold_params))
-                counts["shipped"].append(_photo_counts(image, lines, shipped_params))
+                                       else _photo_counts(image, lines, fold_params, joint_width_px))
+                counts["shipped"].append(counts["given"][-1] if is_shipped
+                                         else _photo_counts(image, lines, shipped_params,
+                                                            joint_width_px))
+            photo_folds.append(fold)
         if progress is not None:
             progress(f"fold {fold + 1}/{folds}: {len(held)} photos scored with {len(grid)} settings")
     if not counts["given"]:
         raise ValueError("no label marks any trace: nothing to choose the settings on")
     scores = tuple(_score(settings, c) for settings, c in zip(grid, counts["grid"]))
     at_given = _score(given, counts["given"])
+    held_out, fold_settings = held_out_score(counts["grid"], counts["given"], photo_folds, grid,
+                                             given)
     defaults = ExtractParams(detector="learned")
     differ = {f.name: getattr(base, f.name) for f in fields(base)
               if f.name not in ("detector", "pixel_model", *grid[0])
               and getattr(base, f.name) != getattr(defaults, f.name)}
     return BackEndChoice(chosen=choose_setting(scores, at_given), at_given=at_given,
                          shipped=_score(given, counts["shipped"]), scores=scores, folds=folds,
-                         skipped=tuple(skipped),
-                         base=MappingProxyType(differ))
+                         skipped=tuple(skipped), base=MappingProxyType(differ),
+                         held_out=held_out, fold_settings=fold_settings)
+
+
+def report_text(choice: BackEndChoice, model_path, *, trained: bool = True) -> str:
+    """The back-end choice as a user reads it: the scores, then the ``[imaging.params]`` to
+    extract with (:meth:`BackEndChoice.config_snippet`). ``trained``: the fold models were trained
+    for the choice (``train_pixel_model``), else one fixed model was scored (``rockmass score``)."""
+    def line(name, score):
+        precision = "-" if math.isnan(score.precision) else f"{score.precision:.3f}"
+        return (f"  {name}\n      F1 {score.f1:.3f}  P {precision}  R {score.recall:.3f}  "
+                f"dP21 {score.dp21_pct:+.0f} %")
+
+    this = "this recipe" if trained else "this model"
+    settings = ", ".join(f"{name} = {value:g}" for name, value in choice.settings.items())
+    skipped = (f"; {len(choice.skipped)} photos whose label marks nothing not scored"
+               if choice.skipped else "")
+    how = ("by a model of this recipe that did not see it" if trained
+           else "by the model, with each setting tried")
+    lines = [f"back end chosen by {choice.folds}-fold cross-validation on {choice.photos} "
+             f"photographs (each scored {how}; F1 at {TOLERANCE_PX:g} px, docs/imaging.md "
+             f"§3.2{skipped}):"]
+    if trained:
+        lines.append(line("shipped model, given settings", choice.shipped))
+    lines.append(line(f"{this}, given settings", choice.at_given))
+    if choice.kept_given:
+        lines.append("  no setting tried beat the given settings by more than a standard error: "
+                     "they are kept")
+    else:
+        lines += [line(f"{this}, {settings}", choice.chosen),
+                  f"  (the best of the {len(choice.scores)} settings tried on these photos: "
+                  "optimistic)"]
+    if choice.held_out is not None:
+        lines.append(line(f"{this}, each fold at the setting chosen on the other folds (what "
+                          "choosing does on photos the choice did not see)", choice.held_out))
+    lines += ["to extract with it, put in the config of rockmass extract / run (--config):",
+              choice.config_snippet(model_path)]
+    return "\n".join(lines)
 
 
 def chosen_settings(model_info: Mapping) -> dict | None:

@@ -62,7 +62,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import platform
 import sys
 import time
@@ -397,7 +396,9 @@ def main(argv=None) -> int:
     path = model.save(args.out)
     print(json.dumps(info, indent=2))
     if choice is not None:
-        print(_back_end_report(choice, path))
+        from .site_back_end import report_text
+
+        print(report_text(choice, path))
     print(f"wrote {path} ({path.stat().st_size} bytes) in {time.perf_counter() - t0:.1f} s")
     return 0
 
@@ -452,35 +453,6 @@ def _choose_back_end(photos, synthetic, folds, seed, max_megapixels, input_recor
             return model.save(Path(folder) / f"fold_{fold}.npz")
 
         return choose_back_end(photos, train_fold, folds=folds, base=base, progress=report)
-
-
-def _back_end_report(choice, path) -> str:
-    """The back-end choice as a user reads it: the scores, then the config snippet."""
-    from .site_back_end import TOLERANCE_PX
-
-    def line(name, score):
-        precision = "-" if math.isnan(score.precision) else f"{score.precision:.3f}"
-        return (f"  {name}\n      F1 {score.f1:.3f}  P {precision}  R {score.recall:.3f}  "
-                f"dP21 {score.dp21_pct:+.0f} %")
-
-    settings = ", ".join(f"{name} = {value:g}" for name, value in choice.settings.items())
-    skipped = (f"; {len(choice.skipped)} photos whose label marks nothing not scored"
-               if choice.skipped else "")
-    lines = [f"back end chosen by {choice.folds}-fold cross-validation on {choice.photos} "
-             f"photographs (each scored by a model of this recipe that did not see it; F1 at "
-             f"{TOLERANCE_PX:g} px, docs/imaging.md §3.2{skipped}):",
-             line("shipped model, given settings", choice.shipped),
-             line("this recipe, given settings", choice.at_given)]
-    if choice.kept_given:
-        lines.append("  no setting tried beat the given settings by more than a standard error: "
-                     "they are kept")
-    else:
-        lines += [line(f"this recipe, {settings}", choice.chosen),
-                  "  (the best of the settings tried on these folds: an optimistic estimate;",
-                  "   score photographs kept out of training to know what the model does)"]
-    lines += ["to extract with it, put in the config of rockmass extract / run (--config):",
-              choice.config_snippet(path)]
-    return "\n".join(lines)
 
 
 def sample_faces(faces, rng) -> tuple[np.ndarray, np.ndarray]:

@@ -81,6 +81,22 @@ def test_labels_painted_red_or_white_on_black_give_the_same_centre_lines(tmp_pat
                                   label_centre_lines(tmp_path / "white.png"))
 
 
+def test_labels_of_16_bits_or_with_an_alpha_channel_read_as_8_bit_ones(tmp_path):
+    from PIL import Image
+
+    _, white = _vein_photo(7)
+    cv2.imwrite(str(tmp_path / "white.png"), white)
+    cv2.imwrite(str(tmp_path / "deep.png"), white.astype(np.uint16) * 257)
+    Image.fromarray(np.dstack([white, np.full_like(white, 255)]), "LA").save(tmp_path / "la.png")
+    expected = label_mask(tmp_path / "white.png")
+    assert expected.any()
+    for name in ("deep.png", "la.png"):
+        np.testing.assert_array_equal(label_mask(tmp_path / name), expected)
+    cv2.imwrite(str(tmp_path / "float.tif"), white.astype(np.float32))
+    with pytest.raises(ValueError, match="float.tif: a label image must be"):
+        label_mask(tmp_path / "float.tif")
+
+
 def test_photos_without_labels_and_missing_folders_are_named(tmp_path):
     (tmp_path / "photos").mkdir()
     (tmp_path / "labels").mkdir()

@@ -94,7 +94,7 @@ def test_each_photo_is_scored_by_the_model_of_its_own_fold(short_joints, monkeyp
     _, pairs = short_joints
     scored = []
 
-    def counts(image, lines, params):  # which model scored which photo (by its label's pixels)
+    def counts(image, lines, params, *_):  # which model scored which photo (by its label's pixels)
         scored.append((int(lines.sum()), params.pixel_model))
         return (1, 1, 1, 1)
 
@@ -339,3 +339,73 @@ def test_a_model_is_trained_on_fewer_than_ten_photos_without_a_held_out_loss(sho
     assert info["held_out_log_loss"] is None and info["held_out_samples"] == 0
     assert "3 labelled photographs" in info["data"] and "(0 held out)" in info["data"]
     assert "no held-out loss" in capsys.readouterr().err
+
+
+def test_the_held_out_score_catches_a_choice_that_only_fits_the_photos_it_was_made_on():
+    # two settings, each right on one fold's photos and wrong on the other's; the given one is
+    # middling everywhere. The best of the grid on all photos looks better than the given
+    # setting, but a choice made on one fold is the wrong one for the other: held out, it loses.
+    from rockmass.imaging.site_back_end import held_out_score
+
+    good, bad, middling = (9, 10, 9, 10), (1, 10, 1, 10), (6, 10, 6, 10)  # F1 0.9, 0.1, 0.6
+    first = [good, good, good, bad, bad, bad]     # photos 0-2 are fold 0, 3-5 fold 1
+    second = [bad, bad, bad, good, good, good]
+    given = [middling] * 6
+    grid = [{"x": 1}, {"x": 2}]
+    score, chosen = held_out_score([first, second], given, [0, 0, 0, 1, 1, 1], grid, {"x": 0})
+    assert [dict(c) for c in chosen] == [{"x": 2}, {"x": 1}]  # each fold: the other's best
+    assert score.f1 == pytest.approx(0.1)                    # which is wrong on it
+    # a setting right on every photo (first in the grid: it wins the tie on fold 0's photos) is
+    # chosen in every fold and keeps its score held out
+    score, chosen = held_out_score([[good] * 6, first], given, [0, 0, 0, 1, 1, 1], grid, {"x": 0})
+    assert [dict(c) for c in chosen] == [{"x": 1}, {"x": 1}] and score.f1 == pytest.approx(0.9)
+
+
+def test_a_fixed_models_choice_reports_the_held_out_score_and_the_settings_per_fold(short_joints):
+    _, pairs = short_joints
+    choice = choose_back_end(pairs, lambda p, f: MODEL_FILE, folds=3, grid=FLOORS)
+    assert len(choice.fold_settings) == 3 and choice.held_out is not None
+    assert len(choice.held_out.photo_f1) == choice.photos == len(pairs)
+    # the joints are 40 px long: every fold's choice is the 30 px floor, as on all photos
+    assert all(s["min_trace_length_px"] == 30.0 for s in choice.fold_settings)
+    assert choice.held_out.f1 == pytest.approx(choice.chosen.f1)
+    record = choice.record()["chosen_without_the_photos_scored"]
+    assert record["F1"] == pytest.approx(choice.held_out.f1, abs=1e-4) and len(record["settings"]) == 3
+    # the shipped model at the given settings is the model's own score there: not extracted twice
+    assert choice.shipped.photo_f1 == choice.at_given.photo_f1
+
+
+def test_rockmass_score_chooses_the_back_end_of_the_shipped_model_and_its_config_scores_so(
+        short_joints, tmp_path, capsys):
+    from rockmass.cli import main
+
+    root, _ = short_joints
+    out = tmp_path / "out"
+    assert main(["score", "--photos", str(root / "photos"), "--labels", str(root / "labels"),
+                 "--out", str(out), "--choose-back-end", "3"]) == 0
+    printed = capsys.readouterr().out
+    assert "what choosing does on photos the choice did not see" in printed
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["overall"]["F1"] < 0.1  # the defaults: the 70 px floor drops the 40 px joints
+    back_end = summary["back_end"]
+    assert back_end["model"] == "shipped" and back_end["settings"]["min_trace_length_px"] <= 50
+    assert back_end["chosen_without_the_photos_scored"]["F1"] > 0.8
+    config = tomllib.loads((out / "back_end.toml").read_text())["imaging"]["params"]
+    assert "pixel_model" not in config  # the shipped model: no path to a file in the package
+    # the printed settings do what the choice said, on the command that extracts
+    assert main(["score", "--photos", str(root / "photos"), "--labels", str(root / "labels"),
+                 "--config", str(out / "back_end.toml"), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["overall"]["F1"] > 0.8
+
+
+@pytest.mark.parametrize("flags, message", [(["--detector", "ridge"], "ridge detector"),
+                                            (["--choose-back-end", "1"], "folds must be")])
+def test_rockmass_score_refuses_a_back_end_choice_it_cannot_make(short_joints, capsys, flags,
+                                                                  message):
+    from rockmass.cli import main
+
+    root, _ = short_joints
+    args = ["score", "--photos", str(root / "photos"), "--labels", str(root / "labels"),
+            "--choose-back-end", "2", *flags]
+    assert main(args) == 2
+    assert message in capsys.readouterr().err

@@ -1,0 +1,204 @@
+"""The work of ``rockmass score``: the detector scored against a user's hand-traced photographs.
+
+Every photo of ``--photos`` that has a label of the same name in ``--labels`` is extracted with the
+settings ``rockmass extract`` would use (``--config``'s ``[imaging]``, then the flags) and scored
+against the label (:mod:`rockmass.imaging.label_scores`, docs/imaging.md §3.5). With ``--out`` it
+writes ``scores.csv`` (one row per photo), ``summary.json`` (the settings, the scores over all
+photos and per photo, the photos not scored), ``manifest.json``, with ``--review``
+``review/<photo>.png``, and with ``--choose-back-end`` ``back_end.toml`` (the learned detector's
+back end chosen for the model on these photos) — all of them or none.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from .errors import InputError, reading
+from .extract_stage import extract_params, imaging_settings, read_photograph
+
+__all__ = ["compute", "produce", "SCORE_COLUMNS"]
+
+#: Columns of scores.csv, in order (PhotoScore.to_dict keys).
+SCORE_COLUMNS = ("photo", "label", "F1", "precision", "recall", "dP21_pct", "dP20_pct", "traces",
+                 "labelled_traces", "drawn_px", "labelled_px", "detector", "seconds")
+
+
+def _pairs(args):
+    """The (photo, label) pairs, or bad input naming the folder."""
+    from .imaging.labels import labelled_pairs
+
+    try:
+        return labelled_pairs(args.photos, args.labels)
+    except FileNotFoundError as exc:
+        raise InputError(f"--photos / --labels: {exc}") from None
+
+
+def _photo_extractor(settings: dict, params, max_pixels_option):
+    """``extract_photo(path) -> (image, Extraction, m_per_px)`` for
+    :func:`rockmass.imaging.label_scores.score_labelled_photos`, with the run's settings; the
+    extraction's warnings are collected per photo instead of printed."""
+    from .imaging import extract
+
+    # without a scale the traces are in pixels: m_per_px = 1 says so without the warning that
+    # rockmass extract gives (the scores are in pixels of the photograph either way)
+    m_per_px = settings["m_per_px"] or 1.0
+
+    def extract_photo(path):
+        image, _ = read_photograph(Path(path), max_pixels_option)
+        with warnings.catch_warnings(), reading(path):
+            warnings.simplefilter("ignore", UserWarning)  # kept in the result's warnings
+            result = extract(image, m_per_px=m_per_px, joint_width_px=settings["joint_width_px"],
+                             joint_width_m=settings["joint_width_m"], params=params)
+        return image, result, m_per_px
+
+    return extract_photo
+
+
+def _finite(value):
+    """``value``, or None for NaN (JSON has no NaN; an undefined score is null)."""
+    return None if isinstance(value, float) and math.isnan(value) else value
+
+
+def compute(args, on_photo=None) -> dict:
+    """Score every labelled photo; return the summary document (``settings``, ``tolerance_px``,
+    ``overall``, ``photos``, ``skipped``, ``warnings``). ``on_photo(score, image, drawn, lines)``
+    is called after each photo (the review images)."""
+    import dataclasses
+
+    from .imaging.extract import infinities_as_text
+    from .imaging.label_scores import score_labelled_photos, summarise_photo_scores
+
+    settings = imaging_settings(args)
+    if settings["m_per_px"] is None and settings["joint_width_m"] is not None:
+        raise InputError(f"{args.config}: imaging.joint_width_m needs imaging.m_per_px (the photos' "
+                         "scale); or give the width in pixels: --joint-width")
+    params = extract_params(settings, args.config)
+    if not (math.isfinite(args.tolerance) and args.tolerance > 0):
+        raise InputError(f"--tolerance: expected a distance in pixels > 0, got {args.tolerance:g}")
+    pairs = _pairs(args)
+    notes: dict[str, list[str]] = {}
+
+    def collect(score, image, drawn, lines):
+        if on_photo is not None:
+            on_photo(score, image, drawn, lines)
+
+    extract_photo = _photo_extractor(settings, params, args.max_pixels)
+
+    def extract_and_note(path):
+        image, result, scale = extract_photo(path)
+        if result.warnings:
+            notes[str(path)] = list(result.warnings)
+        return image, result, scale
+
+    t0 = time.perf_counter()
+    try:
+        scores, skipped = score_labelled_photos(pairs, extract_and_note, tolerance_px=args.tolerance,
+                                                on_photo=collect)
+    except (OSError, ValueError) as exc:
+        if isinstance(exc, InputError):
+            raise
+        raise InputError(str(exc)) from None  # a label: unreadable, or not of its photo's size
+    if not scores:
+        raise InputError(f"{args.labels}: no label marks any trace ({len(skipped)} labels are "
+                         "empty): nothing to score")
+    overall = summarise_photo_scores(scores)
+    back_end = None if args.choose_back_end is None else _back_end(args, pairs, settings, params)
+    return {**({} if back_end is None else {"back_end": back_end}),
+            "settings": {**settings, "params": infinities_as_text(dataclasses.asdict(params))},
+            "tolerance_px": args.tolerance,
+            "overall": {key: _finite(value) for key, value in overall.items()},
+            "photos": [{key: _finite(value) for key, value in score.to_dict().items()}
+                       for score in scores],
+            "skipped": skipped, "warnings": notes,
+            "seconds": time.perf_counter() - t0}
+
+
+def _back_end(args, pairs, settings, params) -> dict:
+    """The learned detector's back end chosen for the run's model on the photos
+    (:func:`rockmass.imaging.site_back_end.choose_back_end`, the model fixed): its record, the
+    ``[imaging.params]`` to extract with (``config``) and the printed ``report``."""
+    from .imaging import learned
+    from .imaging.site_back_end import choose_back_end, report_text
+
+    if params.detector == "ridge":  # named, or chosen by --bright-lines
+        raise InputError("--choose-back-end chooses the learned detector's settings: not with the "
+                         "ridge detector (--detector ridge, --bright-lines)")
+    model = params.pixel_model or learned.MODEL_FILE
+    width = settings["joint_width_px"]
+    if width is None and settings["joint_width_m"] is not None:
+        width = settings["joint_width_m"] / settings["m_per_px"]
+    try:
+        choice = choose_back_end(pairs, lambda photos, fold: model, folds=args.choose_back_end,
+                                 base=params, joint_width_px=width)
+    except ValueError as exc:
+        raise InputError(f"--choose-back-end: {exc}") from None
+    shipped = params.pixel_model is None
+    return {**choice.record(), "model": "shipped" if shipped else str(model),
+            "config": choice.config_snippet(None if shipped else model),
+            "report": report_text(choice, None if shipped else model, trained=False)}
+
+
+def csv_rows(document: dict) -> str:
+    """scores.csv: a header of :data:`SCORE_COLUMNS` and a row per photo (empty where undefined)."""
+    from .outputs import csv_text
+
+    return csv_text({name: [row[name] for row in document["photos"]] for name in SCORE_COLUMNS})
+
+
+def produce(args, out_dir=None) -> dict:
+    """Score, and write the outputs into ``out_dir`` when given (all of them or none); return the
+    summary document."""
+    if not out_dir:
+        if args.review:
+            raise InputError("--review writes review images: give --out")
+        return compute(args)
+    from contextlib import ExitStack
+
+    from .atomic import atomic_path, atomic_write_json, atomic_write_text
+    from .manifest import build_manifest
+    from .outputs import output_set
+
+    with output_set(out_dir) as out, ExitStack() as stack:
+        on_photo = _review_writer(out / "review", args) if args.review else None
+        document = compute(args, on_photo)
+        csv = stack.enter_context(atomic_path(out / "scores.csv"))
+        atomic_write_text(csv, csv_rows(document))
+        js = stack.enter_context(atomic_path(out / "summary.json"))
+        atomic_write_json(js, document, nan_as_null=True)
+        inputs = [p for row in document["photos"] for p in (row["photo"], row["label"])]
+        manifest = build_manifest(command=args.argv, config={"imaging": document["settings"]},
+                                  inputs=inputs, timings_s={"score_s": document["seconds"]},
+                                  extra={"F1": document["overall"]["F1"]})
+        if "back_end" in document:
+            toml = stack.enter_context(atomic_path(out / "back_end.toml"))
+            atomic_write_text(toml, document["back_end"]["config"] + "\n")
+        mf = stack.enter_context(atomic_path(out / "manifest.json"))
+        atomic_write_json(mf, manifest, nan_as_null=True)
+    return document
+
+
+def _review_writer(folder: Path, args):
+    """``on_photo`` writing each photo's review image (PNG) into ``folder``
+    (:func:`rockmass.imaging.label_scores.review_image`)."""
+    from .imaging.label_scores import review_names
+
+    names = review_names([photo for photo, _ in _pairs(args)])
+
+    def write(score, image, drawn, lines):
+        import cv2
+
+        from .atomic import atomic_write_bytes
+        from .imaging.label_scores import review_image
+
+        rgb = review_image(image, drawn, lines, tolerance_px=args.tolerance)
+        ok, png = cv2.imencode(".png", np.ascontiguousarray(rgb[..., ::-1]))
+        if not ok:
+            raise OSError(f"cannot encode the review image of {score.photo}")
+        atomic_write_bytes(folder / names[score.photo], png.tobytes())
+
+    return write
