@@ -953,11 +953,45 @@ def _joint_pixels(grey, params: ExtractParams, width_work: float, mask, clock: _
     return flat, response, binary, stretch
 
 
+#: The steps of :func:`_chains_before_floor`, as its clock names them.
+_CHAIN_STEPS = ("skeleton", "graph", "prune", "crossings", "bridge", "chain")
+
+
 def _trace_chains(binary, params: ExtractParams, work_shape, width_work: float, band_px: float,
                   clock: _Clock) -> tuple:
-    """Joint pixels -> traces as pixel polylines on the working grid: skeleton, graph, spur
-    pruning, X crossings, gap bridging, chaining, linking, ends carried to the border, the length
-    floor. Returns (chains, skeleton image, pruned graph)."""
+    """Joint pixels -> traces as pixel polylines on the working grid: :func:`_chains_before_floor`,
+    then the length floor. Returns (chains, skeleton image, pruned graph). Within
+    :func:`rockmass.imaging.learned.reused_probabilities` the chains before the floor are computed
+    once per joint mask and chain settings (the length floor changes nothing before it)."""
+    from . import learned, link
+
+    floor = params.trace_length_floor_px
+    if not learned.reusing():
+        chains, skeleton, pruned = _chains_before_floor(binary, params, work_shape, width_work,
+                                                        band_px, clock)
+        return [c for c in chains if link.polyline_length_px(c) >= floor], skeleton, pruned
+    key = ("chains", learned.array_digest(binary), repr(replace(params, min_trace_length_px=None)),
+           tuple(work_shape), float(width_work), float(band_px))
+    computed = []
+
+    def compute():
+        computed.append(True)
+        return _chains_before_floor(binary, params, work_shape, width_work, band_px, clock)
+
+    chains, skeleton, pruned = learned.reused(key, compute)
+    if not computed:  # reused: the steps took no time in this run
+        for step in _CHAIN_STEPS:
+            clock.lap(step)
+    # copies: the cached chains and skeleton stay as computed for the next setting
+    return ([c.copy() for c in chains if link.polyline_length_px(c) >= floor], skeleton.copy(),
+            pruned)
+
+
+def _chains_before_floor(binary, params: ExtractParams, work_shape, width_work: float,
+                         band_px: float, clock: _Clock) -> tuple:
+    """Joint pixels -> pixel polylines on the working grid: skeleton, graph, spur pruning, X
+    crossings, gap bridging, chaining, linking, ends carried to the border. Returns (chains,
+    skeleton image, pruned graph)."""
     from . import link, skeleton_graph
 
     skeleton = skeleton_graph.skeletonize(binary)
@@ -983,7 +1017,6 @@ def _trace_chains(binary, params: ExtractParams, work_shape, width_work: float, 
         chains = link.extend_to_border(chains, work_shape,
                                        max_distance_px=params.border_extend_px + band_px,
                                        skip_px=params.link_skip_px, reach_px=params.link_reach_px)
-    chains = [c for c in chains if link.polyline_length_px(c) >= params.trace_length_floor_px]
     return chains, skeleton, pruned
 
 

@@ -158,8 +158,8 @@ def score_traces(traces, lines: np.ndarray, *, m_per_px: float = 1.0,
 
 
 def score_labelled_photos(pairs: Sequence[tuple], extract_photo: Callable, *,
-                          tolerance_px: float = TOLERANCE_PX,
-                          on_photo: Callable | None = None) -> tuple[list[PhotoScore], list[str]]:
+                          tolerance_px: float = TOLERANCE_PX, on_photo: Callable | None = None,
+                          read_lines: Callable | None = None) -> tuple[list[PhotoScore], list[str]]:
     """Extract and score each labelled photograph.
 
     Parameters
@@ -173,6 +173,9 @@ def score_labelled_photos(pairs: Sequence[tuple], extract_photo: Callable, *,
     on_photo : callable, optional
         Called as ``on_photo(score, image, drawn, lines)`` after each scored photo (review images,
         progress).
+    read_lines : callable, optional
+        ``read_lines(label, photo, photo_shape)``: the label's centre lines at the photo's size
+        (default :func:`rockmass.imaging.labels.photo_centre_lines`).
 
     Returns
     -------
@@ -190,12 +193,13 @@ def score_labelled_photos(pairs: Sequence[tuple], extract_photo: Callable, *,
     """
     from .labels import photo_centre_lines
 
+    read_lines = read_lines or photo_centre_lines
     scores, skipped = [], []
     for photo, label in pairs:
         t0 = time.perf_counter()
         image, result, m_per_px = extract_photo(photo)
         seconds = time.perf_counter() - t0
-        lines = photo_centre_lines(label, photo, image.shape)
+        lines = read_lines(label, photo, image.shape)
         if not lines.any():
             skipped.append(str(photo))
             continue

@@ -27,7 +27,8 @@ PHOTO_SUFFIXES = (".jpg", ".jpeg", ".png", ".tif", ".tiff", ".bmp")
 
 def label_mask(label) -> np.ndarray:
     """Bool mask of the traces of a label image (a path, or an (H, W) / (H, W, 3) uint8 array in
-    RGB order). Files of 16 bits are read at the same levels on 8; an alpha channel is ignored.
+    RGB order). Images of 16 bits are read at the same levels on 8; an alpha channel is ignored;
+    a grey mask of 0 and 1 is read as one of 0 and 255.
 
     Examples
     --------
@@ -45,13 +46,10 @@ def label_mask(label) -> np.ndarray:
         stored = cv2.imread(str(label), cv2.IMREAD_UNCHANGED)
         if stored is None:
             raise OSError(f"{label}: cannot read the label image")
-        if stored.ndim == 3 and stored.shape[2] in (3, 4):
-            label = stored[..., 2::-1]  # BGR(A) -> RGB
-        elif stored.ndim == 3 and stored.shape[2] == 2:
-            label = stored[..., 0]  # grey and alpha: the grey
-        else:
-            label = stored
+        label = stored[..., 2::-1] if stored.ndim == 3 else stored  # BGR(A) -> RGB
     array = np.asarray(label)
+    if array.ndim == 3 and array.shape[2] == 2:  # grey and alpha: the grey
+        array = array[..., 0]
     if array.dtype == np.uint16:  # 16-bit masks: the same levels on 8 bits
         array = (array // 257).astype(np.uint8)
     if array.dtype != np.uint8 or array.ndim not in (2, 3):
@@ -62,6 +60,8 @@ def label_mask(label) -> np.ndarray:
         if red.any():
             return red
         array = array[..., :3].mean(axis=2)
+    if array.max(initial=0) == 1:  # a 0/1 mask, as segmentation data sets store them
+        return array > 0
     return array > 127
 
 
@@ -96,14 +96,30 @@ def labelled_pairs(photos_dir, labels_dir) -> list[tuple[Path, Path]]:
     ------
     FileNotFoundError
         A folder is missing, or no photo has a label.
+    ValueError
+        The labels are in the photos' folder, or two labels have one name (``a.png``, ``a.tif``).
+    OSError
+        A folder cannot be listed.
     """
     photos_dir, labels_dir = Path(photos_dir), Path(labels_dir)
     for folder, what in ((photos_dir, "photos"), (labels_dir, "labels")):
         if not folder.is_dir():
             raise FileNotFoundError(f"{folder}: no such folder of {what}")
-    labels = {p.stem: p for p in labels_dir.iterdir() if p.suffix.lower() in PHOTO_SUFFIXES}
-    pairs = [(p, labels[p.stem]) for p in sorted(photos_dir.iterdir())
-             if p.suffix.lower() in PHOTO_SUFFIXES and p.stem in labels]
+    if photos_dir.resolve() == labels_dir.resolve():
+        raise ValueError(f"{labels_dir}: the labels are in the photos' folder; put them in a folder "
+                         "of their own, under the photos' file names")
+    labels: dict[str, Path] = {}
+    for path in sorted(_images(labels_dir)):
+        if path.stem in labels:
+            raise ValueError(f"{labels_dir}: two labels of one name, {labels[path.stem].name} and "
+                             f"{path.name}: keep one")
+        labels[path.stem] = path
+    pairs = [(p, labels[p.stem]) for p in sorted(_images(photos_dir)) if p.stem in labels]
     if not pairs:
         raise FileNotFoundError(f"{photos_dir}: no photo has a label of the same name in {labels_dir}")
     return pairs
+
+
+def _images(folder: Path) -> list[Path]:
+    """The files of ``folder`` with an image suffix (:data:`PHOTO_SUFFIXES`)."""
+    return [p for p in folder.iterdir() if p.suffix.lower() in PHOTO_SUFFIXES and p.is_file()]

@@ -289,9 +289,15 @@ def held_out_score(grid_counts, given_counts, photo_folds, grid, given):
     chosen = []
     for fold in np.unique(folds):
         inside = np.flatnonzero(folds != fold)
-        scores = [_score(settings, [c[i] for i in inside]) for settings, c in zip(grid, grid_counts)]
-        at_given = _score(given, [given_counts[i] for i in inside])
-        pick = choose_setting(scores, at_given) if inside.size else at_given
+        if inside.size:
+            scores = [_score(settings, [c[i] for i in inside])
+                      for settings, c in zip(grid, grid_counts)]
+            at_given = _score(given, [given_counts[i] for i in inside])
+            pick = choose_setting(scores, at_given)
+        else:  # no other fold has a scored photo: nothing to choose on, the given settings stay
+            scores, at_given = [], BackEndScore(MappingProxyType(dict(given)), math.nan, math.nan,
+                                                math.nan, math.nan)
+            pick = at_given
         chosen.append(MappingProxyType(dict(pick.settings)))
         source = (given_counts if pick is at_given
                   else grid_counts[next(k for k, sc in enumerate(scores) if sc is pick)])

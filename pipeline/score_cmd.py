@@ -49,12 +49,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--review", action="store_true",
                    help="with --out: write review/<photo>.png, the photo with matched traces green, "
                         "false traces red and missed labels blue")
-    p.add_argument("--choose-back-end", type=int, nargs="?", metavar="FOLDS", const=5,
+    p.add_argument("--choose-back-end", type=int, nargs="?", metavar="FOLDS", const=0,
                    dest="choose_back_end",
                    help="also choose the learned detector's hysteresis levels and length floor for "
                         "the model on these photos, with a FOLDS-fold estimate of what the choice "
-                        "does on photos it did not see (default 5); prints the [imaging.params] "
-                        "to extract with (--out: back_end.toml)")
+                        "does on photos it did not see (default 5, or the number of photos when "
+                        "fewer); prints the config to extract with (--out: back_end.toml)")
     p.add_argument("--config", help="TOML file; its [imaging] section sets width and params")
     p.add_argument("--detector", choices=("auto", "learned", "ridge"), dest="detector",
                    help="joint detector (default auto; learned with --pixel-model)")
@@ -109,13 +109,13 @@ def run(args) -> int:
         return 0
     print(report_text(document))
     if document["skipped"]:
-        print(f"  note: {len(document['skipped'])} photos not scored: their labels mark nothing "
+        print(f"  note: not scored, their labels mark nothing: {len(document['skipped'])} photo(s) "
               f"({', '.join(Path(p).name for p in document['skipped'][:5])}"
               f"{', ...' if len(document['skipped']) > 5 else ''})", file=sys.stderr)
     if "back_end" in document:
         print(document["back_end"]["report"])
     warned = document["warnings"]
     if warned:
-        print(f"  note: extraction warnings on {len(warned)} photos (summary.json, 'warnings')",
-              file=sys.stderr)
+        print(f"  note: extraction notes on {len(warned)} of the photos (summary.json, "
+              "'warnings')", file=sys.stderr)
     return 0

@@ -23,6 +23,10 @@ from .extract_stage import extract_params, imaging_settings, read_photograph
 
 __all__ = ["compute", "produce", "SCORE_COLUMNS"]
 
+#: Entries of --out the command writes in some runs and not others: a new set drops the old ones.
+_OWNED = (r"review", r"back_end\.toml")
+#: Folds of ``--choose-back-end`` without a number (fewer with fewer photos).
+DEFAULT_FOLDS = 5
 #: Columns of scores.csv, in order (PhotoScore.to_dict keys).
 SCORE_COLUMNS = ("photo", "label", "F1", "precision", "recall", "dP21_pct", "dP20_pct", "traces",
                  "labelled_traces", "drawn_px", "labelled_px", "detector", "seconds")
@@ -34,8 +38,61 @@ def _pairs(args):
 
     try:
         return labelled_pairs(args.photos, args.labels)
-    except FileNotFoundError as exc:
-        raise InputError(f"--photos / --labels: {exc}") from None
+    except (OSError, ValueError) as exc:  # missing, unlistable, labels mixed up
+        text = exc if isinstance(exc, ValueError) else f"cannot list the folders: {exc}"
+        raise InputError(f"--photos / --labels: {text}") from None
+
+
+def _labelled(pairs) -> tuple[list, list]:
+    """Every label read before any photo is extracted: (the pairs whose label marks traces, those
+    whose label marks nothing). A label that cannot be read, or whose size is neither the
+    photo's nor the photo's turned a quarter (EXIF orientation is applied when it is decoded),
+    is bad input naming it."""
+    from .image_limits import image_size
+    from .imaging.labels import label_mask
+
+    kept, empty = [], []
+    for photo, label in pairs:
+        mask = _label_read(label, label_mask, label)
+        size = image_size(photo)
+        if size is not None and mask.shape not in (size[::-1], tuple(size)):
+            raise InputError(f"{label}: label is {mask.shape[1]} x {mask.shape[0]} px, its photo "
+                             f"{Path(photo).name} {size[0]} x {size[1]} px")
+        (kept if mask.any() else empty).append((photo, label))
+    return kept, empty
+
+
+def _read_lines(label, photo, shape):
+    """The label's centre lines at the photo's size; bad input naming the label."""
+    from .imaging.labels import photo_centre_lines
+
+    return _label_read(label, photo_centre_lines, label, photo, shape)
+
+
+def _label_read(label, read, *args):
+    """``read(*args)`` of a label file: what its content or an unreadable file raises is bad
+    input naming it."""
+    try:
+        with reading(label, "--labels"):
+            return read(*args)
+    except OSError as exc:  # cv2 cannot decode it (or read it at all)
+        text = str(exc)
+        raise InputError(text if str(label) in text else f"{label}: --labels: {text}") from None
+
+
+def _folds(args, n_photos: int, params) -> int | None:
+    """The folds of ``--choose-back-end`` (None without it): the number given, or 5 (fewer when
+    there are fewer photos); checked before any photo is extracted."""
+    if args.choose_back_end is None:
+        return None
+    if params.detector == "ridge":  # named, or chosen by --bright-lines
+        raise InputError("--choose-back-end chooses the learned detector's settings: not with the "
+                         "ridge detector (--detector ridge, --bright-lines)")
+    folds = min(DEFAULT_FOLDS, n_photos) if args.choose_back_end == 0 else args.choose_back_end
+    if not 2 <= folds <= n_photos:
+        raise InputError(f"--choose-back-end: FOLDS must be from 2 to the number of photos whose "
+                         f"label marks traces ({n_photos}), got {folds}")
+    return folds
 
 
 def _photo_extractor(settings: dict, params, max_pixels_option):
@@ -80,13 +137,13 @@ def compute(args, on_photo=None) -> dict:
     params = extract_params(settings, args.config)
     if not (math.isfinite(args.tolerance) and args.tolerance > 0):
         raise InputError(f"--tolerance: expected a distance in pixels > 0, got {args.tolerance:g}")
-    pairs = _pairs(args)
+    pairs, empty = _labelled(_pairs(args))
+    empty = [str(photo) for photo, _ in empty]
+    if not pairs:
+        raise InputError(f"{args.labels}: no label marks any trace ({len(empty)} labels are "
+                         "empty): nothing to score")
+    folds = _folds(args, len(pairs), params)
     notes: dict[str, list[str]] = {}
-
-    def collect(score, image, drawn, lines):
-        if on_photo is not None:
-            on_photo(score, image, drawn, lines)
-
     extract_photo = _photo_extractor(settings, params, args.max_pixels)
 
     def extract_and_note(path):
@@ -96,50 +153,42 @@ def compute(args, on_photo=None) -> dict:
         return image, result, scale
 
     t0 = time.perf_counter()
-    try:
-        scores, skipped = score_labelled_photos(pairs, extract_and_note, tolerance_px=args.tolerance,
-                                                on_photo=collect)
-    except (OSError, ValueError) as exc:
-        if isinstance(exc, InputError):
-            raise
-        raise InputError(str(exc)) from None  # a label: unreadable, or not of its photo's size
-    if not scores:
-        raise InputError(f"{args.labels}: no label marks any trace ({len(skipped)} labels are "
-                         "empty): nothing to score")
+    scores, skipped = score_labelled_photos(pairs, extract_and_note, tolerance_px=args.tolerance,
+                                            on_photo=on_photo, read_lines=_read_lines)
     overall = summarise_photo_scores(scores)
-    back_end = None if args.choose_back_end is None else _back_end(args, pairs, settings, params)
+    back_end = None if folds is None else _back_end(pairs, folds, settings, params)
     return {**({} if back_end is None else {"back_end": back_end}),
             "settings": {**settings, "params": infinities_as_text(dataclasses.asdict(params))},
             "tolerance_px": args.tolerance,
             "overall": {key: _finite(value) for key, value in overall.items()},
             "photos": [{key: _finite(value) for key, value in score.to_dict().items()}
                        for score in scores],
-            "skipped": skipped, "warnings": notes,
+            "skipped": empty + skipped, "warnings": notes,
             "seconds": time.perf_counter() - t0}
 
 
-def _back_end(args, pairs, settings, params) -> dict:
+def _back_end(pairs, folds: int, settings, params) -> dict:
     """The learned detector's back end chosen for the run's model on the photos
-    (:func:`rockmass.imaging.site_back_end.choose_back_end`, the model fixed): its record, the
-    ``[imaging.params]`` to extract with (``config``) and the printed ``report``."""
+    (:func:`rockmass.imaging.site_back_end.choose_back_end`, the model fixed): its record (with the
+    joint width it was chosen at), the config to extract with (``config``: ``[imaging]``'s joint
+    width when one was given, and ``[imaging.params]``) and the printed ``report``."""
     from .imaging import learned
+    from .imaging.extract import infinities_as_text
     from .imaging.site_back_end import choose_back_end, report_text
 
-    if params.detector == "ridge":  # named, or chosen by --bright-lines
-        raise InputError("--choose-back-end chooses the learned detector's settings: not with the "
-                         "ridge detector (--detector ridge, --bright-lines)")
     model = params.pixel_model or learned.MODEL_FILE
     width = settings["joint_width_px"]
     if width is None and settings["joint_width_m"] is not None:
         width = settings["joint_width_m"] / settings["m_per_px"]
-    try:
-        choice = choose_back_end(pairs, lambda photos, fold: model, folds=args.choose_back_end,
-                                 base=params, joint_width_px=width)
-    except ValueError as exc:
-        raise InputError(f"--choose-back-end: {exc}") from None
+    choice = choose_back_end(pairs, lambda photos, fold: model, folds=folds, base=params,
+                             joint_width_px=width)
     shipped = params.pixel_model is None
-    return {**choice.record(), "model": "shipped" if shipped else str(model),
-            "config": choice.config_snippet(None if shipped else model),
+    config = choice.config_snippet(None if shipped else model)
+    if width is not None:  # the width the settings were chosen at goes with them
+        config = f"[imaging]\njoint_width_px = {width!r}\n\n{config}"
+    record = choice.record()
+    record["with"] = infinities_as_text({**record["with"], "joint_width_px": width})
+    return {**record, "model": "shipped" if shipped else str(model), "config": config,
             "report": report_text(choice, None if shipped else model, trained=False)}
 
 
@@ -163,8 +212,8 @@ def produce(args, out_dir=None) -> dict:
     from .manifest import build_manifest
     from .outputs import output_set
 
-    with output_set(out_dir) as out, ExitStack() as stack:
-        on_photo = _review_writer(out / "review", args) if args.review else None
+    with output_set(out_dir, owns=_OWNED) as out, ExitStack() as stack:
+        on_photo = _review_writer(out / "review", _pairs(args), args.tolerance) if args.review else None
         document = compute(args, on_photo)
         csv = stack.enter_context(atomic_path(out / "scores.csv"))
         atomic_write_text(csv, csv_rows(document))
@@ -182,12 +231,12 @@ def produce(args, out_dir=None) -> dict:
     return document
 
 
-def _review_writer(folder: Path, args):
+def _review_writer(folder: Path, pairs, tolerance_px: float):
     """``on_photo`` writing each photo's review image (PNG) into ``folder``
     (:func:`rockmass.imaging.label_scores.review_image`)."""
     from .imaging.label_scores import review_names
 
-    names = review_names([photo for photo, _ in _pairs(args)])
+    names = review_names([photo for photo, _ in pairs])
 
     def write(score, image, drawn, lines):
         import cv2
@@ -195,7 +244,7 @@ def _review_writer(folder: Path, args):
         from .atomic import atomic_write_bytes
         from .imaging.label_scores import review_image
 
-        rgb = review_image(image, drawn, lines, tolerance_px=args.tolerance)
+        rgb = review_image(image, drawn, lines, tolerance_px=tolerance_px)
         ok, png = cv2.imencode(".png", np.ascontiguousarray(rgb[..., ::-1]))
         if not ok:
             raise OSError(f"cannot encode the review image of {score.photo}")

@@ -270,3 +270,32 @@ def test_reused_probabilities_compute_a_map_once_per_model_and_image_and_change_
     n_calls = len(calls)
     extract(photo, m_per_px=1.0, params=settings[0])  # the maps were dropped with the block
     assert len(calls) == 2 * n_calls
+
+
+def test_reused_chains_are_traced_once_per_joint_mask_and_the_floors_give_what_they_give_alone(
+        monkeypatch):
+    import importlib
+
+    from rockmass.imaging import learned
+
+    extract_module = importlib.import_module("rockmass.imaging.extract")  # not the function
+    rng = np.random.default_rng(4)
+    image = (0.6 + 0.05 * rng.normal(size=(200, 260))).astype(np.float32)
+    for (a, b) in (((10, 20), (250, 150)), ((20, 180), (60, 150)), ((150, 20), (200, 60))):
+        cv2.line(image, a, b, 0.3, 3)  # one long joint, two of about 50 and 65 px
+    photo = (np.clip(image, 0, 1) * 255).astype(np.uint8)
+    settings = [ExtractParams(detector="learned", min_trace_length_px=floor, learned_levels=())
+                for floor in (70.0, 50.0, 30.0)]
+    alone = [extract(photo, m_per_px=1.0, params=p) for p in settings]
+    calls = []
+    traced = extract_module._chains_before_floor
+    monkeypatch.setattr(extract_module, "_chains_before_floor",
+                        lambda *args: calls.append(1) or traced(*args))
+    with learned.reused_probabilities():
+        reused = [extract(photo, m_per_px=1.0, params=p) for p in settings]
+    assert len(calls) == 1  # one joint mask: the floors share its chains
+    for a, b in zip(alone, reused):
+        np.testing.assert_array_equal(a.traces.xy_m, b.traces.xy_m)
+        np.testing.assert_array_equal(a.traces.offsets, b.traces.offsets)
+        assert set(b.timings_s) == set(a.timings_s)
+    assert alone[0].traces.n_traces < alone[2].traces.n_traces  # the floors do differ here

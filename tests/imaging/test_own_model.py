@@ -81,17 +81,20 @@ def test_labels_painted_red_or_white_on_black_give_the_same_centre_lines(tmp_pat
                                   label_centre_lines(tmp_path / "white.png"))
 
 
-def test_labels_of_16_bits_or_with_an_alpha_channel_read_as_8_bit_ones(tmp_path):
+def test_labels_of_16_bits_with_an_alpha_channel_or_of_0_and_1_read_as_8_bit_ones(tmp_path):
     from PIL import Image
 
     _, white = _vein_photo(7)
     cv2.imwrite(str(tmp_path / "white.png"), white)
     cv2.imwrite(str(tmp_path / "deep.png"), white.astype(np.uint16) * 257)
     Image.fromarray(np.dstack([white, np.full_like(white, 255)]), "LA").save(tmp_path / "la.png")
+    cv2.imwrite(str(tmp_path / "ones.png"), (white > 0).astype(np.uint8))  # a 0/1 mask
     expected = label_mask(tmp_path / "white.png")
     assert expected.any()
-    for name in ("deep.png", "la.png"):
+    for name in ("deep.png", "la.png", "ones.png"):
         np.testing.assert_array_equal(label_mask(tmp_path / name), expected)
+    np.testing.assert_array_equal(label_mask(np.dstack([white, np.full_like(white, 255)])),
+                                  expected)  # grey and alpha as an array
     cv2.imwrite(str(tmp_path / "float.tif"), white.astype(np.float32))
     with pytest.raises(ValueError, match="float.tif: a label image must be"):
         label_mask(tmp_path / "float.tif")

@@ -382,7 +382,7 @@ def test_rockmass_score_chooses_the_back_end_of_the_shipped_model_and_its_config
     root, _ = short_joints
     out = tmp_path / "out"
     assert main(["score", "--photos", str(root / "photos"), "--labels", str(root / "labels"),
-                 "--out", str(out), "--choose-back-end", "3"]) == 0
+                 "--out", str(out), "--choose-back-end", "3", "--joint-width", "3"]) == 0
     printed = capsys.readouterr().out
     assert "what choosing does on photos the choice did not see" in printed
     summary = json.loads((out / "summary.json").read_text())
@@ -390,16 +390,39 @@ def test_rockmass_score_chooses_the_back_end_of_the_shipped_model_and_its_config
     back_end = summary["back_end"]
     assert back_end["model"] == "shipped" and back_end["settings"]["min_trace_length_px"] <= 50
     assert back_end["chosen_without_the_photos_scored"]["F1"] > 0.8
-    config = tomllib.loads((out / "back_end.toml").read_text())["imaging"]["params"]
-    assert "pixel_model" not in config  # the shipped model: no path to a file in the package
+    imaging = tomllib.loads((out / "back_end.toml").read_text())["imaging"]
+    assert "pixel_model" not in imaging["params"]  # the shipped model: no file in the package
+    assert imaging["joint_width_px"] == 3.0  # the width it was chosen at goes with it
     # the printed settings do what the choice said, on the command that extracts
     assert main(["score", "--photos", str(root / "photos"), "--labels", str(root / "labels"),
                  "--config", str(out / "back_end.toml"), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["overall"]["F1"] > 0.8
 
 
+def test_rockmass_score_records_an_infinite_setting_of_the_choice_as_text(short_joints, tmp_path,
+                                                                           capsys):
+    from rockmass.cli import main
+
+    root, pairs = short_joints
+    photos, labels = tmp_path / "photos", tmp_path / "labels"
+    photos.mkdir()
+    labels.mkdir()
+    for photo, label in pairs[:2]:
+        (photos / photo.name).symlink_to(photo)
+        (labels / label.name).symlink_to(label)
+    config = tmp_path / "off.toml"
+    config.write_text("[imaging.params]\nmin_trace_contrast = -inf\n")
+    assert main(["score", "--photos", str(photos), "--labels", str(labels), "--config", str(config),
+                 "--choose-back-end", "--json"]) == 0
+    back_end = json.loads(capsys.readouterr().out)["back_end"]
+    assert back_end["folds"] == 2  # the default, 5, cut to the two photos
+    assert back_end["with"]["min_trace_contrast"] == "-inf"
+    assert "min_trace_contrast = -inf" in back_end["config"]
+
+
 @pytest.mark.parametrize("flags, message", [(["--detector", "ridge"], "ridge detector"),
-                                            (["--choose-back-end", "1"], "folds must be")])
+                                            (["--choose-back-end", "1"], "FOLDS must be"),
+                                            (["--choose-back-end", "11"], "FOLDS must be")])
 def test_rockmass_score_refuses_a_back_end_choice_it_cannot_make(short_joints, capsys, flags,
                                                                   message):
     from rockmass.cli import main

@@ -129,7 +129,7 @@ def test_a_photo_whose_label_marks_nothing_is_reported_not_averaged(faces, tmp_p
 
 @pytest.mark.parametrize("case", ["label size", "label unreadable", "no pairs", "all empty",
                                   "review without out", "tolerance", "config value",
-                                  "photo unreadable"])
+                                  "photo unreadable", "labels with the photos", "two labels"])
 def test_bad_input_stops_with_exit_2_naming_the_file_and_keeps_the_previous_outputs(
         faces, tmp_path, capsys, case):
     photos, lines, _ = faces
@@ -169,6 +169,12 @@ def test_bad_input_stops_with_exit_2_naming_the_file_and_keeps_the_previous_outp
         (broken / "face0.png").write_bytes(b"\x89PNG broken")
         labels = _labels(tmp_path / "labels0", {"face0": lines["face1"], **lines})
         args[2], args[4], named = str(broken), str(labels), "face0.png"
+    elif case == "labels with the photos":
+        args[4], named = str(photos), "the labels are in the photos' folder"
+    elif case == "two labels":
+        labels = _labels(tmp_path / "labels", lines)
+        (labels / "face2.tif").write_bytes((labels / "face2.png").read_bytes())
+        args[4], named = str(labels), "face2.png and face2.tif"
     capsys.readouterr()
     assert main(args) == 2
     assert named in capsys.readouterr().err
@@ -201,3 +207,15 @@ def test_it_scores_real_photos_as_the_benchmarks_do(tmp_path, capsys):
     for ours, theirs in (("F1", "F1"), ("precision", "P"), ("recall", "R"), ("dP21_pct", "dP21_pct"),
                          ("dP20_pct", "dP20_pct")):
         assert got[ours] == pytest.approx(expected[theirs], abs=1e-12), ours
+
+
+def test_a_new_run_drops_the_review_images_of_an_earlier_one(faces, tmp_path):
+    photos, lines, _ = faces
+    labels = _labels(tmp_path / "labels", lines)
+    out = tmp_path / "out"
+    common = ["score", "--photos", str(photos), "--labels", str(labels), "--out", str(out), *RIDGE]
+    assert main([*common, "--review"]) == 0
+    assert len(list((out / "review").iterdir())) == 3
+    (out / "notes.txt").write_text("mine")  # the user's own file stays
+    assert main(common) == 0
+    assert not (out / "review").exists() and (out / "notes.txt").read_text() == "mine"

@@ -1,0 +1,120 @@
+"""What choosing the learned back end costs on large photographs, beside what it buys.
+
+    python benchmarks/bench_choose_back_end.py [--photos 3] [--megapixels 12[,16,24]]
+
+A site geologist's photographs are 12-24 MP. ``rockmass score --choose-back-end`` (docs/imaging.md
+§3.5) extracts each labelled photo with the 18 back-end settings of
+:data:`rockmass.imaging.site_back_end.BACK_END_GRID`, the probability map computed once per photo.
+This benchmark writes field-like synthetic faces (:func:`rockmass.imaging.synthetic_field.field_face`,
+seeds 1..n, the truth's centre lines drawn 3 px wide as the label, white on black) at each size and
+runs, each in a fresh process (2 cores, as ``rockmass`` runs):
+
+- ``rockmass score`` (the photos extracted once, at the defaults): the base cost;
+- ``rockmass score --choose-back-end 2``: the choice, with two folds of consecutive photos.
+
+It prints the wall time per photo and the peak resident memory of the process beside the scores:
+F1 at 5 px at the default back end, the setting chosen, its F1 on the same photos (the best of 18:
+optimistic) and each fold's photos at the setting chosen on the other fold (``held_out_F1``, the
+choice's own estimate for photos it did not see). Rows also go to
+benchmarks/results/bench_choose_back_end.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import header, save, table  # noqa: E402
+
+#: Face sides (rows, cols) per size, 3:4 as a camera's.
+SHAPES = {12: (3000, 4000), 16: (3464, 4619), 24: (4243, 5657)}
+COLUMNS = [("MP", "d"), ("photos", "d"), ("command", "s"), ("s_per_photo", ".1f"), ("peak_MB", ".0f"),
+           ("F1_defaults", ".3f"), ("chosen", "s"), ("F1_chosen", ".3f"), ("held_out_F1", ".3f")]
+
+
+def write_faces(folder: Path, megapixels: int, n: int) -> tuple[Path, Path]:
+    """n field-like faces of the size and their labels, as PNG files in ``folder``."""
+    import cv2
+    import numpy as np
+
+    from rockmass.imaging.metrics import render_traces
+    from rockmass.imaging.synthetic_field import field_face
+
+    photos, labels = folder / "photos", folder / "labels"
+    photos.mkdir(parents=True)
+    labels.mkdir()
+    shape = SHAPES[megapixels]
+    for seed in range(1, n + 1):
+        face = field_face(seed=seed, shape_px=shape, m_per_px=0.008 * 1000 / shape[0])
+        lines = render_traces(face.truth, face.image.shape[:2], face.m_per_px)
+        label = cv2.dilate(lines.astype(np.uint8), np.ones((3, 3), np.uint8)) * 255
+        image = face.image if face.image.ndim == 2 else face.image[..., ::-1]
+        cv2.imwrite(str(photos / f"face{seed:02d}.png"), image)
+        cv2.imwrite(str(labels / f"face{seed:02d}.png"), label)
+    return photos, labels
+
+
+def run(args: list[str]) -> tuple[dict, float, float]:
+    """(summary.json, wall seconds, peak resident MB) of ``rockmass score`` in a fresh process
+    (its own peak, from the rusage of its exit)."""
+    import os
+
+    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
+        t0 = time.perf_counter()
+        child = subprocess.Popen([sys.executable, "-m", "rockmass", "score", *args, "--json"],
+                                 stdout=out, stderr=err)
+        _, status, usage = os.wait4(child.pid, 0)
+        seconds = time.perf_counter() - t0
+        child.returncode = os.waitstatus_to_exitcode(status)
+        out.seek(0)
+        err.seek(0)
+        if child.returncode != 0:
+            raise RuntimeError(f"rockmass score failed: {err.read().decode()}")
+        return json.loads(out.read()), seconds, usage.ru_maxrss / 1024
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--photos", type=int, default=3, help="photos per size (default 3)")
+    parser.add_argument("--megapixels", default="12",
+                        help="sizes, of 12, 16, 24 (default 12; drawing a field-like face takes "
+                             "minutes at these sizes)")
+    args = parser.parse_args(argv)
+    sizes = [int(v) for v in args.megapixels.split(",") if v.strip()]
+    print(header("rockmass score --choose-back-end on large photographs (field-like synthetic faces)"))
+    rows = []
+    for megapixels in sizes:
+        with tempfile.TemporaryDirectory() as tmp:
+            photos, labels = write_faces(Path(tmp), megapixels, args.photos)
+            base = ["--photos", str(photos), "--labels", str(labels)]
+            scored, seconds, peak = run(base)
+            rows.append({"MP": megapixels, "photos": args.photos, "command": "score",
+                         "s_per_photo": seconds / args.photos, "peak_MB": peak,
+                         "F1_defaults": scored["overall"]["F1"]})
+            chosen, seconds, peak = run([*base, "--choose-back-end", "2"])
+            back_end = chosen["back_end"]
+            rows.append({"MP": megapixels, "photos": args.photos,
+                         "command": "score --choose-back-end 2",
+                         "s_per_photo": seconds / args.photos, "peak_MB": peak,
+                         "F1_defaults": back_end["fold_models_at_given_settings"]["F1"],
+                         "chosen": "/".join(f"{v:g}" for v in back_end["settings"].values()),
+                         "F1_chosen": back_end["cross_validated"]["F1"],
+                         "held_out_F1": back_end["chosen_without_the_photos_scored"]["F1"]})
+            print(table(rows[-2:], COLUMNS), flush=True)
+    print("\nall rows")
+    print(table(rows, COLUMNS))
+    print("\nchosen: prob_low/prob_high/min_trace_length_px; F1 at 5 px of the photograph, means "
+          "over the photos; peak_MB: the peak resident set of the command's process")
+    path = save("bench_choose_back_end", {"rows": rows, "shapes": {str(k): v for k, v in SHAPES.items()}})
+    print(f"\nrows saved to {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
