@@ -12,6 +12,7 @@ back end chosen for the model on these photos) — all of them or none.
 from __future__ import annotations
 
 import math
+import sys
 import time
 import warnings
 from pathlib import Path
@@ -20,6 +21,7 @@ import numpy as np
 
 from .errors import InputError, reading
 from .extract_stage import extract_params, imaging_settings, read_photograph
+from .progress import count_bar
 
 __all__ = ["compute", "produce", "SCORE_COLUMNS"]
 
@@ -153,8 +155,19 @@ def compute(args, on_photo=None) -> dict:
         return image, result, scale
 
     t0 = time.perf_counter()
-    scores, skipped = score_labelled_photos(pairs, extract_and_note, tolerance_px=args.tolerance,
-                                            on_photo=on_photo, read_lines=_read_lines)
+    with count_bar("score", len(pairs), "photo") as bar:
+        done = []
+
+        def after_photo(*scored):  # the review image, then the bar
+            if on_photo is not None:
+                on_photo(*scored)
+            done.append(True)
+            if bar is not None:
+                bar(len(done))
+
+        scores, skipped = score_labelled_photos(pairs, extract_and_note,
+                                                tolerance_px=args.tolerance, on_photo=after_photo,
+                                                read_lines=_read_lines)
     overall = summarise_photo_scores(scores)
     back_end = None if folds is None else _back_end(pairs, folds, settings, params)
     return {**({} if back_end is None else {"back_end": back_end}),
@@ -180,8 +193,11 @@ def _back_end(pairs, folds: int, settings, params) -> dict:
     width = settings["joint_width_px"]
     if width is None and settings["joint_width_m"] is not None:
         width = settings["joint_width_m"] / settings["m_per_px"]
+    def report(line):  # the choice runs 18 settings per photo: say where it is
+        print(f"rockmass score: back end: {line}", file=sys.stderr, flush=True)
+
     choice = choose_back_end(pairs, lambda photos, fold: model, folds=folds, base=params,
-                             joint_width_px=width)
+                             joint_width_px=width, progress=report)
     shipped = params.pixel_model is None
     config = choice.config_snippet(None if shipped else model)
     if width is not None:  # the width the settings were chosen at goes with them
