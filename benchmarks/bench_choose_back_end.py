@@ -69,13 +69,12 @@ def run(args: list[str]) -> tuple[dict, float, float]:
         t0 = time.perf_counter()
         child = subprocess.Popen([sys.executable, "-m", "rockmass", "score", *args, "--json"],
                                  stdout=out, stderr=err)
-        _, status, usage = os.wait4(child.pid, 0)
+        _, status, usage = os.wait4(child.pid, 0)  # the child's own peak memory
         seconds = time.perf_counter() - t0
-        child.returncode = os.waitstatus_to_exitcode(status)
-        out.seek(0)
-        err.seek(0)
-        if child.returncode != 0:
+        if os.waitstatus_to_exitcode(status) != 0:
+            err.seek(0)
             raise RuntimeError(f"rockmass score failed: {err.read().decode()}")
+        out.seek(0)
         return json.loads(out.read()), seconds, usage.ru_maxrss / 1024
 
 

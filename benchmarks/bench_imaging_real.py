@@ -199,7 +199,7 @@ def score_real(pairs, params, joint_width_px: float | None, min_joint_score=None
     that many times (bicubic) and its label with it, and the tolerance grows in proportion: the
     same scene at a higher pixel count. ``band_px`` is the length-weighted median of the traces'
     ``band_width_px``."""
-    from rockmass.imaging.metrics import raster_counts, render_traces
+    from rockmass.imaging.label_scores import score_traces
 
     counts, elapsed, megapixels, n_traces = [], 0.0, 0.0, np.zeros(2)
     bands, lengths = [], []
@@ -209,8 +209,7 @@ def score_real(pairs, params, joint_width_px: float | None, min_joint_score=None
         elapsed += seconds
         megapixels += truth.size / 1e6
         traces = confident(traces, min_joint_score)
-        drawn = render_traces(traces, truth.shape, 1.0)
-        counts.append(raster_counts(drawn, truth, tolerance_px=TOLERANCE_PX * upsample))
+        counts.append(score_traces(traces, truth, tolerance_px=TOLERANCE_PX * upsample)[0])
         n_traces += (traces.n_traces, label_trace_count(truth))
         if traces.n_traces:
             bands.append(np.asarray(traces.attributes["band_width_px"], dtype=float))

@@ -961,30 +961,28 @@ def _trace_chains(binary, params: ExtractParams, work_shape, width_work: float, 
                   clock: _Clock) -> tuple:
     """Joint pixels -> traces as pixel polylines on the working grid: :func:`_chains_before_floor`,
     then the length floor. Returns (chains, skeleton image, pruned graph). Within
-    :func:`rockmass.imaging.learned.reused_probabilities` the chains before the floor are computed
-    once per joint mask and chain settings (the length floor changes nothing before it)."""
-    from . import learned, link
+    :func:`rockmass.imaging.reuse.shared_work` the chains before the floor are computed once per
+    joint mask and chain settings (the length floor changes nothing before it)."""
+    from . import link
+    from .reuse import array_digest, reused
 
-    floor = params.trace_length_floor_px
-    if not learned.reusing():
-        chains, skeleton, pruned = _chains_before_floor(binary, params, work_shape, width_work,
-                                                        band_px, clock)
-        return [c for c in chains if link.polyline_length_px(c) >= floor], skeleton, pruned
-    key = ("chains", learned.array_digest(binary), repr(replace(params, min_trace_length_px=None)),
-           tuple(work_shape), float(width_work), float(band_px))
     computed = []
 
     def compute():
         computed.append(True)
         return _chains_before_floor(binary, params, work_shape, width_work, band_px, clock)
 
-    chains, skeleton, pruned = learned.reused(key, compute)
+    (chains, skeleton, pruned), kept = reused(
+        lambda: ("chains", array_digest(binary), repr(replace(params, min_trace_length_px=None)),
+                 tuple(work_shape), float(width_work), float(band_px)), compute)
     if not computed:  # reused: the steps took no time in this run
         for step in _CHAIN_STEPS:
             clock.lap(step)
-    # copies: the cached chains and skeleton stay as computed for the next setting
-    return ([c.copy() for c in chains if link.polyline_length_px(c) >= floor], skeleton.copy(),
-            pruned)
+    floor = params.trace_length_floor_px
+    chains = [c for c in chains if link.polyline_length_px(c) >= floor]
+    if kept:  # the block keeps them as computed for the next setting
+        chains, skeleton = [c.copy() for c in chains], skeleton.copy()
+    return chains, skeleton, pruned
 
 
 def _chains_before_floor(binary, params: ExtractParams, work_shape, width_work: float,

@@ -28,6 +28,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -70,27 +71,32 @@ class PhotoScore:
     detector: str
     seconds: float
 
+    @cached_property
+    def _scores(self) -> dict:
+        """:func:`rockmass.imaging.metrics.summarise_counts` of this one photo."""
+        from .metrics import summarise_counts
+
+        return summarise_counts([self.counts])
+
     @property
     def precision(self) -> float:
         """Share of drawn pixels within the tolerance of a label (NaN when nothing was drawn)."""
-        return self.counts[0] / self.counts[1] if self.counts[1] else float("nan")
+        return self._scores["P"]
 
     @property
     def recall(self) -> float:
-        """Share of labelled pixels within the tolerance of a drawn one."""
-        return self.counts[2] / self.counts[3] if self.counts[3] else float("nan")
+        """Share of labelled pixels within the tolerance of a drawn one (NaN without a label)."""
+        return self._scores["R"]
 
     @property
     def f1(self) -> float:
         """Harmonic mean of precision and recall; 0 when nothing was drawn."""
-        from .metrics import image_f1
-
-        return float(image_f1([self.counts])[0])
+        return self._scores["F1"]
 
     @property
     def length_error_pct(self) -> float:
-        """ΔP21: drawn / labelled line length − 1, %."""
-        return 100.0 * (self.counts[1] / self.counts[3] - 1.0) if self.counts[3] else float("nan")
+        """ΔP21: drawn / labelled line length − 1, % (NaN without a label)."""
+        return self._scores["dP21_pct"] if self.counts[3] else float("nan")
 
     @property
     def count_error_pct(self) -> float:

@@ -20,12 +20,9 @@ processor's cache (:meth:`Stage.predict`).
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from contextlib import contextmanager
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -33,8 +30,7 @@ from .features import CONTEXT_NAMES, FEATURE_NAMES, context_features, pixel_feat
 
 __all__ = ["MODEL_FILE", "MODEL_LINE_WIDTH_PX", "MIN_SPREAD", "MAX_STRETCH", "Stage", "PixelModel",
            "load_model", "model_record", "flattened", "model_input", "stretch_gain",
-           "stretch_flat_face", "joint_probability", "reused_probabilities", "reusing", "reused",
-           "array_digest"]
+           "stretch_flat_face", "joint_probability"]
 
 #: The shipped model, inside the installed package.
 MODEL_FILE = Path(__file__).resolve().parent / "models" / "joint_pixel_mlp.npz"
@@ -347,8 +343,8 @@ def stretch_flat_face(flat, *, min_spread: float = MIN_SPREAD, max_stretch: floa
 def joint_probability(flat, model: PixelModel | None = None) -> np.ndarray:
     """Probability map (H, W) float32 in [0, 1] of joint centre lines in a :func:`model_input` image.
 
-    Inside :func:`reused_probabilities`, a map already computed for the same model and an identical
-    image is returned (a copy) instead of being computed again.
+    Inside :func:`rockmass.imaging.reuse.shared_work`, a map already computed for the same model
+    and an identical image is returned (a copy) instead of being computed again.
 
     Examples
     --------
@@ -357,56 +353,11 @@ def joint_probability(flat, model: PixelModel | None = None) -> np.ndarray:
     >>> int(p[32].argmax()) in (30, 31, 32)
     True
     """
+    from .reuse import array_digest, reused
+
     model = model or load_model()
-    if _REUSED is None:
-        return model.probability(pixel_features(flat))
-    # the model is kept with its map, so that its id stays its own
-    key = ("probability", id(model), array_digest(flat))
-    return reused(key, lambda: (model, model.probability(pixel_features(flat))))[1].copy()
-
-
-def array_digest(array) -> tuple:
-    """(shape, dtype, 16-byte BLAKE2b digest of the bytes) of an array: a key for
-    :func:`reused` that tells equal arrays from different ones."""
-    import hashlib
-
-    array = np.ascontiguousarray(array)
-    return array.shape, array.dtype.str, hashlib.blake2b(array.data, digest_size=16).digest()
-
-
-def reusing() -> bool:
-    """True within :func:`reused_probabilities`."""
-    return _REUSED is not None
-
-
-def reused(key, compute: Callable[[], Any]):
-    """``compute()``; within :func:`reused_probabilities`, computed once per ``key`` and the same
-    object returned again (callers copy what they change)."""
-    if _REUSED is None:
-        return compute()
-    if key not in _REUSED:
-        _REUSED[key] = compute()
-    return _REUSED[key]
-
-
-#: What :func:`reused` keeps while :func:`reused_probabilities` is on (("probability", model id,
-#: digest of the image) -> (model, probability map); ("chains", ...) -> trace chains); else None.
-_REUSED: dict | None = None
-
-
-@contextmanager
-def reused_probabilities():
-    """Within this block :func:`joint_probability` computes a map once per model and input image,
-    and :func:`rockmass.imaging.extract.extract` its trace chains once per joint mask and chain
-    settings, before the length floor (:func:`reused`): for extracting one photograph with several
-    back-end settings, which change nothing before the probability map, and the length floor
-    nothing before the last step of the chains (:mod:`rockmass.imaging.site_back_end`). What was
-    computed is dropped when the block ends; blocks do not nest."""
-    global _REUSED
-    if _REUSED is not None:
-        raise RuntimeError("reused_probabilities() blocks do not nest")
-    _REUSED = {}
-    try:
-        yield
-    finally:
-        _REUSED = None
+    # in a shared_work() block: one map per model and image (the model is kept with its map, so
+    # that its id stays its own)
+    (_, probability), kept = reused(lambda: ("probability", id(model), array_digest(flat)),
+                                    lambda: (model, model.probability(pixel_features(flat))))
+    return probability.copy() if kept else probability

@@ -36,7 +36,7 @@ them reaches the choice. Photographs kept out of the whole choice give the unbia
 (``benchmarks/bench_imaging_outcrop.py --site-models`` does that). The same photos are also
 extracted with the shipped model at the given settings, for comparison. The probability map of a
 photo is computed once per model for all the settings
-(:func:`rockmass.imaging.learned.reused_probabilities`): they change nothing before it.
+(:func:`rockmass.imaging.reuse.shared_work`): they change nothing before it.
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ import numpy as np
 from . import label_scores
 
 __all__ = ["BACK_END_GRID", "LENGTH_TOLERANCE_PCT", "TOLERANCE_PX", "BackEndScore", "BackEndChoice",
-           "fold_of", "choose_setting", "held_out_score", "choose_back_end", "report_text",
+           "fold_of", "check_folds", "choose_setting", "held_out_score", "choose_back_end", "report_text",
            "chosen_settings", "recommended_settings", "unused_settings_note"]
 
 #: The settings tried, in order; the defaults of ExtractParams (0.8, 0.97, 70 px) are among them.
@@ -221,6 +221,24 @@ def fold_of(k: int, n: int, folds: int) -> int:
     return k * folds // n
 
 
+def check_folds(folds, n_photos: int, name: str = "folds") -> None:
+    """Refuse (ValueError, naming ``name``) folds that are not an integer from 2 to the number
+    of labelled photos: the check of :func:`choose_back_end`, which the commands make before any
+    work.
+
+    Examples
+    --------
+    >>> check_folds(3, 3)
+    >>> check_folds(4, 3, "--choose-back-end: FOLDS")
+    Traceback (most recent call last):
+    ...
+    ValueError: --choose-back-end: FOLDS must be an integer from 2 to the number of labelled photos (3), got 4
+    """
+    if isinstance(folds, bool) or not (isinstance(folds, int) and 2 <= folds <= n_photos):
+        raise ValueError(f"{name} must be an integer from 2 to the number of labelled photos "
+                         f"({n_photos}), got {folds!r}")
+
+
 def choose_setting(scores: Sequence[BackEndScore], given: BackEndScore) -> BackEndScore:
     """Rules 4 and 5 of the module notes: the candidate among ``scores`` (the best mean F1 among
     the settings whose |dP21| <= :data:`LENGTH_TOLERANCE_PCT`, or among all), kept only when its
@@ -372,11 +390,10 @@ def choose_back_end(pairs: Sequence[tuple], train: Callable[[list, int], Path], 
     """
     from . import learned
     from .extract import ExtractParams
+    from .reuse import shared_work
 
     n = len(pairs)
-    if isinstance(folds, bool) or not (isinstance(folds, int) and 2 <= folds <= n):
-        raise ValueError(f"folds must be an integer from 2 to the number of labelled photos "
-                         f"({n}), got {folds!r}")
+    check_folds(folds, n)
     if not grid or any(set(settings) != set(grid[0]) for settings in grid):
         raise ValueError("grid: give one or more settings, each of the same names")
     base = replace(base or ExtractParams(), detector="learned")
@@ -397,7 +414,7 @@ def choose_back_end(pairs: Sequence[tuple], train: Callable[[list, int], Path], 
             if not lines.any():
                 skipped.append(str(pairs[k][0]))
                 continue
-            with learned.reused_probabilities():  # one map per model: the settings come after it
+            with shared_work():  # one map and its chains per model: the settings come after them
                 for photo_counts, settings in zip(counts["grid"], grid):
                     photo_counts.append(_photo_counts(image, lines, replace(fold_params, **settings),
                                                       joint_width_px))

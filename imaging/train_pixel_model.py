@@ -311,9 +311,13 @@ def main(argv=None) -> int:
     photos = labelled_pairs(args.photos, args.labels) if args.photos is not None else []
     if not photos and args.faces + n_plain == 0:
         parser.error("nothing to train on: --faces 0 and no --photos")
-    if args.choose_back_end is not None and not 2 <= args.choose_back_end <= len(photos):
-        parser.error(f"--choose-back-end: FOLDS must be from 2 to the number of labelled photos "
-                     f"({len(photos)}), got {args.choose_back_end}")
+    if args.choose_back_end is not None:
+        from .site_back_end import check_folds
+
+        try:
+            check_folds(args.choose_back_end, len(photos), "--choose-back-end: FOLDS")
+        except ValueError as error:
+            parser.error(str(error))
     fit = dict(hidden=tuple(args.hidden), epochs=args.epochs, seed=args.seed)
     base = None if args.config is None else _config_params(args.config, parser,
                                                            args.max_megapixels)

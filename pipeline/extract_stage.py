@@ -40,8 +40,8 @@ def imaging_settings(args, document=None):
         values = document.imaging.model_dump()
     else:  # no [imaging] section: the defaults, without importing pydantic for them
         values = _imaging_defaults()
-    for key in ("m_per_px", "face_dip_deg", "face_dip_direction_deg"):
-        if getattr(args, key) is not None:
+    for key in ("m_per_px", "face_dip_deg", "face_dip_direction_deg"):  # flags a command may lack
+        if getattr(args, key, None) is not None:
             values[key] = getattr(args, key)
     for key, other in (("joint_width_px", "joint_width_m"), ("joint_width_m", "joint_width_px")):
         if getattr(args, key, None) is not None:  # a width on the command line replaces the file's

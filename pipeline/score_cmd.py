@@ -69,9 +69,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--max-pixels", type=pixel_limit_arg, dest="max_pixels", metavar="N",
                    help="refuse photos above N pixels (default 100000000, or ROCKMASS_MAX_PIXELS)")
     p.add_argument("--json", action="store_true", help="print summary.json on stdout")
-    # the [imaging] settings rockmass extract takes from flags that do not apply here
-    p.set_defaults(handler=run, m_per_px=None, joint_width_m=None, face_dip_deg=None,
-                   face_dip_direction_deg=None)
+    p.set_defaults(handler=run)
     return p
 
 

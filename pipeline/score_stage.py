@@ -90,10 +90,13 @@ def _folds(args, n_photos: int, params) -> int | None:
     if params.detector == "ridge":  # named, or chosen by --bright-lines
         raise InputError("--choose-back-end chooses the learned detector's settings: not with the "
                          "ridge detector (--detector ridge, --bright-lines)")
+    from .imaging.site_back_end import check_folds
+
     folds = min(DEFAULT_FOLDS, n_photos) if args.choose_back_end == 0 else args.choose_back_end
-    if not 2 <= folds <= n_photos:
-        raise InputError(f"--choose-back-end: FOLDS must be from 2 to the number of photos whose "
-                         f"label marks traces ({n_photos}), got {folds}")
+    try:
+        check_folds(folds, n_photos, "--choose-back-end: FOLDS")  # photos whose label marks traces
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
     return folds
 
 
@@ -123,10 +126,10 @@ def _finite(value):
     return None if isinstance(value, float) and math.isnan(value) else value
 
 
-def compute(args, on_photo=None) -> dict:
+def compute(args, review_folder: Path | None = None) -> dict:
     """Score every labelled photo; return the summary document (``settings``, ``tolerance_px``,
-    ``overall``, ``photos``, ``skipped``, ``warnings``). ``on_photo(score, image, drawn, lines)``
-    is called after each photo (the review images)."""
+    ``overall``, ``photos``, ``skipped``, ``warnings``, and ``back_end`` with
+    ``--choose-back-end``); with ``review_folder``, each photo's review image is written there."""
     import dataclasses
 
     from .imaging.extract import infinities_as_text
@@ -145,6 +148,8 @@ def compute(args, on_photo=None) -> dict:
         raise InputError(f"{args.labels}: no label marks any trace ({len(empty)} labels are "
                          "empty): nothing to score")
     folds = _folds(args, len(pairs), params)
+    on_photo = None if review_folder is None else _review_writer(review_folder, pairs,
+                                                                  args.tolerance)
     notes: dict[str, list[str]] = {}
     extract_photo = _photo_extractor(settings, params, args.max_pixels)
 
@@ -229,8 +234,7 @@ def produce(args, out_dir=None) -> dict:
     from .outputs import output_set
 
     with output_set(out_dir, owns=_OWNED) as out, ExitStack() as stack:
-        on_photo = _review_writer(out / "review", _pairs(args), args.tolerance) if args.review else None
-        document = compute(args, on_photo)
+        document = compute(args, out / "review" if args.review else None)
         csv = stack.enter_context(atomic_path(out / "scores.csv"))
         atomic_write_text(csv, csv_rows(document))
         js = stack.enter_context(atomic_path(out / "summary.json"))

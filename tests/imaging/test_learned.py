@@ -9,6 +9,7 @@ import pytest
 from rockmass.imaging.extract import ExtractParams, extract
 from rockmass.imaging.features import CONTEXT_NAMES, FEATURE_NAMES, line_support
 from rockmass.imaging.learned import PixelModel, Stage, joint_probability, load_model, model_input
+from rockmass.imaging.reuse import shared_work
 from rockmass.imaging.train_pixel_model import face_samples, fit_mlp
 from rockmass.imaging.vectorize import mean_along
 
@@ -241,7 +242,7 @@ def test_contrast_filter_drops_a_faint_line_and_keeps_the_dark_one():
     assert any(abs(r - 50) <= 3 for r in rows) and not any(abs(r - 109.5) <= 3 for r in rows)
 
 
-def test_reused_probabilities_compute_a_map_once_per_model_and_image_and_change_nothing(monkeypatch):
+def test_shared_work_computes_a_map_once_per_model_and_image_and_changes_nothing(monkeypatch):
     from rockmass.imaging import learned
 
     rng = np.random.default_rng(3)
@@ -256,10 +257,10 @@ def test_reused_probabilities_compute_a_map_once_per_model_and_image_and_change_
     monkeypatch.setattr(learned.PixelModel, "probability",
                         lambda self, features: calls.append(features.shape) or
                         probability(self, features))
-    with learned.reused_probabilities():
+    with shared_work():
         reused = [extract(photo, m_per_px=1.0, params=p) for p in settings]
         with pytest.raises(RuntimeError, match="do not nest"):
-            with learned.reused_probabilities():
+            with shared_work():
                 pass
     # one map per grid the learned detector reads (the working grid and the coarser ones)
     assert len(calls) == len(set(calls)) == 1 + len(alone[0].learned_levels["levels"][1:])
@@ -276,8 +277,6 @@ def test_reused_chains_are_traced_once_per_joint_mask_and_the_floors_give_what_t
         monkeypatch):
     import importlib
 
-    from rockmass.imaging import learned
-
     extract_module = importlib.import_module("rockmass.imaging.extract")  # not the function
     rng = np.random.default_rng(4)
     image = (0.6 + 0.05 * rng.normal(size=(200, 260))).astype(np.float32)
@@ -291,7 +290,7 @@ def test_reused_chains_are_traced_once_per_joint_mask_and_the_floors_give_what_t
     traced = extract_module._chains_before_floor
     monkeypatch.setattr(extract_module, "_chains_before_floor",
                         lambda *args: calls.append(1) or traced(*args))
-    with learned.reused_probabilities():
+    with shared_work():
         reused = [extract(photo, m_per_px=1.0, params=p) for p in settings]
     assert len(calls) == 1  # one joint mask: the floors share its chains
     for a, b in zip(alone, reused):

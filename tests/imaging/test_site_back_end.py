@@ -265,7 +265,8 @@ def test_a_config_with_a_byte_order_mark_is_read_as_rockmass_reads_configs(short
 @pytest.mark.parametrize("args, message", [
     (["--choose-back-end"], "chooses settings on your labelled --photos"),
     (["--config", "c.toml"], "--config goes with --choose-back-end"),
-    (["--choose-back-end", "11"], "FOLDS must be from 2 to the number of labelled photos (10)"),
+    (["--choose-back-end", "11"],
+     "FOLDS must be an integer from 2 to the number of labelled photos (10)"),
 ])
 def test_back_end_options_that_cannot_work_are_refused(args, message, short_joints, tmp_path, capsys):
     root, _ = short_joints
@@ -421,8 +422,10 @@ def test_rockmass_score_records_an_infinite_setting_of_the_choice_as_text(short_
 
 
 @pytest.mark.parametrize("flags, message", [(["--detector", "ridge"], "ridge detector"),
-                                            (["--choose-back-end", "1"], "FOLDS must be"),
-                                            (["--choose-back-end", "11"], "FOLDS must be")])
+                                            (["--choose-back-end", "1"], "FOLDS must be an integer "
+                                             "from 2 to the number of labelled photos (10), got 1"),
+                                            (["--choose-back-end", "11"], "FOLDS must be an integer "
+                                             "from 2 to the number of labelled photos (10), got 11")])
 def test_rockmass_score_refuses_a_back_end_choice_it_cannot_make(short_joints, capsys, flags,
                                                                   message):
     from rockmass.cli import main
