@@ -1,4 +1,6 @@
-"""Numba kernel behind :func:`rockmass.imaging.skeleton_graph.build_graph`: walk skeleton branches.
+"""Numba kernels of :mod:`rockmass.imaging.skeleton_graph`: walk skeleton branches
+(:func:`~rockmass.imaging.skeleton_graph.build_graph`) and measure their end directions
+(:func:`~rockmass.imaging.skeleton_graph.end_directions`).
 
 Kept apart from its wrapper (the project's kernel rule: kernels take plain arrays, write into caller-allocated
 outputs and return the counts written; the wrapper validates and slices).
@@ -131,3 +133,50 @@ def _walk_branches(skel, node_id, visited, out_rc, out_offsets, out_src, out_dst
             n_v = _push(out_rc, n_v, sr, sc)
             n_b = _close(out_offsets, out_src, out_dst, n_b, n_v, -1, -1)
     return n_b, n_v
+
+
+@numba.njit(numba.void(numba.float64[:, ::1], numba.int64[::1], numba.float64, numba.float64,
+                       numba.float64[:, :, ::1]), cache=True)
+def _end_directions(rc, offsets, skip_px, reach_px, out):
+    """Unit direction into every chain ``rc[offsets[i]:offsets[i + 1]]`` from its first point
+    (``out[i, 0]``) and from its last (``out[i, 1]``), between arc lengths skip and reach.
+
+    The arithmetic of :func:`rockmass.imaging.skeleton_graph._direction`, step for step (the arc
+    summed from the end in chain order, the first vertex at or beyond each arc length), so the
+    two agree to the bit. ``out`` starts at zero: chains of one point or no length keep it.
+    """
+    longest = 1
+    for i in range(offsets.size - 1):
+        longest = max(longest, offsets[i + 1] - offsets[i])
+    arc = np.empty(longest)
+    for i in range(offsets.size - 1):
+        lo, hi = offsets[i], offsets[i + 1]
+        k = hi - lo
+        if k < 2:
+            continue
+        for side in range(2):
+            step = -1 if side == 1 else 1
+            first = hi - 1 if side == 1 else lo
+            arc[0] = 0.0
+            for j in range(1, k):
+                a = first + step * j
+                b = a - step
+                arc[j] = arc[j - 1] + np.hypot(rc[a, 0] - rc[b, 0], rc[a, 1] - rc[b, 1])
+            reach = min(reach_px, arc[k - 1])
+            skip = min(skip_px, reach / 3.0)
+            near = 0
+            while near < k - 1 and arc[near] < skip:  # skip <= arc[k - 1]: the bound is a guard
+                near += 1
+            far = 0
+            while far < k - 1 and arc[far] < reach:
+                far += 1
+            p = first + step * near
+            q = first + step * far
+            if rc[p, 0] == rc[q, 0] and rc[p, 1] == rc[q, 1]:
+                p = first
+            d0 = rc[q, 0] - rc[p, 0]
+            d1 = rc[q, 1] - rc[p, 1]
+            norm = np.hypot(d0, d1)
+            if norm > 0:
+                out[i, side, 0] = d0 / norm
+                out[i, side, 1] = d1 / norm

@@ -916,32 +916,45 @@ def _joint_pixels(grey, params: ExtractParams, width_work: float, mask, clock: _
     probability) and threshold it (hysteresis, inside ``mask``; holes filled). Returns (flattened
     image, response, binary mask of joint pixels, and for the learned detector the relative
     spread and contrast of the flattened face and the factor its input was stretched by, else
-    None)."""
-    from . import enhance, learned, ridges, segment, vectorize
+    None). Within :func:`rockmass.imaging.reuse.shared_work` the learned detector's flattened face
+    and probability map are computed once per model, image and mask (no back-end setting changes
+    them)."""
+    from . import enhance, learned, ridges, segment
+    from .reuse import array_digest, reused
 
     stretch = None
     if params.detector == "learned":
         model = learned.load_model(params.pixel_model)
-        flat = learned.flattened(grey, background_sigma_px=params.background_sigma_px)
-        levels = vectorize.face_levels(flat, mask=mask)  # one sample: the stretch and the floor
-        model_image, gain, _ = learned.stretch_flat_face(flat, min_spread=params.min_face_spread,
-                                                         levels=levels)
+        computed = []
+
+        def probability_map():
+            computed.append(True)
+            flat, levels, model_image, gain = _learned_input(grey, params, mask)
+            clock.lap("flatten")
+            probability = learned.joint_probability(model_image, model)
+            clock.lap("ridges")
+            # the model is kept with its map, so that its id stays its own while the block lasts
+            return model, flat, levels, gain, probability
+
+        (_, flat, levels, gain, response), _ = reused(
+            lambda: ("probability map", id(model), array_digest(grey), array_digest(mask),
+                     params.background_sigma_px, params.min_face_spread), probability_map)
+        if not computed:  # reused: the steps took no time in this run
+            clock.lap("flatten")
+            clock.lap("ridges")
+        # kept in a block, flat and response are read here and by _detect, which copies what it
+        # hands on: one map per photo, not one per pair of hysteresis levels
         trained = model.input_stretch
         stretch = {"spread": levels.spread, "stretch": gain, "face_contrast": levels.contrast,
                    "model_stretch": None if trained is None
                    else learned.stretch_gain(levels.spread, *trained)}
+        binary = segment.hysteresis_mask(response, low=params.prob_low, high=params.prob_high,
+                                         min_size_px=params.min_object_px, mask=mask)
     else:
         flat = enhance.flatten_illumination(
             grey, line_width_px=max(2.0 * width_work, 2.0), sigma_px=params.background_sigma_px,
             method=params.flatten_method, clahe=params.clahe, clahe_clip_limit=params.clahe_clip_limit)
-    clock.lap("flatten")
-    if params.detector == "learned":
-        response = learned.joint_probability(model_image, model)
-        del model_image
-        clock.lap("ridges")
-        binary = segment.hysteresis_mask(response, low=params.prob_low, high=params.prob_high,
-                                         min_size_px=params.min_object_px, mask=mask)
-    else:
+        clock.lap("flatten")
         sigmas = ridges.ridge_sigmas(width_work, params.n_scales, spread=params.scale_spread,
                                      min_sigma_px=params.min_sigma_px)
         response = ridges.ridge_response(flat, sigmas, black_ridges=params.line_polarity == "dark")
@@ -953,36 +966,21 @@ def _joint_pixels(grey, params: ExtractParams, width_work: float, mask, clock: _
     return flat, response, binary, stretch
 
 
+def _learned_input(grey, params: ExtractParams, mask) -> tuple:
+    """(flattened face, its levels, the pixel model's input, the factor it was stretched by) of
+    the learned detector (docs/imaging.md §3.1): the face stretched when flatter than
+    ``min_face_spread``, the unstretched one kept for the traces' contrasts."""
+    from . import learned, vectorize
+
+    flat = learned.flattened(grey, background_sigma_px=params.background_sigma_px)
+    levels = vectorize.face_levels(flat, mask=mask)  # one sample: the stretch and the floor
+    model_image, gain, _ = learned.stretch_flat_face(flat, min_spread=params.min_face_spread,
+                                                     levels=levels)
+    return flat, levels, model_image, gain
+
+
 #: The steps of :func:`_chains_before_floor`, as its clock names them.
 _CHAIN_STEPS = ("skeleton", "graph", "prune", "crossings", "bridge", "chain")
-
-
-def _trace_chains(binary, params: ExtractParams, work_shape, width_work: float, band_px: float,
-                  clock: _Clock) -> tuple:
-    """Joint pixels -> traces as pixel polylines on the working grid: :func:`_chains_before_floor`,
-    then the length floor. Returns (chains, skeleton image, pruned graph). Within
-    :func:`rockmass.imaging.reuse.shared_work` the chains before the floor are computed once per
-    joint mask and chain settings (the length floor changes nothing before it)."""
-    from . import link
-    from .reuse import array_digest, reused
-
-    computed = []
-
-    def compute():
-        computed.append(True)
-        return _chains_before_floor(binary, params, work_shape, width_work, band_px, clock)
-
-    (chains, skeleton, pruned), kept = reused(
-        lambda: ("chains", array_digest(binary), repr(replace(params, min_trace_length_px=None)),
-                 tuple(work_shape), float(width_work), float(band_px)), compute)
-    if not computed:  # reused: the steps took no time in this run
-        for step in _CHAIN_STEPS:
-            clock.lap(step)
-    floor = params.trace_length_floor_px
-    chains = [c for c in chains if link.polyline_length_px(c) >= floor]
-    if kept:  # the block keeps them as computed for the next setting
-        chains, skeleton = [c.copy() for c in chains], skeleton.copy()
-    return chains, skeleton, pruned
 
 
 def _chains_before_floor(binary, params: ExtractParams, work_shape, width_work: float,
@@ -1025,6 +1023,7 @@ class _Found(NamedTuple):
     chains: list
     contrast: np.ndarray
     band_px: np.ndarray
+    confidence: np.ndarray
     flat: np.ndarray
     response: np.ndarray
     binary: np.ndarray
@@ -1085,14 +1084,33 @@ def _low_contrast_notes(record, params: ExtractParams) -> list[str]:
 def _detect(grey, params: ExtractParams, width_work: float, mask, band_px: float, work_shape,
             clock: _Clock) -> _Found:
     """The chain of one detector (``params`` on the grid, not "auto"), from the working grey image
-    to filtered traces: joint pixels, traces, the contrast and width filters."""
-    from . import vectorize
+    to filtered traces: joint pixels, traces (:func:`_chains_before_floor`), then the length floor
+    and the contrast and width filters. Within :func:`rockmass.imaging.reuse.shared_work`
+    everything before the length floor is computed once per image, mask and other settings (the
+    floor changes nothing before it; the traces' attributes are those of each trace alone)."""
+    from . import link, vectorize
+    from .reuse import array_digest, reused
 
-    flat, response, binary, stretch = _joint_pixels(grey, params, width_work, mask, clock)
-    chains, skeleton, pruned = _trace_chains(binary, params, work_shape, width_work, band_px, clock)
-    contrast = vectorize.trace_contrast(chains, flat, mask=mask)
-    band = vectorize.band_width_px(chains, binary)
-    keep = np.ones(len(chains), dtype=bool)
+    computed = []
+
+    def before_floor():
+        computed.append(True)
+        flat, response, binary, stretch = _joint_pixels(grey, params, width_work, mask, clock)
+        chains, skeleton, pruned = _chains_before_floor(binary, params, work_shape, width_work,
+                                                        band_px, clock)
+        attributes = (vectorize.trace_contrast(chains, flat, mask=mask),
+                      vectorize.band_width_px(chains, binary), vectorize.mean_along(chains, response))
+        return flat, response, binary, stretch, chains, skeleton, pruned, attributes
+
+    (flat, response, binary, stretch, chains, skeleton, pruned, (contrast, band, confidence)), kept \
+        = reused(lambda: ("traces before the floor", array_digest(grey), array_digest(mask),
+                          repr(replace(params, min_trace_length_px=None)), tuple(work_shape),
+                          float(width_work), float(band_px)), before_floor)
+    if not computed:  # reused: the steps took no time in this run
+        for step in ("flatten", "ridges", "segment", *_CHAIN_STEPS):
+            clock.lap(step)
+    keep = np.array([link.polyline_length_px(c) >= params.trace_length_floor_px for c in chains],
+                    dtype=bool)
     face = None if stretch is None else stretch["face_contrast"]
     if face is None and params.resolved("face_contrast_share") is not None:  # a share for ridge
         face = vectorize.face_levels(flat, mask=mask).contrast
@@ -1102,9 +1120,13 @@ def _detect(grey, params: ExtractParams, width_work: float, mask, band_px: float
     if params.resolved("min_trace_width") is not None:
         keep &= band >= params.resolved("min_trace_width") * width_work
     clock.lap("link")
+    chains = [c for c, k in zip(chains, keep) if k]
+    if kept:  # the block keeps them as computed for the next setting
+        chains = [c.copy() for c in chains]
+        flat, response, binary, skeleton = flat.copy(), response.copy(), binary.copy(), skeleton.copy()
     record = None if stretch is None else MappingProxyType({**stretch, "contrast_floor": floor})
-    return _Found([c for c, k in zip(chains, keep) if k], contrast[keep], band[keep], flat,
-                  response, binary, skeleton, pruned, record)
+    return _Found(chains, contrast[keep], band[keep], confidence[keep], flat, response, binary,
+                  skeleton, pruned, record)
 
 
 def detector_agreement(ridge_chains, learned_chains, shape_px, *,
@@ -1286,7 +1308,7 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         traces = vectorize.to_trace_map(
             grid_levels.to_grid(run.chains, shape, (h, w)), height_px=h, m_per_px=scale,
             window_uv_m=window, tolerance_px=grid_params.simplify_tolerance_px / grid_factor,
-            frame="face", attributes={"confidence": vectorize.mean_along(run.chains, run.response),
+            frame="face", attributes={"confidence": run.confidence,
                                       "contrast": run.contrast,
                                       "band_width_px": run.band_px / grid_factor})
         traces = _with_joint_score(traces, detector, m_per_px=scale,
@@ -1361,7 +1383,7 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
             width_source = f"{width_source}, grid coarsened {level}x"
         width_work = width_used
     params = given_params.for_detector(kept).on_grid(scale_of_grid)
-    chains, contrast, band, flat, response, binary, skeleton, pruned, face_contrast = found[kept]
+    chains, contrast, band, _, flat, response, binary, skeleton, pruned, face_contrast = found[kept]
     notes += _low_contrast_notes(face_contrast, params)
     if kept == "learned":
         from .site_back_end import unused_settings_note

@@ -343,9 +343,6 @@ def stretch_flat_face(flat, *, min_spread: float = MIN_SPREAD, max_stretch: floa
 def joint_probability(flat, model: PixelModel | None = None) -> np.ndarray:
     """Probability map (H, W) float32 in [0, 1] of joint centre lines in a :func:`model_input` image.
 
-    Inside :func:`rockmass.imaging.reuse.shared_work`, a map already computed for the same model
-    and an identical image is returned (a copy) instead of being computed again.
-
     Examples
     --------
     >>> img = np.ones((64, 64), np.float32); img[:, 30:33] = 0.5
@@ -353,11 +350,5 @@ def joint_probability(flat, model: PixelModel | None = None) -> np.ndarray:
     >>> int(p[32].argmax()) in (30, 31, 32)
     True
     """
-    from .reuse import array_digest, reused
-
     model = model or load_model()
-    # in a shared_work() block: one map per model and image (the model is kept with its map, so
-    # that its id stays its own)
-    (_, probability), kept = reused(lambda: ("probability", id(model), array_digest(flat)),
-                                    lambda: (model, model.probability(pixel_features(flat))))
-    return probability.copy() if kept else probability
+    return model.probability(pixel_features(flat))

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .skeleton_graph import _direction
+from .skeleton_graph import _direction, chain_end_directions
 
 __all__ = ["link_traces", "extend_to_border", "polyline_length_px"]
 
@@ -124,10 +124,11 @@ def link_traces(polylines_rc_px, *, max_gap_px: float, max_turn_deg: float = 15.
     points = np.empty((2 * len(usable), 2))
     outward = np.empty((2 * len(usable), 2))
     anchor = np.empty((2 * len(usable), 2))
+    directions = chain_end_directions([lines[i] for i in usable], skip_px=skip_px, reach_px=reach_px)
     for k, i in enumerate(usable):
         for side, chain in ((0, lines[i]), (1, lines[i][::-1])):
             points[2 * k + side] = chain[0]
-            outward[2 * k + side] = -_direction(chain, skip_px, reach_px)
+            outward[2 * k + side] = -directions[k, side]
             anchor[2 * k + side] = _point_at(chain, min(skip_px, 0.5 * polyline_length_px(chain)))
     cos_turn = np.cos(np.radians(max_turn_deg))
     candidates = []

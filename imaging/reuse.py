@@ -2,11 +2,12 @@
 
 :mod:`rockmass.imaging.site_back_end` extracts each labelled photo with 18 settings of the learned
 detector's back end (hysteresis levels, length floor). The settings change nothing before the
-probability map, and the length floor nothing before the last step of the trace chains, so inside
-a :func:`shared_work` block :func:`rockmass.imaging.learned.joint_probability` computes a map once
-per model and input image and :func:`rockmass.imaging.extract.extract` its chains once per joint
-mask and chain settings (docs/imaging.md §3.2). Outside a block nothing is kept and no key is
-built. What a block computed is dropped when it ends; blocks do not nest.
+probability map, and the length floor nothing before it is applied to the traces, so inside a
+:func:`shared_work` block :func:`rockmass.imaging.extract.extract` computes the flattened face and
+the probability map once per model, image and mask, and the joint pixels, the traces and their
+attributes once per setting of everything but the floor (docs/imaging.md §3.2). Outside a block
+nothing is kept and no key is built. What a block computed is dropped when it ends; blocks do not
+nest.
 """
 
 from __future__ import annotations
@@ -58,10 +59,12 @@ def reused(key: Callable[[], Hashable], compute: Callable[[], Any]) -> tuple[Any
     return _KEPT[name], True
 
 
-def array_digest(array) -> tuple:
+def array_digest(array) -> tuple | None:
     """(shape, dtype, 16-byte BLAKE2b digest of the bytes) of an array: a key part that tells
-    equal arrays from different ones."""
+    equal arrays from different ones; None for None (no mask, say)."""
     import hashlib
 
+    if array is None:
+        return None
     array = np.ascontiguousarray(array)
     return array.shape, array.dtype.str, hashlib.blake2b(array.data, digest_size=16).digest()

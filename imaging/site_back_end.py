@@ -113,7 +113,9 @@ class BackEndChoice:
         The setting kept, with its cross-validated scores (optimistic when it is not the given
         one: the best of the grid on the same folds).
     at_given : BackEndScore
-        The fold models at the given settings.
+        The given settings, each photo scored by the model it was scored with (a model trained
+        without its fold, or the one fixed model); ``"at_given_settings"`` in :meth:`record`
+        (``"fold_models_at_given_settings"`` in model files made before session 22).
     shipped : BackEndScore
         The shipped model at the given settings, on the same photos.
     scores : tuple of BackEndScore
@@ -171,7 +173,7 @@ class BackEndChoice:
                 "cross_validated": self.chosen.record(),
                 "chosen_without_the_photos_scored": None if self.held_out is None else {
                     **self.held_out.record(), "settings": [dict(f) for f in self.fold_settings]},
-                "fold_models_at_given_settings": self.at_given.record(),
+                "at_given_settings": self.at_given.record(),
                 "shipped_model_at_given_settings": self.shipped.record()}
 
     def config_snippet(self, model_path) -> str:

@@ -110,7 +110,7 @@ def mean_along(polylines_rc_px, image, *, step_px: float = 0.5) -> np.ndarray:
     >>> mean_along([[(2, 0), (2, 9)]], img).round(1).tolist()
     [0.5]
     """
-    values = np.asarray(image, dtype=np.float64)
+    values = np.asarray(image)  # sampled, then made float64: no float64 copy of the whole image
     h, w = values.shape
     out = np.full(len(polylines_rc_px), np.nan)
     for i, line in enumerate(polylines_rc_px):
@@ -120,7 +120,7 @@ def mean_along(polylines_rc_px, image, *, step_px: float = 0.5) -> np.ndarray:
         t = np.linspace(0.0, arc[-1], max(int(np.ceil(arc[-1] / step_px)), 1) + 1)
         r = np.clip(np.round(np.interp(t, arc, rc[:, 0])).astype(np.int64), 0, h - 1)
         c = np.clip(np.round(np.interp(t, arc, rc[:, 1])).astype(np.int64), 0, w - 1)
-        out[i] = values[r, c].mean() if values.size else np.nan
+        out[i] = values[r, c].astype(np.float64).mean() if values.size else np.nan
     return out
 
 

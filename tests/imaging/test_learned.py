@@ -273,28 +273,40 @@ def test_shared_work_computes_a_map_once_per_model_and_image_and_changes_nothing
     assert len(calls) == 2 * n_calls
 
 
-def test_reused_chains_are_traced_once_per_joint_mask_and_the_floors_give_what_they_give_alone(
+def test_shared_work_traces_once_per_joint_mask_and_each_setting_gives_what_it_gives_alone(
         monkeypatch):
     import importlib
+    from dataclasses import replace
 
     extract_module = importlib.import_module("rockmass.imaging.extract")  # not the function
+    learned_module = importlib.import_module("rockmass.imaging.learned")
     rng = np.random.default_rng(4)
     image = (0.6 + 0.05 * rng.normal(size=(200, 260))).astype(np.float32)
     for (a, b) in (((10, 20), (250, 150)), ((20, 180), (60, 150)), ((150, 20), (200, 60))):
         cv2.line(image, a, b, 0.3, 3)  # one long joint, two of about 50 and 65 px
     photo = (np.clip(image, 0, 1) * 255).astype(np.uint8)
-    settings = [ExtractParams(detector="learned", min_trace_length_px=floor, learned_levels=())
-                for floor in (70.0, 50.0, 30.0)]
+    settings = [ExtractParams(detector="learned", min_trace_length_px=floor, learned_levels=(),
+                              prob_low=low)
+                for low in (0.85, 0.5) for floor in (70.0, 50.0, 30.0)]
     alone = [extract(photo, m_per_px=1.0, params=p) for p in settings]
-    calls = []
-    traced = extract_module._chains_before_floor
+    traced, mapped = [], []
+    chains = extract_module._chains_before_floor
+    flattened = learned_module.flattened
     monkeypatch.setattr(extract_module, "_chains_before_floor",
-                        lambda *args: calls.append(1) or traced(*args))
+                        lambda *args: traced.append(1) or chains(*args))
+    monkeypatch.setattr(learned_module, "flattened",
+                        lambda *args, **kw: mapped.append(1) or flattened(*args, **kw))
     with shared_work():
         reused = [extract(photo, m_per_px=1.0, params=p) for p in settings]
-    assert len(calls) == 1  # one joint mask: the floors share its chains
-    for a, b in zip(alone, reused):
+        again = extract(photo, m_per_px=1.0, params=replace(settings[0], prob_high=0.99))
+    assert len(traced) == 3 and len(mapped) == 1  # a joint mask per pair of levels, one map
+    for a, b in zip(alone + [extract(photo, m_per_px=1.0, params=replace(settings[0],
+                                                                       prob_high=0.99))],
+                    reused + [again]):
         np.testing.assert_array_equal(a.traces.xy_m, b.traces.xy_m)
         np.testing.assert_array_equal(a.traces.offsets, b.traces.offsets)
+        for name in ("confidence", "contrast", "band_width_px", "joint_score"):
+            np.testing.assert_array_equal(a.traces.attributes[name], b.traces.attributes[name])
         assert set(b.timings_s) == set(a.timings_s)
     assert alone[0].traces.n_traces < alone[2].traces.n_traces  # the floors do differ here
+    assert alone[2].traces.total_length_m() != alone[5].traces.total_length_m()  # and the levels

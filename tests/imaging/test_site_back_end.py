@@ -197,7 +197,7 @@ def test_the_command_records_the_choice_and_prints_a_config_that_reproduces_it(c
     back_end = load_model(out).info["back_end"]
     assert back_end["folds"] == 2 and back_end["photos"] == 10
     assert back_end["settings"]["min_trace_length_px"] == 30.0  # the joints are 40 px long
-    assert back_end["fold_models_at_given_settings"]["F1"] < 0.1
+    assert back_end["at_given_settings"]["F1"] < 0.1
     assert back_end["cross_validated"]["F1"] > 0.5
     assert back_end["with"] == {"min_trace_contrast": float("-inf")}  # the config's, pixel_model left out
     assert "fold 2/2" in stderr

@@ -166,3 +166,49 @@ def test_graph_functions_do_not_modify_their_input():
     np.testing.assert_array_equal(graph.branch_rc_px, before[0])
     np.testing.assert_array_equal(graph.partners, before[1])
     np.testing.assert_array_equal(graph.src, before[2])
+
+
+def test_end_directions_kernel_agrees_with_the_python_rule_to_the_bit():
+    # the kernel replaces a per-branch Python loop over _direction: every branch end of real
+    # skeletons (random crack networks) and of hand-made edge cases must come out bit for bit
+    from rockmass.imaging.skeleton_graph import SkeletonGraph, _direction, end_directions
+
+    rng = np.random.default_rng(3)
+    image = np.zeros((300, 300), np.uint8)
+    for _ in range(40):
+        (r0, c0), (r1, c1) = rng.integers(0, 300, (2, 2))
+        cv2.line(image, (int(c0), int(r0)), (int(c1), int(r1)), 1, int(rng.integers(1, 4)))
+    graphs = [build_graph(skeletonize(image.astype(bool)))]
+    cases = [np.array([[0.0, 0.0]]), np.array([[5.0, 5.0], [5.0, 5.0]]),  # one point; no length
+             np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0], [3.0, 3.0]]),  # skip = reach / 3 on a vertex
+             np.array([[4.0, 4.0], [4.0, 5.0], [4.0, 4.0]]),  # back to its start
+             np.cumsum(rng.integers(-1, 2, (60, 2)), axis=0).astype(float)]  # a wandering chain
+    offsets = np.cumsum([0] + [len(c) for c in cases])
+    graphs.append(SkeletonGraph(np.zeros((1, 2)), np.concatenate(cases), offsets.astype(np.int64),
+                                np.zeros(len(cases), np.int64), np.zeros(len(cases), np.int64),
+                                -np.ones((len(cases), 2, 2), np.int64)))
+    for graph in graphs:
+        for skip, reach in [(2.0, 12.0), (0.0, 5.0), (3.0, 3.0)]:
+            fast = end_directions(graph, skip_px=skip, reach_px=reach)
+            for i in range(graph.n_branches):
+                chain = graph.branch(i)
+                assert np.array_equal(fast[i, 0], _direction(chain, skip, reach))
+                assert np.array_equal(fast[i, 1], _direction(chain[::-1], skip, reach))
+    assert graphs[0].n_branches > 50
+
+
+def test_end_directions_refuse_what_the_kernel_cannot_measure_and_read_read_only_chains():
+    import pytest
+
+    from rockmass.imaging.skeleton_graph import _direction, chain_end_directions, end_directions
+
+    chains = [np.array([[0.0, 0.0], [0.0, 30.0]]), np.array([[5.0, 5.0], [6.0, 6.0]])]
+    with pytest.raises(ValueError, match="skip_px must be finite"):
+        chain_end_directions(chains, skip_px=5.0, reach_px=float("nan"))  # read past a chain before
+    with pytest.raises(ValueError, match="skip_px must be finite"):
+        chain_end_directions(chains, skip_px=float("nan"))
+    graph = build_graph(skeletonize(_thick([(10, 60, 110, 60)], width=1)))
+    graph.branch_rc_px.setflags(write=False)  # a graph frozen by its maker
+    graph.branch_offsets.setflags(write=False)
+    np.testing.assert_array_equal(end_directions(graph)[0, 0], _direction(graph.branch(0), 2.0, 12.0))
+    assert chain_end_directions([]).shape == (0, 2, 2)
