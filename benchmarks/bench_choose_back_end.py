@@ -1,6 +1,7 @@
 """What choosing the learned back end costs on large photographs, beside what it buys.
 
     python benchmarks/bench_choose_back_end.py [--photos 3] [--megapixels 12[,16,24]] [--faces DIR]
+    python benchmarks/bench_choose_back_end.py --working-grids 1.5,2.5,4,8 [--faces DIR]
 
 A site geologist's photographs are 12-24 MP. ``rockmass score --choose-back-end`` (docs/imaging.md
 §3.5) extracts each labelled photo with the 18 back-end settings of
@@ -21,6 +22,13 @@ benchmarks/results/bench_choose_back_end.json.
 Drawing a field-like face takes minutes at these sizes (about 4 at 12 MP, 20 at 24 MP on one
 core). With ``--faces DIR`` the faces are kept in ``DIR/<MP>MP`` and drawn only when missing, so
 two versions of the code can be timed back to back on the same photographs.
+
+The F1 of these faces is no judge of the detector on large photographs: ``field_face`` keeps its
+feature sizes in pixels and grows its joint count with the area. ``--working-grids`` shows it
+instead of timing the choice: the share of each face the label covers at 400 x 400 and
+1000 x 1500 px (seed 1, drawn the same way) and at each size, and ``rockmass score --detector
+learned`` with each ``max_megapixels`` given (rows to
+benchmarks/results/bench_choose_back_end_working_grids.json).
 """
 
 from __future__ import annotations
@@ -38,12 +46,15 @@ from _common import header, save, table  # noqa: E402
 
 #: Face sides (rows, cols) per size, 3:4 as a camera's.
 SHAPES = {12: (3000, 4000), 16: (3464, 4619), 24: (4243, 5657)}
+GRID_COLUMNS = [("MP", "d"), ("photos", "d"), ("label_pct", ".1f"), ("max_megapixels", "g"),
+                ("F1", ".3f"), ("P", ".3f"), ("R", ".3f"), ("dP21_pct", "+.0f"),
+                ("s_per_photo", ".1f")]
 COLUMNS = [("MP", "d"), ("photos", "d"), ("command", "s"), ("s_per_photo", ".1f"), ("peak_MB", ".0f"),
            ("F1_defaults", ".3f"), ("chosen", "s"), ("F1_chosen", ".3f"), ("held_out_F1", ".3f")]
 
 
-def write_faces(folder: Path, megapixels: int, n: int) -> tuple[Path, Path]:
-    """n field-like faces of the size and their labels, as PNG files in ``folder`` (those already
+def write_faces(folder: Path, shape: tuple[int, int], n: int) -> tuple[Path, Path]:
+    """n field-like faces of ``shape`` (rows, cols) and their labels, as PNG files in ``folder`` (those already
     there kept; the others drawn two at a time, one per core: drawing is not what is timed)."""
     from concurrent.futures import ProcessPoolExecutor
 
@@ -55,7 +66,7 @@ def write_faces(folder: Path, megapixels: int, n: int) -> tuple[Path, Path]:
                if not ((photos / _name(seed)).is_file() and (labels / _name(seed)).is_file())]
     with ProcessPoolExecutor(max_workers=2) as pool:
         list(pool.map(_write_face, [photos] * len(missing), [labels] * len(missing),
-                      [megapixels] * len(missing), missing))
+                      [shape] * len(missing), missing))
     extra = sorted(p.name for p in photos.iterdir() if p.name not in names)
     if extra:
         raise SystemExit(f"{photos}: photos other than the {n} of this run ({', '.join(extra)})")
@@ -66,8 +77,8 @@ def _name(seed: int) -> str:
     return f"face{seed:02d}.png"
 
 
-def _write_face(photos: Path, labels: Path, megapixels: int, seed: int) -> None:
-    """Face ``seed`` of the size as ``face<seed>.png`` in ``photos``, its truth's centre lines
+def _write_face(photos: Path, labels: Path, shape: tuple[int, int], seed: int) -> None:
+    """Face ``seed`` of ``shape`` as ``face<seed>.png`` in ``photos``, its truth's centre lines
     drawn 3 px wide, white on black, under the same name in ``labels``."""
     import cv2
     import numpy as np
@@ -75,7 +86,6 @@ def _write_face(photos: Path, labels: Path, megapixels: int, seed: int) -> None:
     from rockmass.imaging.metrics import render_traces
     from rockmass.imaging.synthetic_field import field_face
 
-    shape = SHAPES[megapixels]
     face = field_face(seed=seed, shape_px=shape, m_per_px=0.008 * 1000 / shape[0])
     lines = render_traces(face.truth, face.image.shape[:2], face.m_per_px)
     label = cv2.dilate(lines.astype(np.uint8), np.ones((3, 3), np.uint8)) * 255
@@ -113,14 +123,19 @@ def main(argv=None) -> int:
     parser.add_argument("--faces", type=Path,
                         help="keep the faces in this folder (DIR/<MP>MP) and draw only those "
                              "missing (default: a temporary folder)")
+    parser.add_argument("--working-grids", default="",
+                        help="instead of the timing: score with the learned detector at each of "
+                             "these max_megapixels (e.g. 1.5,2.5,4,8) and print label coverage")
     args = parser.parse_args(argv)
     sizes = [int(v) for v in args.megapixels.split(",") if v.strip()]
+    if args.working_grids:
+        return working_grids(sizes, args, [float(v) for v in args.working_grids.split(",")])
     print(header("rockmass score --choose-back-end on large photographs (field-like synthetic faces)"))
     rows = []
     for megapixels in sizes:
         with tempfile.TemporaryDirectory() as tmp:
             folder = Path(tmp) if args.faces is None else args.faces / f"{megapixels}MP"
-            photos, labels = write_faces(folder, megapixels, args.photos)
+            photos, labels = write_faces(folder, SHAPES[megapixels], args.photos)
             base = ["--photos", str(photos), "--labels", str(labels)]
             scored, seconds, peak = run(base)
             rows.append({"MP": megapixels, "photos": args.photos, "command": "score",
@@ -141,6 +156,50 @@ def main(argv=None) -> int:
     print("\nchosen: prob_low/prob_high/min_trace_length_px; F1 at 5 px of the photograph, means "
           "over the photos; peak_MB: the peak resident set of the command's process")
     path = save("bench_choose_back_end", {"rows": rows, "shapes": {str(k): v for k, v in SHAPES.items()}})
+    print(f"\nrows saved to {path}")
+    return 0
+
+
+def _label_share(labels: Path) -> float:
+    """Mean share of the label images' pixels that mark a trace."""
+    import cv2
+    import numpy as np
+
+    return float(np.mean([(cv2.imread(str(p), cv2.IMREAD_GRAYSCALE) > 0).mean()
+                          for p in sorted(labels.iterdir())]))
+
+
+def working_grids(sizes, args, grids) -> int:
+    """The ``--working-grids`` run (module notes)."""
+    print(header("field-like faces: label coverage, and the learned detector at several working "
+                 "grids"))
+    with tempfile.TemporaryDirectory() as tmp:
+        small = []
+        for rows_px, cols_px in ((400, 400), (1000, 1500)):
+            _, labels = write_faces(Path(tmp) / f"{rows_px}x{cols_px}", (rows_px, cols_px), 1)
+            small.append(f"{rows_px} x {cols_px} px {100 * _label_share(labels):.1f} %")
+    print("label coverage (3 px centre lines), seed 1: " + ", ".join(small))
+    rows = []
+    for megapixels in sizes:
+        with tempfile.TemporaryDirectory() as tmp:
+            folder = Path(tmp) if args.faces is None else args.faces / f"{megapixels}MP"
+            photos, labels = write_faces(folder, SHAPES[megapixels], args.photos)
+            share = 100 * _label_share(labels)
+            for grid in grids:
+                config = Path(tmp) / "grid.toml"
+                config.write_text(f"[imaging.params]\nmax_megapixels = {grid!r}\n")
+                scored, seconds, _ = run(["--photos", str(photos), "--labels", str(labels),
+                                          "--detector", "learned", "--config", str(config)])
+                overall = scored["overall"]
+                rows.append({"MP": megapixels, "photos": args.photos, "label_pct": share,
+                             "max_megapixels": grid, "F1": overall["F1"], "P": overall["precision"],
+                             "R": overall["recall"], "dP21_pct": overall["dP21_pct"],
+                             "s_per_photo": seconds / args.photos})
+                print(table(rows[-1:], GRID_COLUMNS), flush=True)
+    print("\nall rows")
+    print(table(rows, GRID_COLUMNS))
+    print("\nF1, P, R at 5 px of the photograph, means over the photos; dP21 over all photos")
+    path = save("bench_choose_back_end_working_grids", {"rows": rows, "label_coverage": small})
     print(f"\nrows saved to {path}")
     return 0
 
