@@ -49,6 +49,15 @@ class FieldStyle:
     Each ``(lo, hi)`` is a uniform range a face (or a joint) draws its value from; counts are per
     400 x 400 px and scale with the image area, except the half-cast families (per face). The
     half-casts and shotcrete are sized in metres and drawn at the face's ``m_per_px``.
+
+    ``feature_scale`` k draws the face as a camera with k times the pixels across would see it:
+    every size in pixels (joint widths and paths, shadows, clutter, blur, the shortest truth
+    piece) is multiplied by k, every count per 400 x 400 px divided by k², and the fields drawn
+    as noise (the rock, the shotcrete, the sensor noise) are drawn on the grid of the face of
+    k = 1 and enlarged. A face of k times the shape at ``m_per_px / k`` is then the face of
+    k = 1 from the same seed at k times the pixels: the same joints in metres, and averaged
+    down k times nearly the same image (docs/imaging.md §9.1). The default, 1, draws the faces
+    drawn before it existed.
     """
 
     major_joints: tuple[int, int] = (1, 5)
@@ -91,6 +100,8 @@ class FieldStyle:
     crevice_width_px: tuple[float, float] = (12.0, 30.0)
     crevice_depth: tuple[float, float] = (0.6, 0.9)
     crevice_blur: tuple[float, float] = (0.05, 0.2)  # edge softness, times the crevice's width
+    # pixels per feature: sizes in pixels times this, counts per 400 x 400 px over its square
+    feature_scale: float = 1.0
 
 
 #: A drill-and-blast tunnel face: the field-like faces with blast half-casts (0-2 families) and
@@ -199,6 +210,20 @@ def _shaded_relief(rng, shape, relief):
     return _lambert(g_r, g_c, light), light
 
 
+def _feature_scale(style) -> float:
+    """``style.feature_scale``, checked: finite and > 0."""
+    k = float(style.feature_scale)
+    if not (np.isfinite(k) and k > 0):
+        raise ValueError(f"FieldStyle.feature_scale must be finite and > 0, got {style.feature_scale!r}")
+    return k
+
+
+def _area_factor(shape, style) -> float:
+    """The image's area in units of 400 x 400 px at the style's feature scale: what the counts per
+    400 x 400 px are multiplied by."""
+    return shape[0] * shape[1] / 160_000.0 / _feature_scale(style) ** 2
+
+
 def _count(rng, bounds, area_factor):
     """A count drawn from ``bounds`` (per 400 x 400 px), scaled to the image area."""
     return int(round(rng.integers(bounds[0], bounds[1] + 1) * area_factor))
@@ -206,14 +231,16 @@ def _count(rng, bounds, area_factor):
 
 def _minor_cracks(rng, shape, style, area_factor):
     """The unlabelled minor cracks: (rc path, width px, relative darkening) each, short (8-90 px),
-    rough, 1-3 px wide and faint (0.08-0.5). The first draws of the clutter stream."""
+    rough, 1-3 px wide and faint (0.08-0.5), sizes times ``style.feature_scale``. The first draws
+    of the clutter stream."""
     h, w = shape
+    k = style.feature_scale
     cracks = []
     for _ in range(_count(rng, style.minor_cracks, area_factor)):
         start = rng.uniform(0, 1, 2) * (h, w)
-        path = _rough_path(rng, start, rng.uniform(0, 2 * np.pi), rng.uniform(8, 90), step_px=3.0,
-                           roughness=0.6)
-        width = rng.choice([1, 1, 2, 3])
+        path = _rough_path(rng, start, rng.uniform(0, 2 * np.pi), k * rng.uniform(8, 90),
+                           step_px=k * 3.0, roughness=0.6)
+        width = k * rng.choice([1, 1, 2, 3])
         cracks.append((path, width, rng.uniform(0.08, 0.5)))
     return cracks
 
@@ -223,22 +250,26 @@ def _major_joints(rng, shape, style, area_factor):
     h, w = shape
     diag = float(np.hypot(h, w))
     n = max(_count(rng, style.major_joints, area_factor), 1)
+    centre_shift = 0.5 * (style.feature_scale - 1.0)
     set_angles = rng.uniform(0, np.pi) + np.array([0.0, rng.uniform(np.pi / 4, np.pi / 2)])
     paths = []
     for _ in range(n):
         angle = set_angles[int(rng.random() < 0.35)] + rng.normal(0, np.radians(8))
-        centre = np.array([rng.uniform(0.1, 0.9) * h, rng.uniform(0.1, 0.9) * w])
+        # drawn on the pixel-edge frame: the same place in metres at every feature scale
+        centre = np.array([rng.uniform(0.1, 0.9) * h, rng.uniform(0.1, 0.9) * w]) + centre_shift
         spans = rng.random() < 0.7
         half = diag if spans else rng.uniform(0.2, 0.45) * diag
-        back = _rough_path(rng, centre, angle + np.pi, half, roughness=rng.uniform(0.1, 0.4))
-        ahead = _rough_path(rng, centre, angle, half, roughness=rng.uniform(0.1, 0.4))
+        step = 6.0 * style.feature_scale
+        back = _rough_path(rng, centre, angle + np.pi, half, step, roughness=rng.uniform(0.1, 0.4))
+        ahead = _rough_path(rng, centre, angle, half, step, roughness=rng.uniform(0.1, 0.4))
         paths.append(np.vstack([back[::-1], ahead[1:]]))
     return paths
 
 
-def _clip_to_image(paths_rc, shape, hidden=None):
+def _clip_to_image(paths_rc, shape, hidden=None, min_length_px=10.0):
     """Pieces of the polylines inside the image rectangle (pixel-centre extent) and outside the
-    ``hidden`` area (a shapely geometry in rc pixels, e.g. shotcrete), as rc arrays."""
+    ``hidden`` area (a shapely geometry in rc pixels, e.g. shotcrete), as rc arrays, those shorter
+    than ``min_length_px`` left out."""
     import shapely
 
     h, w = shape
@@ -249,7 +280,7 @@ def _clip_to_image(paths_rc, shape, hidden=None):
     for rc in paths_rc:
         clipped = shapely.LineString(rc).intersection(frame)
         for part in shapely.get_parts(clipped):
-            if part.geom_type == "LineString" and part.length >= 10.0:
+            if part.geom_type == "LineString" and part.length >= min_length_px:
                 pieces.append(np.asarray(part.coords))
     return pieces
 
@@ -291,7 +322,7 @@ def _half_cast_layout(rng, shape, style, m_per_px):
     return families
 
 
-def _half_cast_shade(shape, families, light):
+def _half_cast_shade(shape, families, light, crack_width_px=1.0):
     """Multiplicative shading (1 off the grooves) of half-cylindrical grooves along the given axes.
 
     Across a groove of radius R the surface is :math:`z = -\\sqrt{R^2 - d^2}` (d the distance from the
@@ -300,7 +331,7 @@ def _half_cast_shade(shape, families, light):
     not the opening) is in shadow at an ambient 0.45 — the dark-bright line pair of a half-cast.
     The shading's departure from 1 is doubled (fresh blasted rock in a groove glints, and its
     walls are steeper than a flat face ever is), and the bottom is slightly darker (less sky seen).
-    An axial crack is a thin dark line along the groove's bottom.
+    An axial crack is a thin dark line, ``crack_width_px`` wide, along the groove's bottom.
     """
     h, w = shape
     shade = np.ones(shape, dtype=np.float32)
@@ -331,7 +362,7 @@ def _half_cast_shade(shape, families, light):
         window[inside] *= local.astype(np.float32)
         if crack > 0:
             line = np.zeros(shape, dtype=np.float32)
-            _draw(line, np.array([p0, p1]), 1.0, 1)
+            _draw(line, np.array([p0, p1]), 1.0, crack_width_px)
             shade *= 1.0 - crack * line
     return shade
 
@@ -343,13 +374,16 @@ def _shotcrete_cover(rng, shape, style, m_per_px):
     overspray reaches the face's rim, or it seals loose patches of the face as blobs; either way
     the edge is lobed, following how the nozzle was swept. Drawn here as a closeness to one image
     edge (the top most often, as the crown) or to 1-3 blob centres, plus smooth noise of a 0.15-0.5 m
-    scale for the lobes, thresholded at the quantile that covers the drawn fraction exactly.
+    scale for the lobes, thresholded at the quantile that covers the drawn fraction exactly. The
+    score is drawn on the reference grid of ``style.feature_scale`` and enlarged to ``shape``.
     """
     if rng.random() >= style.shotcrete_share:
         return None
     fraction = rng.uniform(*style.shotcrete_cover)
     if fraction < 0.005:
         return None
+    full_shape, k = tuple(shape), style.feature_scale
+    shape, m_per_px = _reference_shape(full_shape, k), m_per_px * k
     h, w = shape
     diag = float(np.hypot(h, w))
     rr, cc = np.mgrid[0:h, 0:w].astype(np.float32)
@@ -360,7 +394,7 @@ def _shotcrete_cover(rng, shape, style, m_per_px):
         centres = rng.uniform(0, 1, (int(rng.integers(1, 4)), 2)) * (h, w)
         bias = -np.min([np.hypot(rr - r, cc - c) for r, c in centres], axis=0) / diag
     sigma = float(np.clip(rng.uniform(0.15, 0.5) / m_per_px, 3.0, 0.3 * max(h, w)))
-    score = bias + rng.uniform(0.05, 0.15) * _smooth_noise(rng, shape, sigma)
+    score = _enlarged(bias + rng.uniform(0.05, 0.15) * _smooth_noise(rng, shape, sigma), full_shape)
     return score, float(np.quantile(score, 1.0 - fraction))
 
 
@@ -390,6 +424,46 @@ def _shotcrete_surface(rng, shape, m_per_px, light):
     g_r, g_c = np.gradient(height)
     grain = rng.uniform(1.0, 3.0) * _smooth_noise(rng, shape, 0.8)
     return tone * _lambert(g_r, g_c, light) + grain
+
+
+def _rock(rng, shape, style):
+    """The bare rock of a field face on a grid of ``shape`` (float32 grey levels) and the light
+    that shades it (None for a flat face): grain and blotches, shaded relief, bedding streaks, dark
+    patches (lichen, wet rock) and fields of crevice loops (the zero level of a smooth field:
+    grain boundaries, the texture loops a line filter mistakes for joints). Every draw of the
+    face's rock stream."""
+    h, w = shape
+    image = _rock_texture(rng, (h, w), rng.uniform(*style.texture))
+    relief, light = _shaded_relief(rng, (h, w), rng.uniform(*style.relief))
+    image *= relief
+    image += _oriented_texture(rng, (h, w), rng.uniform(*style.oriented_texture))
+    blotch = np.clip(_smooth_noise(rng, (h, w), rng.uniform(6, 20)) - 1.2, 0, None)
+    image -= rng.uniform(0, 40) * np.clip(blotch, 0, 1)
+    for _ in range(int(rng.integers(style.crevice_fields[0], style.crevice_fields[1] + 1))):
+        level = _smooth_noise(rng, (h, w), rng.uniform(5, 18))
+        grad = np.hypot(*np.gradient(level)) + 1e-6
+        loops = np.exp(-0.5 * (level / (grad * rng.uniform(0.6, 1.6))) ** 2)
+        patchy = np.clip(_smooth_noise(rng, (h, w), 20.0) + 0.5, 0, 1)  # only in places
+        image *= 1.0 - rng.uniform(0.1, 0.45) * loops * patchy
+    return image, light
+
+
+def _reference_shape(shape, feature_scale: float) -> tuple[int, int]:
+    """The grid of the face at feature scale 1 that a face of ``shape`` at ``feature_scale``
+    enlarges (``shape`` itself at 1)."""
+    if feature_scale == 1.0:
+        return tuple(shape)
+    return tuple(max(int(round(n / feature_scale)), 2) for n in shape)
+
+
+def _enlarged(field, shape):
+    """A float32 field drawn on the reference grid resized (bicubic) to ``shape``; the field
+    itself when it is already of that shape."""
+    import cv2
+
+    if field.shape == tuple(shape):
+        return field
+    return cv2.resize(field, (shape[1], shape[0]), interpolation=cv2.INTER_CUBIC)
 
 
 def _streams(seed):
@@ -423,9 +497,10 @@ def _crevice(rng, style) -> _Crevice | None:
     """
     if style.crevice_share <= 0 or rng.random() >= style.crevice_share:
         return None
-    width = rng.uniform(*style.crevice_width_px)
+    k = style.feature_scale
+    width = k * rng.uniform(*style.crevice_width_px)
     return _Crevice(width, rng.uniform(*style.crevice_depth),
-                    max(width * rng.uniform(*style.crevice_blur), 0.6))
+                    max(width * rng.uniform(*style.crevice_blur), k * 0.6))
 
 
 def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
@@ -437,7 +512,8 @@ def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
     seed : int, default 0
         Root seed: the same seed, shape and style give the same image and truth.
     shape_px : (rows, cols), default (400, 400)
-        Image size, at least 32 x 32. Feature sizes are in pixels; counts scale with the area.
+        Image size, at least 32 x 32. Feature sizes are in pixels (times ``style.feature_scale``);
+        counts scale with the area (over the feature scale squared).
     m_per_px : float, default 0.005
         Scale of the truth.
     style : FieldStyle, optional
@@ -466,38 +542,26 @@ def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
     h, w = (int(v) for v in shape_px)
     if h < 32 or w < 32:
         raise ValueError(f"shape_px must be at least 32 x 32 pixels, got {shape_px}")
-    area = h * w / 160_000.0
+    k = _feature_scale(style)
+    area = _area_factor((h, w), style)
     (net_rng, rock_rng, joint_rng, clutter_rng, camera_rng, cast_rng, spray_rng,
      crevice_rng) = _streams(seed)
 
-    # rock: grain and blotches, bedding streaks, dark patches (lichen, wet rock)
-    image = _rock_texture(rock_rng, (h, w), rock_rng.uniform(*style.texture))
-    relief, light = _shaded_relief(rock_rng, (h, w), rock_rng.uniform(*style.relief))
-    image *= relief
-    image += _oriented_texture(rock_rng, (h, w), rock_rng.uniform(*style.oriented_texture))
-    blotch = np.clip(_smooth_noise(rock_rng, (h, w), rock_rng.uniform(6, 20)) - 1.2, 0, None)
-    image -= rock_rng.uniform(0, 40) * np.clip(blotch, 0, 1)
-
-    # crevices: dark curvy loops along the zero level of a smooth field (grain boundaries, the
-    # texture loops a line filter mistakes for joints)
-    for _ in range(int(rock_rng.integers(style.crevice_fields[0], style.crevice_fields[1] + 1))):
-        level = _smooth_noise(rock_rng, (h, w), rock_rng.uniform(5, 18))
-        grad = np.hypot(*np.gradient(level)) + 1e-6
-        loops = np.exp(-0.5 * (level / (grad * rock_rng.uniform(0.6, 1.6))) ** 2)
-        patchy = np.clip(_smooth_noise(rock_rng, (h, w), 20.0) + 0.5, 0, 1)  # only in places
-        image *= 1.0 - rock_rng.uniform(0.1, 0.45) * loops * patchy
+    # the rock, drawn on the reference grid (k = 1) and enlarged: the same rock at any scale
+    image, light = _rock(rock_rng, _reference_shape((h, w), k), style)
+    image = _enlarged(image, (h, w))
 
     # blast half-casts: straight grooves of the drill holes, shaded with the rock's light
     light = light if light is not None else np.array([0.5, 0.5, np.sqrt(0.5)])
     casts = _half_cast_layout(cast_rng, (h, w), style, m_per_px)
     if casts:
-        image *= _half_cast_shade((h, w), casts, light)
+        image *= _half_cast_shade((h, w), casts, light, crack_width_px=k)
 
     paths = _major_joints(net_rng, (h, w), style, area)
     darkness = np.zeros((h, w), dtype=np.float32)
     widths = []
     for rc in paths:
-        width = joint_rng.uniform(*style.core_width_px)
+        width = k * joint_rng.uniform(*style.core_width_px)
         crevice = _crevice(crevice_rng, style)  # the joint stream's draws stay the same either way
         if crevice is not None:
             width = crevice.width_px
@@ -508,69 +572,73 @@ def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
                 line = np.ones((h, w), dtype=np.float32)
                 _draw(line, rc, 0.0, 1)
                 dist = cv2.distanceTransform((line > 0.5).astype(np.uint8), cv2.DIST_L2, 3)
-                fade = np.exp(-dist / joint_rng.uniform(15, 120))
+                fade = np.exp(-dist / (k * joint_rng.uniform(15, 120)))
                 step = joint_rng.uniform(*style.step_contrast) * joint_rng.choice([-1.0, 1.0])
                 image += np.where(side, step, -0.3 * step) * fade
         if joint_rng.random() < style.shadow_share:  # one-sided shadow band beside the core
             band = np.zeros((h, w), dtype=np.float32)
-            shadow_w = joint_rng.uniform(*style.shadow_width_px)
+            shadow_w = k * joint_rng.uniform(*style.shadow_width_px)
             sign = joint_rng.choice([-1.0, 1.0])
             _draw(band, _offset(rc, sign * (width + shadow_w) / 2), 1.0, shadow_w)
-            band = cv2.GaussianBlur(band, (0, 0), max(shadow_w / 4, 1.0))
+            band = cv2.GaussianBlur(band, (0, 0), max(shadow_w / 4, k))
             darkness = np.maximum(darkness, joint_rng.uniform(*style.shadow_depth) * band)
         core = np.zeros((h, w), dtype=np.float32)
         _draw(core, rc, 1.0, width)
         core = cv2.GaussianBlur(core, (0, 0),
-                                max(width / 5, 0.6) if crevice is None else crevice.blur_px)
+                                max(width / 5, k * 0.6) if crevice is None else crevice.blur_px)
         depth = joint_rng.uniform(*style.core_depth)
         if crevice is not None:
             depth = crevice.depth
         if joint_rng.random() < 0.4:  # a faint stretch (rock bridge, dirt) along the joint
             t = joint_rng.uniform(0.1, 0.9)
             centre = rc[int(t * (len(rc) - 1))]
-            cv2.circle(core, (int(centre[1]), int(centre[0])), int(joint_rng.uniform(5, 25)), 0.3, -1)
+            cv2.circle(core, (int(centre[1]), int(centre[0])), int(k * joint_rng.uniform(5, 25)), 0.3,
+                       -1)
         darkness = np.maximum(darkness, depth * np.clip(core, 0, 1))
 
     # clutter, not labelled: minor cracks, rubble, bright plates, highlights, veins
     for crack, width, depth in _minor_cracks(clutter_rng, (h, w), style, area):
         mark = np.zeros((h, w), dtype=np.float32)
         _draw(mark, crack, 1.0, width)
-        mark = cv2.GaussianBlur(mark, (0, 0), 0.7)
+        mark = cv2.GaussianBlur(mark, (0, 0), k * 0.7)
         darkness = np.maximum(darkness, depth * mark)
     for _ in range(_count(clutter_rng, style.rubble, area)):
         centre = (int(clutter_rng.uniform(0, w)), int(clutter_rng.uniform(0, h)))
-        axes = (int(clutter_rng.uniform(2, 14)), int(clutter_rng.uniform(2, 10)))
+        axes = (int(k * clutter_rng.uniform(2, 14)), int(k * clutter_rng.uniform(2, 10)))
         tone = clutter_rng.uniform(-50, 40)
         blob = np.zeros((h, w), dtype=np.float32)
         cv2.ellipse(blob, centre, axes, float(clutter_rng.uniform(0, 180)), 0, 360, 1.0, -1)
-        image += tone * cv2.GaussianBlur(blob, (0, 0), 0.7)
+        image += tone * cv2.GaussianBlur(blob, (0, 0), k * 0.7)
     for _ in range(_count(clutter_rng, style.plates, area)):
         centre = clutter_rng.uniform(0, 1, 2) * (w, h)
         n_vert = int(clutter_rng.integers(4, 8))
         angles = np.sort(clutter_rng.uniform(0, 2 * np.pi, n_vert))
-        radius = clutter_rng.uniform(15, 90) * clutter_rng.uniform(0.6, 1.0, n_vert)
+        radius = k * clutter_rng.uniform(15, 90) * clutter_rng.uniform(0.6, 1.0, n_vert)
         poly = np.column_stack([centre[0] + radius * np.cos(angles), centre[1] + radius * np.sin(angles)])
         plate = np.zeros((h, w), dtype=np.float32)
         cv2.fillPoly(plate, [np.round(poly).astype(np.int32)], 1.0, lineType=cv2.LINE_AA)
-        image += clutter_rng.uniform(15, 70) * cv2.GaussianBlur(plate, (0, 0), clutter_rng.uniform(0.6, 2.0))
+        image += clutter_rng.uniform(15, 70) * cv2.GaussianBlur(plate, (0, 0),
+                                                                k * clutter_rng.uniform(0.6, 2.0))
     for _ in range(int(clutter_rng.integers(0, 3))):  # soft specular highlights
         spot = np.zeros((h, w), dtype=np.float32)
         cv2.circle(spot, (int(clutter_rng.uniform(0, w)), int(clutter_rng.uniform(0, h))),
-                   int(clutter_rng.uniform(5, 40)), 1.0, -1)
-        image += clutter_rng.uniform(20, 60) * cv2.GaussianBlur(spot, (0, 0), clutter_rng.uniform(3, 12))
+                   int(k * clutter_rng.uniform(5, 40)), 1.0, -1)
+        image += clutter_rng.uniform(20, 60) * cv2.GaussianBlur(spot, (0, 0),
+                                                                k * clutter_rng.uniform(3, 12))
     for _ in range(_count(clutter_rng, style.veins, area)):
         vein = np.zeros((h, w), dtype=np.float32)
         _draw(vein, _rough_path(clutter_rng, clutter_rng.uniform(0, 1, 2) * (h, w),
-                                clutter_rng.uniform(0, 2 * np.pi), clutter_rng.uniform(40, 300),
-                                roughness=0.2), 1.0, clutter_rng.uniform(1, 4))
-        image += clutter_rng.uniform(15, 50) * cv2.GaussianBlur(vein, (0, 0), 0.8)
+                                clutter_rng.uniform(0, 2 * np.pi), k * clutter_rng.uniform(40, 300),
+                                k * 6.0, roughness=0.2), 1.0, k * clutter_rng.uniform(1, 4))
+        image += clutter_rng.uniform(15, 50) * cv2.GaussianBlur(vein, (0, 0), k * 0.8)
 
     # shotcrete: a smooth grey skin over parts of the face, hiding everything under it
     cover = _shotcrete_cover(spray_rng, (h, w), style, m_per_px)
     hidden = None
     if cover is not None:
-        alpha = cv2.GaussianBlur((cover[0] > cover[1]).astype(np.float32), (0, 0), 1.0)
-        image = image * (1.0 - alpha) + _shotcrete_surface(spray_rng, (h, w), m_per_px, light) * alpha
+        alpha = cv2.GaussianBlur((cover[0] > cover[1]).astype(np.float32), (0, 0), k)
+        skin = _shotcrete_surface(spray_rng, _reference_shape((h, w), k), m_per_px * k, light)
+        image = image * (1.0 - alpha) + _enlarged(skin, (h, w)) * alpha
         darkness *= 1.0 - alpha
         hidden = _cover_polygon(*cover)
 
@@ -578,8 +646,10 @@ def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
     image *= _lighting(camera_rng, (h, w), camera_rng.uniform(*style.lighting),
                        int(camera_rng.integers(style.shadows[0], style.shadows[1] + 1)))
     image *= 1.0 - np.clip(darkness, 0.0, 0.95)
-    image = cv2.GaussianBlur(image, (0, 0), camera_rng.uniform(*style.blur_px))
-    image += camera_rng.uniform(*style.noise) * camera_rng.standard_normal((h, w)).astype(np.float32)
+    image = cv2.GaussianBlur(image, (0, 0), k * camera_rng.uniform(*style.blur_px))
+    amplitude = camera_rng.uniform(*style.noise)  # sensor noise, drawn on the reference grid
+    noise = camera_rng.standard_normal(_reference_shape((h, w), k)).astype(np.float32)
+    image += amplitude * _enlarged(noise, (h, w))
     image = np.clip(np.round(image), 0, 255).astype(np.uint8)
     quality = int(camera_rng.integers(style.jpeg_quality[0], style.jpeg_quality[1] + 1))
     ok, encoded = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, quality])
@@ -587,7 +657,7 @@ def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
 
     pieces, piece_widths = [], []
     for rc, width in zip(paths, widths):
-        for part in _clip_to_image([rc], (h, w), hidden):
+        for part in _clip_to_image([rc], (h, w), hidden, min_length_px=k * 10.0):
             pieces.append(rc_to_uv(part, h, m_per_px))
             piece_widths.append(int(round(width)))
     window = np.array([[0.0, 0.0], [w * m_per_px, 0.0], [w * m_per_px, h * m_per_px],
@@ -614,15 +684,17 @@ def half_cast_axes(face: SyntheticFace) -> list[np.ndarray]:
     return [np.array([[p0, p1] for p0, p1, _, _ in holes]) for holes in families]
 
 
-def minor_crack_mask(face: SyntheticFace, *, margin_px: float = 2.0) -> np.ndarray:
-    """Pixels of a field face within ``margin_px`` of a minor crack's drawn stroke (bool), redrawn
-    from the face's seed and style. Minor cracks are not labelled; training can leave these pixels
+def minor_crack_mask(face: SyntheticFace, *, margin_px: float | None = None) -> np.ndarray:
+    """Pixels of a field face within ``margin_px`` (default 2 px times the style's feature scale)
+    of a minor crack's drawn stroke (bool), redrawn from the face's seed and style. Minor cracks are not labelled; training can leave these pixels
     out of its negatives, so that a thin dark line is not taught to be "not a joint" (its length,
     which tells a minor crack from a joint, is judged per trace, not per pixel)."""
     import cv2
 
     h, w = face.image.shape
-    area = h * w / 160_000.0
+    area = _area_factor((h, w), face.style)
+    if margin_px is None:
+        margin_px = 2.0 * face.style.feature_scale
     mark = np.zeros((h, w), dtype=np.float32)
     for crack, width, _ in _minor_cracks(_streams(face.seed)[3], (h, w), face.style, area):
         _draw(mark, crack, 1.0, width)

@@ -184,3 +184,71 @@ def test_a_wide_crevice_is_a_dark_band_labelled_at_its_centre_line():
                             face.image[ring(20, 26)].mean())
     assert centre < 0.5 * rock and inside < 0.6 * rock  # dark across its width, not on a line
     assert centre <= inside + 5  # no lighter middle: the label is not on an edge
+
+
+# the same face photographed with k times the pixels across (FieldStyle.feature_scale)
+@pytest.mark.parametrize("seed", [1, 2])
+def test_feature_scale_draws_the_same_joints_in_metres_at_k_times_the_pixels(seed):
+    base = field_face(seed=seed, **SMALL)
+    big = field_face(seed=seed, shape_px=(320, 400), m_per_px=0.005,
+                     style=FieldStyle(feature_scale=2.0))
+    assert big.truth.n_traces == base.truth.n_traces
+    np.testing.assert_allclose(big.truth.xy_m, base.truth.xy_m, atol=1e-9)
+    np.testing.assert_array_equal(big.truth.offsets, base.truth.offsets)
+    # core widths in pixels: k times (each rounded to a whole pixel)
+    widths, big_widths = base.truth.attributes["width_px"], big.truth.attributes["width_px"]
+    assert np.all(np.abs(big_widths - 2 * widths) <= 1)
+
+
+@pytest.mark.parametrize("k", [2.0, 3.0])
+def test_feature_scale_makes_a_joint_k_times_wider_in_pixels(k):
+    # one quiet joint of a 4 px core, with and without its darkening: the darkened area in pixels
+    # grows as k^2 on a face k times larger (k times longer, k times wider)
+    quiet = FieldStyle(**{**QUIET, "noise": (0.0, 0.0)}, core_width_px=(4.0, 4.0),
+                       shadow_share=0.0, step_share=0.0, relief=(0.0, 0.0),
+                       oriented_texture=(0.0, 0.0))
+
+    def darkened_px(scale):
+        shape = (round(160 * scale), round(200 * scale))
+        style = replace(quiet, feature_scale=scale)
+        face = field_face(seed=3, shape_px=shape, m_per_px=0.01 / scale, style=style)
+        bare = field_face(seed=3, shape_px=shape, m_per_px=0.01 / scale,
+                          style=replace(style, core_depth=(0.0, 0.0)))
+        return ((bare.image.astype(float) - face.image) > 10).sum()
+
+    ratio = darkened_px(k) / darkened_px(1.0)
+    assert ratio == pytest.approx(k * k, rel=0.2)
+
+
+def test_feature_scale_minor_crack_mask_follows_the_scale():
+    quiet = FieldStyle(major_joints=(0, 0), rubble=(0, 0), plates=(0, 0), veins=(0, 0),
+                       crevice_fields=(0, 0), relief=(0.0, 0.0), oriented_texture=(0.0, 0.0),
+                       minor_cracks=(40, 40), feature_scale=2.0)
+    shape = dict(shape_px=(320, 400), m_per_px=0.005)
+    face = field_face(seed=1, style=quiet, **shape)
+    bare = field_face(seed=1, style=replace(quiet, minor_cracks=(0, 0)), **shape)
+    darkened = bare.image.astype(float) - face.image
+    assert (darkened > 8).sum() > 400
+    assert minor_crack_mask(face)[darkened > 8].mean() > 0.95
+
+
+@pytest.mark.parametrize("bad", [0.0, -1.0, float("nan"), float("inf")])
+def test_feature_scale_must_be_finite_and_positive(bad):
+    with pytest.raises(ValueError, match="feature_scale"):
+        field_face(seed=0, style=FieldStyle(feature_scale=bad), **SMALL)
+
+
+@pytest.mark.parametrize("style", [FieldStyle(), TUNNEL_STYLE], ids=["field", "tunnel"])
+def test_a_face_at_feature_scale_k_averaged_down_k_times_is_the_reference_face(style):
+    # the same face with k times the pixels: area-averaged back to the reference grid it must be
+    # the face of k = 1 up to the camera's per-pixel noise, JPEG and the interpolation (a face
+    # whose rock or clutter were drawn anew correlates at about 0.2-0.8)
+    import cv2
+
+    reference = field_face(seed=3, shape_px=(150, 225), m_per_px=0.008, style=style)
+    for k in (2.0, 3.0):
+        face = field_face(seed=3, shape_px=(round(150 * k), round(225 * k)), m_per_px=0.008 / k,
+                          style=replace(style, feature_scale=k))
+        averaged = cv2.resize(face.image, (225, 150), interpolation=cv2.INTER_AREA)
+        assert np.corrcoef(reference.image.ravel(), averaged.ravel())[0, 1] > 0.97
+        assert abs(shotcrete_mask(face).mean() - shotcrete_mask(reference).mean()) < 0.01
