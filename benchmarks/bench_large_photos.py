@@ -1,8 +1,8 @@
-"""The learned detector on large photographs of one face: the working grid against accuracy and time.
+"""The joint detectors on large photographs of one face: the working grid against accuracy and time.
 
     python benchmarks/bench_large_photos.py [--megapixels 1.5,12,24] [--grids 1.5,2.5,4,8]
                                             [--detectors learned,auto] [--style tunnel|field]
-                                            [--seeds 3] [--levels default,none]
+                                            [--seeds 3] [--levels default,none] [--tag NAME]
 
 A site geologist's photographs are 12-24 MP; the chain runs the detectors on a working grid of at
 most ``max_megapixels`` (default 4, docs/imaging.md §1). Whether that grid costs a large
@@ -12,18 +12,21 @@ sizes in pixels times k, its counts per area over k², at ``m_per_px / k``: the 
 metres, docs/imaging.md §9.1). Here k = sqrt(MP / 1.5), so every size shows the faces of the
 1000 x 1500 px benchmark faces (8 x 12 m at 8 mm per pixel; the 1.5 MP row is those faces).
 
-Faces: seeds 1-3 (the benchmark seeds of bench_imaging_real.py; ``--seeds n``: 1-n), ``TUNNEL_STYLE`` by default
-(half-casts and shotcrete) or the default ``FieldStyle``. Each face is extracted at each working
-grid (``max_megapixels``; a grid of the photo's size or larger runs the photo as it is, and
-only the first such grid is run) and scored
-against its truth with the buffered match of docs/imaging.md (8.1)-(8.3) at 3 px of the 1.5 MP
-face (24 mm on the face) whatever the size and the grid, so the rows compare like with like.
-Columns: the photo's size and k, the grid given and the grid run (MP), F1, precision, recall,
-ΔP21, the extraction's wall time per photo and, per face, the grid level the learned detector
+Faces: seeds 1-3 (``--seeds n``: 1-n; 1-3 are the benchmark seeds of bench_imaging_real.py),
+``TUNNEL_STYLE`` by default (half-casts and shotcrete) or the default ``FieldStyle``. Each face
+is extracted at each working grid (``max_megapixels``; a grid of the photo's size or larger
+runs the photo as it is, and only the first such grid is run) and scored against its truth with
+the buffered match of docs/imaging.md (8.1)-(8.3) at 3 px of the 1.5 MP face (24 mm on the
+face) whatever the size and the grid, so the rows compare like with like. ``--levels
+default,none`` also runs the learned detector on the working grid alone (``learned_levels =
+[]``), to separate the grid from the choice among the coarser ones.
+
+Columns: the photo's size and k, the detector, the grid given and the grid run (MP), F1,
+precision, recall, ΔP21, the extraction's wall time per photo (2 cores; the faces are drawn
+beforehand, two at a time, and not timed) and, per face, the grid level the learned detector
 kept (1: the working grid; 2, 4: coarsened so many times, docs/imaging.md §3.4) and its F1.
-``--levels default,none`` also runs the learned detector on the working grid alone
-(``learned_levels = []``), to separate the grid from the choice among the coarser ones. (2 cores; the faces are drawn beforehand, two at
-a time, and are not timed). Rows also go to benchmarks/results/bench_large_photos_<style>.json.
+Rows also go to benchmarks/results/bench_large_photos_<style>.json (``..._<style>_<NAME>.json``
+with ``--tag NAME``, so that a partial run keeps the full one).
 """
 
 from __future__ import annotations
@@ -64,17 +67,17 @@ def draw(megapixels: float, seed: int, style_name: str):
     return field_face(seed=seed, shape_px=shape, m_per_px=BASE_M_PER_PX / k, style=style)
 
 
-def score(face, detector: str, grid: float, levels: str = "default") -> dict:
+def score(face, detector: str, grid: float, level_mode: str = "default") -> dict:
     """Buffered scores of one extraction at one working grid (with the coarser grids of
-    ``learned_levels`` when ``levels`` is "default", without them when "none"), and its wall
-    time."""
+    ``learned_levels`` when ``level_mode`` is "default", without them when "none"), its wall
+    time and the grid level the learned detector kept."""
     from rockmass.imaging.extract import ExtractParams, extract
     from rockmass.imaging.metrics import trace_accuracy
 
     t0 = time.perf_counter()
     result = extract(face.image, m_per_px=face.m_per_px,
                      params=ExtractParams(detector=detector, max_megapixels=grid,
-                                          **({} if levels == "default" else {"learned_levels": []})))
+                                          **({} if level_mode == "default" else {"learned_levels": []})))
     seconds = time.perf_counter() - t0
     accuracy = trace_accuracy(result.traces, face.truth, m_per_px=BASE_M_PER_PX, buffer_px=BUFFER_PX)
     # work_factor: working-grid pixels per photo pixel
@@ -94,15 +97,23 @@ def main(argv=None) -> int:
     parser.add_argument("--seeds", type=int, default=3, help="faces per size: seeds 1..n (default 3)")
     parser.add_argument("--levels", default="default",
                         help="learned_levels: default, none (the working grid alone), or both")
+    parser.add_argument("--tag", default="", help="suffix of the results file")
     args = parser.parse_args(argv)
     seeds = tuple(range(1, args.seeds + 1))
     level_modes = [v.strip() for v in args.levels.split(",") if v.strip()]
     if not set(level_modes) <= {"default", "none"} or args.seeds < 1:
         parser.error("--levels takes default and/or none; --seeds at least 1")
-    sizes = [float(v) for v in args.megapixels.split(",") if v.strip()]
-    grids = [float(v) for v in args.grids.split(",") if v.strip()]
+    try:
+        sizes = [float(v) for v in args.megapixels.split(",") if v.strip()]
+        grids = [float(v) for v in args.grids.split(",") if v.strip()]
+    except ValueError as error:
+        parser.error(f"--megapixels and --grids take comma-separated numbers: {error}")
+    if not sizes or not grids or min(sizes + grids) <= 0:
+        parser.error("--megapixels and --grids need values > 0")
     detectors = [v.strip() for v in args.detectors.split(",") if v.strip()]
-    print(header(f"the learned detector on large photographs of one face ({args.style} style, "
+    if not detectors or not set(detectors) <= {"learned", "auto", "ridge"}:
+        parser.error("--detectors takes learned, auto and/or ridge")
+    print(header(f"joint detectors on large photographs of one face ({args.style} style, "
                  f"seeds {seeds[0]}-{seeds[-1]})"))
     rows = []
     for megapixels in sizes:
@@ -128,7 +139,9 @@ def main(argv=None) -> int:
     print(f"\nk: the photo's pixels per pixel of the reference face; F1, P, R: buffered match at "
           f"{BUFFER_PX:g} px of the 1.5 MP face ({1000 * BUFFER_PX * BASE_M_PER_PX:g} mm), means over "
           f"the faces; dP21: mean relative error of the trace length")
-    path = save(f"bench_large_photos_{args.style}", {"rows": rows, "style": args.style, "seeds": list(seeds)})
+    name = "_".join(["bench_large_photos", args.style, *([args.tag] if args.tag else [])])
+    path = save(name, {"rows": rows, "style": args.style, "seeds": list(seeds), "megapixels": sizes,
+                       "grids": grids, "detectors": detectors, "levels": level_modes})
     print(f"\nrows saved to {path}")
     return 0
 

@@ -113,10 +113,13 @@ TUNNEL_STYLE = FieldStyle(half_cast_families=(0, 2), shotcrete_share=0.4)
 CREVICE_STYLE = FieldStyle(crevice_share=0.25)
 
 
-def _rough_path(rng, start, angle, length_px, step_px=6.0, roughness=0.35):
+def _rough_path(rng, start, angle, length_px, step_px=6.0, roughness=0.35, scale=1.0):
     """A rough polyline (rc pixels): a walk of ``step_px`` steps whose heading wanders around
-    ``angle`` (radians) by an Ornstein–Uhlenbeck turn, ``roughness`` radians at most per step."""
+    ``angle`` (radians) by an Ornstein–Uhlenbeck turn, ``roughness`` radians at most per step.
+    ``length_px`` and ``step_px`` are pixels of the reference face (feature scale 1); the walk is
+    drawn ``scale`` times larger, with the same number of steps and draws."""
     n = max(int(length_px / step_px), 2)
+    step_px = scale * step_px
     heading, pts = 0.0, [np.asarray(start, dtype=np.float64)]
     for _ in range(n):
         heading = 0.8 * heading + rng.normal(0.0, roughness / 2)
@@ -219,9 +222,19 @@ def _feature_scale(style) -> float:
 
 
 def _area_factor(shape, style) -> float:
-    """The image's area in units of 400 x 400 px at the style's feature scale: what the counts per
-    400 x 400 px are multiplied by."""
-    return shape[0] * shape[1] / 160_000.0 / _feature_scale(style) ** 2
+    """The area of the reference face (feature scale 1) an image of ``shape`` enlarges, in units
+    of 400 x 400 px: what the counts per 400 x 400 px are multiplied by."""
+    h, w = _reference_shape(shape, _feature_scale(style))
+    return h * w / 160_000.0
+
+
+def _extent(shape, style) -> tuple[float, float]:
+    """The reference face's rows and columns times the feature scale: the extent, in pixels of
+    ``shape``, that positions are drawn over (``shape`` itself at scale 1), so that a position
+    drawn from the same number lies at the same place on the face at every scale."""
+    k = _feature_scale(style)
+    h, w = _reference_shape(shape, k)
+    return k * h, k * w
 
 
 def _count(rng, bounds, area_factor):
@@ -233,13 +246,13 @@ def _minor_cracks(rng, shape, style, area_factor):
     """The unlabelled minor cracks: (rc path, width px, relative darkening) each, short (8-90 px),
     rough, 1-3 px wide and faint (0.08-0.5), sizes times ``style.feature_scale``. The first draws
     of the clutter stream."""
-    h, w = shape
-    k = style.feature_scale
+    h, w = _extent(shape, style)
+    k = _feature_scale(style)
     cracks = []
     for _ in range(_count(rng, style.minor_cracks, area_factor)):
         start = rng.uniform(0, 1, 2) * (h, w)
-        path = _rough_path(rng, start, rng.uniform(0, 2 * np.pi), k * rng.uniform(8, 90),
-                           step_px=k * 3.0, roughness=0.6)
+        path = _rough_path(rng, start, rng.uniform(0, 2 * np.pi), rng.uniform(8, 90), step_px=3.0,
+                           roughness=0.6, scale=k)
         width = k * rng.choice([1, 1, 2, 3])
         cracks.append((path, width, rng.uniform(0.08, 0.5)))
     return cracks
@@ -247,10 +260,11 @@ def _minor_cracks(rng, shape, style, area_factor):
 
 def _major_joints(rng, shape, style, area_factor):
     """Polylines (rc pixels) of the major joints: two sets, most spanning the image."""
-    h, w = shape
-    diag = float(np.hypot(h, w))
+    k = _feature_scale(style)
+    h, w = _extent(shape, style)
+    diag = float(np.hypot(*_reference_shape(shape, k)))  # pixels of the reference face
     n = max(_count(rng, style.major_joints, area_factor), 1)
-    centre_shift = 0.5 * (style.feature_scale - 1.0)
+    centre_shift = 0.5 * (k - 1.0)
     set_angles = rng.uniform(0, np.pi) + np.array([0.0, rng.uniform(np.pi / 4, np.pi / 2)])
     paths = []
     for _ in range(n):
@@ -259,9 +273,8 @@ def _major_joints(rng, shape, style, area_factor):
         centre = np.array([rng.uniform(0.1, 0.9) * h, rng.uniform(0.1, 0.9) * w]) + centre_shift
         spans = rng.random() < 0.7
         half = diag if spans else rng.uniform(0.2, 0.45) * diag
-        step = 6.0 * style.feature_scale
-        back = _rough_path(rng, centre, angle + np.pi, half, step, roughness=rng.uniform(0.1, 0.4))
-        ahead = _rough_path(rng, centre, angle, half, step, roughness=rng.uniform(0.1, 0.4))
+        back = _rough_path(rng, centre, angle + np.pi, half, roughness=rng.uniform(0.1, 0.4), scale=k)
+        ahead = _rough_path(rng, centre, angle, half, roughness=rng.uniform(0.1, 0.4), scale=k)
         paths.append(np.vstack([back[::-1], ahead[1:]]))
     return paths
 
@@ -382,9 +395,9 @@ def _shotcrete_cover(rng, shape, style, m_per_px):
     fraction = rng.uniform(*style.shotcrete_cover)
     if fraction < 0.005:
         return None
-    full_shape, k = tuple(shape), style.feature_scale
-    shape, m_per_px = _reference_shape(full_shape, k), m_per_px * k
-    h, w = shape
+    k = _feature_scale(style)
+    ref_shape, ref_m_per_px = _reference_shape(shape, k), m_per_px * k
+    h, w = ref_shape
     diag = float(np.hypot(h, w))
     rr, cc = np.mgrid[0:h, 0:w].astype(np.float32)
     if rng.random() < 0.6:  # along the face's rim: top (crown) twice as likely as another edge
@@ -393,8 +406,8 @@ def _shotcrete_cover(rng, shape, style, m_per_px):
     else:
         centres = rng.uniform(0, 1, (int(rng.integers(1, 4)), 2)) * (h, w)
         bias = -np.min([np.hypot(rr - r, cc - c) for r, c in centres], axis=0) / diag
-    sigma = float(np.clip(rng.uniform(0.15, 0.5) / m_per_px, 3.0, 0.3 * max(h, w)))
-    score = _enlarged(bias + rng.uniform(0.05, 0.15) * _smooth_noise(rng, shape, sigma), full_shape)
+    sigma = float(np.clip(rng.uniform(0.15, 0.5) / ref_m_per_px, 3.0, 0.3 * max(h, w)))
+    score = _enlarged(bias + rng.uniform(0.05, 0.15) * _smooth_noise(rng, ref_shape, sigma), shape)
     return score, float(np.quantile(score, 1.0 - fraction))
 
 
@@ -457,13 +470,15 @@ def _reference_shape(shape, feature_scale: float) -> tuple[int, int]:
 
 
 def _enlarged(field, shape):
-    """A float32 field drawn on the reference grid resized (bicubic) to ``shape``; the field
-    itself when it is already of that shape."""
+    """A float32 field drawn on the reference grid resized to ``shape`` (bicubic; area averaging
+    for a feature scale under 1); the field itself when it is already of that shape."""
     import cv2
 
     if field.shape == tuple(shape):
         return field
-    return cv2.resize(field, (shape[1], shape[0]), interpolation=cv2.INTER_CUBIC)
+    shrink = shape[0] * shape[1] < field.shape[0] * field.shape[1]
+    return cv2.resize(field, (shape[1], shape[0]),
+                      interpolation=cv2.INTER_AREA if shrink else cv2.INTER_CUBIC)
 
 
 def _streams(seed):
@@ -543,7 +558,7 @@ def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
     if h < 32 or w < 32:
         raise ValueError(f"shape_px must be at least 32 x 32 pixels, got {shape_px}")
     k = _feature_scale(style)
-    area = _area_factor((h, w), style)
+    area, extent = _area_factor((h, w), style), _extent((h, w), style)
     (net_rng, rock_rng, joint_rng, clutter_rng, camera_rng, cast_rng, spray_rng,
      crevice_rng) = _streams(seed)
 
@@ -603,14 +618,14 @@ def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
         mark = cv2.GaussianBlur(mark, (0, 0), k * 0.7)
         darkness = np.maximum(darkness, depth * mark)
     for _ in range(_count(clutter_rng, style.rubble, area)):
-        centre = (int(clutter_rng.uniform(0, w)), int(clutter_rng.uniform(0, h)))
+        centre = (int(clutter_rng.uniform(0, extent[1])), int(clutter_rng.uniform(0, extent[0])))
         axes = (int(k * clutter_rng.uniform(2, 14)), int(k * clutter_rng.uniform(2, 10)))
         tone = clutter_rng.uniform(-50, 40)
         blob = np.zeros((h, w), dtype=np.float32)
         cv2.ellipse(blob, centre, axes, float(clutter_rng.uniform(0, 180)), 0, 360, 1.0, -1)
         image += tone * cv2.GaussianBlur(blob, (0, 0), k * 0.7)
     for _ in range(_count(clutter_rng, style.plates, area)):
-        centre = clutter_rng.uniform(0, 1, 2) * (w, h)
+        centre = clutter_rng.uniform(0, 1, 2) * extent[::-1]
         n_vert = int(clutter_rng.integers(4, 8))
         angles = np.sort(clutter_rng.uniform(0, 2 * np.pi, n_vert))
         radius = k * clutter_rng.uniform(15, 90) * clutter_rng.uniform(0.6, 1.0, n_vert)
@@ -621,15 +636,15 @@ def field_face(*, seed: int = 0, shape_px=(400, 400), m_per_px: float = 0.005,
                                                                 k * clutter_rng.uniform(0.6, 2.0))
     for _ in range(int(clutter_rng.integers(0, 3))):  # soft specular highlights
         spot = np.zeros((h, w), dtype=np.float32)
-        cv2.circle(spot, (int(clutter_rng.uniform(0, w)), int(clutter_rng.uniform(0, h))),
+        cv2.circle(spot, (int(clutter_rng.uniform(0, extent[1])), int(clutter_rng.uniform(0, extent[0]))),
                    int(k * clutter_rng.uniform(5, 40)), 1.0, -1)
         image += clutter_rng.uniform(20, 60) * cv2.GaussianBlur(spot, (0, 0),
                                                                 k * clutter_rng.uniform(3, 12))
     for _ in range(_count(clutter_rng, style.veins, area)):
         vein = np.zeros((h, w), dtype=np.float32)
-        _draw(vein, _rough_path(clutter_rng, clutter_rng.uniform(0, 1, 2) * (h, w),
-                                clutter_rng.uniform(0, 2 * np.pi), k * clutter_rng.uniform(40, 300),
-                                k * 6.0, roughness=0.2), 1.0, k * clutter_rng.uniform(1, 4))
+        _draw(vein, _rough_path(clutter_rng, clutter_rng.uniform(0, 1, 2) * extent,
+                                clutter_rng.uniform(0, 2 * np.pi), clutter_rng.uniform(40, 300),
+                                roughness=0.2, scale=k), 1.0, k * clutter_rng.uniform(1, 4))
         image += clutter_rng.uniform(15, 50) * cv2.GaussianBlur(vein, (0, 0), k * 0.8)
 
     # shotcrete: a smooth grey skin over parts of the face, hiding everything under it

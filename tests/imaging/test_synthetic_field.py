@@ -187,17 +187,30 @@ def test_a_wide_crevice_is_a_dark_band_labelled_at_its_centre_line():
 
 
 # the same face photographed with k times the pixels across (FieldStyle.feature_scale)
-@pytest.mark.parametrize("seed", [1, 2])
-def test_feature_scale_draws_the_same_joints_in_metres_at_k_times_the_pixels(seed):
-    base = field_face(seed=seed, **SMALL)
-    big = field_face(seed=seed, shape_px=(320, 400), m_per_px=0.005,
-                     style=FieldStyle(feature_scale=2.0))
-    assert big.truth.n_traces == base.truth.n_traces
-    np.testing.assert_allclose(big.truth.xy_m, base.truth.xy_m, atol=1e-9)
-    np.testing.assert_array_equal(big.truth.offsets, base.truth.offsets)
-    # core widths in pixels: k times (each rounded to a whole pixel)
-    widths, big_widths = base.truth.attributes["width_px"], big.truth.attributes["width_px"]
-    assert np.all(np.abs(big_widths - 2 * widths) <= 1)
+@pytest.mark.parametrize("style", [FieldStyle(), TUNNEL_STYLE], ids=["field", "tunnel"])
+@pytest.mark.parametrize("seed", [1, 2, 3])
+@pytest.mark.parametrize("k, shape", [(2.0, (320, 400)), (1.7, (272, 340)),
+                                      (np.sqrt(8.0), (453, 566))])
+def test_feature_scale_draws_the_same_joints_in_metres_at_k_times_the_pixels(seed, k, shape, style):
+    # vertex for vertex when the larger face spans exactly k times the reference shape and no
+    # shotcrete cuts the joints; else (k = sqrt 8: the image edge moves by the rounding of the
+    # shape, and with it the clipping; a cut end follows the enlarged shotcrete edge) the same
+    # lines to within one reference pixel
+    import shapely
+
+    base = field_face(seed=seed, **SMALL, style=style)
+    big = field_face(seed=seed, shape_px=shape, m_per_px=0.01 / k,
+                     style=replace(style, feature_scale=k))
+    lines = [shapely.MultiLineString([f.truth.polyline(i) for i in range(f.truth.n_traces)])
+             for f in (base, big)]
+    assert lines[0].hausdorff_distance(lines[1]) <= 0.01
+    assert lines[1].length == pytest.approx(lines[0].length, rel=0.02)
+    if np.allclose(np.multiply(k, SMALL["shape_px"]), shape, atol=1e-9) and not shotcrete_mask(base).any():
+        np.testing.assert_array_equal(big.truth.offsets, base.truth.offsets)
+        np.testing.assert_allclose(big.truth.xy_m, base.truth.xy_m, atol=1e-9)
+        # core widths in pixels: k times (each rounded to a whole pixel)
+        widths, big_widths = base.truth.attributes["width_px"], big.truth.attributes["width_px"]
+        assert np.all(np.abs(big_widths - k * widths) <= 0.5 + 0.5 * k)
 
 
 @pytest.mark.parametrize("k", [2.0, 3.0])
@@ -251,4 +264,8 @@ def test_a_face_at_feature_scale_k_averaged_down_k_times_is_the_reference_face(s
                           style=replace(style, feature_scale=k))
         averaged = cv2.resize(face.image, (225, 150), interpolation=cv2.INTER_AREA)
         assert np.corrcoef(reference.image.ravel(), averaged.ravel())[0, 1] > 0.97
-        assert abs(shotcrete_mask(face).mean() - shotcrete_mask(reference).mean()) < 0.01
+        cover = cv2.resize(shotcrete_mask(face).astype(np.float32), (225, 150),
+                           interpolation=cv2.INTER_AREA) > 0.5
+        drawn = shotcrete_mask(reference)
+        if drawn.any():  # the same lobes, not only the same share (which the quantile fixes)
+            assert (cover & drawn).sum() / (cover | drawn).sum() > 0.95
