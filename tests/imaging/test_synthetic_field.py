@@ -189,28 +189,44 @@ def test_a_wide_crevice_is_a_dark_band_labelled_at_its_centre_line():
 # the same face photographed with k times the pixels across (FieldStyle.feature_scale)
 @pytest.mark.parametrize("style", [FieldStyle(), TUNNEL_STYLE], ids=["field", "tunnel"])
 @pytest.mark.parametrize("seed", [1, 2, 3])
-@pytest.mark.parametrize("k, shape", [(2.0, (320, 400)), (1.7, (272, 340)),
-                                      (np.sqrt(8.0), (453, 566))])
-def test_feature_scale_draws_the_same_joints_in_metres_at_k_times_the_pixels(seed, k, shape, style):
+@pytest.mark.parametrize("k, base_shape, shape", [
+    (2.0, (160, 200), (320, 400)), (1.7, (160, 200), (272, 340)),
+    (np.sqrt(8.0), (160, 200), (453, 566))])
+def test_feature_scale_draws_the_same_joints_in_metres_at_k_times_the_pixels(seed, k, base_shape,
+                                                                              shape, style):
     # vertex for vertex when the larger face spans exactly k times the reference shape and no
     # shotcrete cuts the joints; else (k = sqrt 8: the image edge moves by the rounding of the
     # shape, and with it the clipping; a cut end follows the enlarged shotcrete edge) the same
     # lines to within one reference pixel
     import shapely
 
-    base = field_face(seed=seed, **SMALL, style=style)
+    base = field_face(seed=seed, shape_px=base_shape, m_per_px=0.01, style=style)
     big = field_face(seed=seed, shape_px=shape, m_per_px=0.01 / k,
                      style=replace(style, feature_scale=k))
+    assert big.truth.n_traces == base.truth.n_traces
     lines = [shapely.MultiLineString([f.truth.polyline(i) for i in range(f.truth.n_traces)])
              for f in (base, big)]
     assert lines[0].hausdorff_distance(lines[1]) <= 0.01
     assert lines[1].length == pytest.approx(lines[0].length, rel=0.02)
-    if np.allclose(np.multiply(k, SMALL["shape_px"]), shape, atol=1e-9) and not shotcrete_mask(base).any():
+    if np.allclose(np.multiply(k, base_shape), shape, atol=1e-9) and not shotcrete_mask(base).any():
         np.testing.assert_array_equal(big.truth.offsets, base.truth.offsets)
         np.testing.assert_allclose(big.truth.xy_m, base.truth.xy_m, atol=1e-9)
         # core widths in pixels: k times (each rounded to a whole pixel)
         widths, big_widths = base.truth.attributes["width_px"], big.truth.attributes["width_px"]
         assert np.all(np.abs(big_widths - k * widths) <= 0.5 + 0.5 * k)
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_feature_scale_counts_are_those_of_the_reference_face(seed):
+    # 200 x 400 px is half of 400 x 400: five joints give a count of 2.5, which rounds to 2; the
+    # larger face's rounded shape (566 x 1131 px, a little more than sqrt 8 times) holds a little
+    # more area, so a count taken from it would round to 3
+    style = FieldStyle(major_joints=(5, 5))
+    base = field_face(seed=seed, shape_px=(200, 400), m_per_px=0.01, style=style)
+    big = field_face(seed=seed, shape_px=(566, 1131), m_per_px=0.01 / np.sqrt(8.0),
+                     style=replace(style, feature_scale=np.sqrt(8.0)))
+    assert big.truth.n_traces == base.truth.n_traces
+    np.testing.assert_array_equal(big.truth.offsets, base.truth.offsets)
 
 
 @pytest.mark.parametrize("k", [2.0, 3.0])
