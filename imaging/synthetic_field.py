@@ -464,8 +464,6 @@ def _rock(rng, shape, style):
 def _reference_shape(shape, feature_scale: float) -> tuple[int, int]:
     """The grid of the face at feature scale 1 that a face of ``shape`` at ``feature_scale``
     enlarges (``shape`` itself at 1)."""
-    if feature_scale == 1.0:
-        return tuple(shape)
     return tuple(max(int(round(n / feature_scale)), 2) for n in shape)
 
 
@@ -512,7 +510,7 @@ def _crevice(rng, style) -> _Crevice | None:
     """
     if style.crevice_share <= 0 or rng.random() >= style.crevice_share:
         return None
-    k = style.feature_scale
+    k = _feature_scale(style)
     width = k * rng.uniform(*style.crevice_width_px)
     return _Crevice(width, rng.uniform(*style.crevice_depth),
                     max(width * rng.uniform(*style.crevice_blur), k * 0.6))
@@ -701,15 +699,16 @@ def half_cast_axes(face: SyntheticFace) -> list[np.ndarray]:
 
 def minor_crack_mask(face: SyntheticFace, *, margin_px: float | None = None) -> np.ndarray:
     """Pixels of a field face within ``margin_px`` (default 2 px times the style's feature scale)
-    of a minor crack's drawn stroke (bool), redrawn from the face's seed and style. Minor cracks are not labelled; training can leave these pixels
-    out of its negatives, so that a thin dark line is not taught to be "not a joint" (its length,
-    which tells a minor crack from a joint, is judged per trace, not per pixel)."""
+    of a minor crack's drawn stroke (bool), redrawn from the face's seed and style. Minor cracks
+    are not labelled; training can leave these pixels out of its negatives, so that a thin dark
+    line is not taught to be "not a joint" (its length, which tells a minor crack from a joint, is
+    judged per trace, not per pixel)."""
     import cv2
 
     h, w = face.image.shape
     area = _area_factor((h, w), face.style)
     if margin_px is None:
-        margin_px = 2.0 * face.style.feature_scale
+        margin_px = 2.0 * _feature_scale(face.style)
     mark = np.zeros((h, w), dtype=np.float32)
     for crack, width, _ in _minor_cracks(_streams(face.seed)[3], (h, w), face.style, area):
         _draw(mark, crack, 1.0, width)
