@@ -109,8 +109,21 @@ def _section_histories(run: _Run) -> str:
     fig, axes = plt.subplots(panels, 1, figsize=(7.5, 2.6 * panels + 0.6), sharex=True, squeeze=False)
     t = h["time_s"]
     ax = axes[0, 0]
+    try:
+        mons = run.json("solve", "result.json").get("monitors") or {}
+    except _Note as exc:
+        mons, missing = {}, exc
+    else:
+        missing = None
     for m in monitors:
-        ax.plot(t, [1e3 * math.hypot(x, y) for x, y in zip(h[f"{m}_ux_m"], h[f"{m}_uy_m"])], label=m)
+        u = [1e3 * math.hypot(x, y) for x, y in zip(h[f"{m}_ux_m"], h[f"{m}_uy_m"])]
+        failed = (mons.get(m) or {}).get("failed")
+        if failed is None:
+            ax.plot(t, u, label=m)
+            continue
+        end = _removal_row(h, m, failed["stage"])
+        line, = ax.plot(t[:end + 1], u[:end + 1], label=f"{m} (failed: {failed['mechanism']}, taken out)")
+        ax.plot([t[end]], [u[end]], "x", color=line.get_color())
     ax.set_ylabel("displacement (mm)")
     if monitors:
         ax.legend(frameon=False, fontsize=8)
@@ -132,16 +145,29 @@ def _section_histories(run: _Run) -> str:
     plt.close(fig)
     parts = [figure("Monitored blocks: displacement magnitude over time"
                     + (", and the unbalanced-force ratio" if panels == 2 else "")
-                    + "; dashed lines: stage boundaries", src)]
-    try:
-        mons = run.json("solve", "result.json").get("monitors") or {}
-        rows = [[name, fmt(m.get("block")), fmt(m.get("final_ux_m")), fmt(m.get("final_uy_m")),
-                 fmt(m.get("final_displacement_m")), fmt(m.get("max_contact_plastic_slip_m"))]
-                for name, m in mons.items()]
-        if rows:
-            parts.append(table(["monitor", "block", "final ux (m)", "final uy (m)", "final |u| (m)",
-                                "max plastic slip on its contacts (m)"], rows, "t-monitors"))
-    except _Note as exc:
-        parts.append(note(f"{exc}."))
+                    + "; dashed lines: stage boundaries; a monitor whose block failed ends with a "
+                    "cross where the block was taken out (a fall is not a displacement)", src)]
+    if missing is not None:
+        parts.append(note(f"{missing}."))
+        return "".join(parts)
+    rows = [[name, fmt(m.get("block")), fmt(m.get("final_ux_m")), fmt(m.get("final_uy_m")),
+             fmt(m.get("final_displacement_m")) if "failed" not in m else
+             f"failed in stage {m['failed']['stage']} ({m['failed']['mechanism']}): no displacement",
+             fmt(m.get("max_contact_plastic_slip_m"))]
+            for name, m in mons.items()]
+    if rows:
+        parts.append(table(["monitor", "block", "final ux (m)", "final uy (m)", "final |u| (m)",
+                            "max plastic slip on its contacts (m)"], rows, "t-monitors"))
     return "".join(parts)
+
+
+def _removal_row(history: dict, monitor: str, stage: str) -> int:
+    """The last history row of a failed monitor's block before it was taken out: the first row of
+    ``stage`` from which its recorded position no longer changes (a block taken out is frozen)."""
+    ux, uy, stages = history[f"{monitor}_ux_m"], history[f"{monitor}_uy_m"], history["stage"]
+    rows = [i for i, s in enumerate(stages) if s == stage]
+    if not rows:
+        return len(ux) - 1
+    last = (ux[rows[-1]], uy[rows[-1]])
+    return next(i for i in rows if (ux[i], uy[i]) == last)
 

@@ -71,7 +71,12 @@ def _summary_line(result, doc) -> str:
             text += ", " + ", ".join(f"{k} {v * 1e3:.3g} mm" for k, v in s.monitors.items())
         parts.append(text)
     for name, m in doc["monitors"].items():
-        if "final_ux_m" in m:
+        if "failed" in m:
+            f = m["failed"]
+            parts.append(f"monitor {name} (block {m['block']}): failed in stage {f['stage']} "
+                         f"({f['mechanism']}, taken out after {f['displacement_at_removal_m']:.3g} m): "
+                         f"no displacement")
+        elif "final_ux_m" in m:
             parts.append(f"monitor {name} (block {m['block']}): u = ({m['final_ux_m']:.4g}, "
                          f"{m['final_uy_m']:.4g}) m")
     return "; ".join(parts)

@@ -106,7 +106,13 @@ def solve(model, settings, config_path, progress=None):
 
 
 def _monitor_summary(result, model, settings) -> dict:
-    """Per monitor: its block, and displacement at the end of each stage and its change."""
+    """Per monitor: its block, and displacement at the end of each stage and its change.
+
+    A monitor whose block failed (kept moving in a static stage and was taken out,
+    :class:`rockmass.solver.failure.FailedBlock`) has no displacement from that stage on: a fall
+    is not a displacement of the rock mass. Its entry says so (``failed``: the stage, the
+    mechanism and how far the block had moved when it was taken out) and has no ``final_*``
+    values; the stages before keep theirs."""
     import numpy as np
 
     from .solver.selectors import block_at_point
@@ -120,12 +126,17 @@ def _monitor_summary(result, model, settings) -> dict:
             block = m.block if m.block is not None else block_at_point(model, m.point_xy_m)
         entry = {"block": int(block), "region": int(model.region[block]),
                  "centroid_xy_m": [float(v) for v in model.centroid_xy_m[block]], "stages": []}
+        failure = _failure_of(result, int(block))
+        if failure is not None:
+            entry["failed"] = failure
         ux_all = hist.get(f"{m.name}_ux_m")
         if ux_all is not None and len(ux_all):
             uy_all = hist[f"{m.name}_uy_m"]
             stages = np.asarray(hist["stage"])
             prev = (0.0, 0.0)
             for s in result.stages:
+                if failure is not None and s.name == failure["stage"]:
+                    break
                 rows = np.flatnonzero(stages == s.name)
                 if not len(rows):
                     continue
@@ -137,7 +148,7 @@ def _monitor_summary(result, model, settings) -> dict:
                     "change_ux_m": ux - prev[0], "change_uy_m": uy - prev[1],
                     "change_m": float(np.hypot(ux - prev[0], uy - prev[1]))})
                 prev = (ux, uy)
-            final = entry["stages"][-1] if entry["stages"] else None
+            final = entry["stages"][-1] if entry["stages"] and failure is None else None
             if final is not None:
                 entry["final_ux_m"], entry["final_uy_m"] = final["ux_m"], final["uy_m"]
                 entry["final_displacement_m"] = final["displacement_m"]
@@ -149,6 +160,16 @@ def _monitor_summary(result, model, settings) -> dict:
             entry["max_contact_plastic_slip_m"] = float(slip.max(initial=0.0))
         out[m.name] = entry
     return out
+
+
+def _failure_of(result, block: int) -> dict | None:
+    """Where ``block`` failed: the stage, mechanism and displacement when it was taken out, or None."""
+    for stage in result.stages:
+        for failed in stage.failed_blocks:
+            if int(failed["block"]) == block:
+                return {"stage": stage.name, "mechanism": failed["mechanism"],
+                        "displacement_at_removal_m": float(failed["displacement_m"])}
+    return None
 
 
 

@@ -52,6 +52,41 @@ def test_a_falling_block_among_loaded_ones_is_named_not_converged():
     assert st.worst_ratio < Stage("x").block_tolerance
 
 
+
+def test_a_monitor_on_a_failed_block_reports_the_failure_not_a_displacement():
+    """``rockmass solve`` summarises each monitor (result.json, the CLI line, the report): a
+    monitor whose block fell says so and gives no final displacement (before session 24 it gave
+    the fallen block's drop as ``final_displacement_m``); a monitor on a block that stays keeps its
+    displacement. The report's history plot ends the fallen block's curve where it was taken out
+    (a removed block's recorded position no longer changes)."""
+    from rockmass.report_solve import _removal_row
+    from rockmass.solve_cmd import _summary_line
+    from rockmass.solve_stage import _monitor_summary
+
+    settings = Settings(joints={"default": Coulomb(KN, KN, 40.0)}, material=Material(RHO),
+                        fixes=(Fix("blocks:0"), Fix("blocks:1,2,3,4", "xr")),
+                        insitu=InSituStress(syy_pa=15e6),
+                        boundary_stress=(BoundaryStress(("top",), from_insitu=True),),
+                        monitors=(Monitor("loose", block=5), Monitor("top", block=4)),
+                        stages=(Stage("settle", max_steps=20_000),))
+    model = _loaded_column_with_a_loose_block()
+    result = run(model, settings)
+    summary = _monitor_summary(result, model, settings)
+    loose, top = summary["loose"], summary["top"]
+    fell = result.stages[0].failed_blocks[0]
+    assert loose["failed"] == {"stage": "settle", "mechanism": "fall",
+                               "displacement_at_removal_m": fell["displacement_m"]}
+    assert "final_displacement_m" not in loose and loose["stages"] == []
+    assert "failed" not in top and top["final_displacement_m"] < 1e-3
+    line = _summary_line(result, {"monitors": summary})
+    assert "monitor loose (block 5): failed in stage settle (fall" in line and "no displacement" in line
+    history = {k: list(np.asarray(v)) for k, v in result.history.items()}
+    end = _removal_row(history, "loose", "settle")
+    drop = np.hypot(history["loose_ux_m"][end], history["loose_uy_m"][end])
+    assert 0 < end < len(history["stage"]) - 1           # taken out before the stage ended
+    assert drop == pytest.approx(fell["displacement_m"], rel=0.05)
+    assert np.hypot(history["loose_ux_m"][end - 1], history["loose_uy_m"][end - 1]) < drop
+
 def test_converged_means_every_block_and_its_moment():
     """A converged stage reports its worst block's own ratio below the block tolerance, and a
     tighter block tolerance takes more steps to reach (the criterion is applied, not just
