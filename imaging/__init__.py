@@ -31,8 +31,8 @@ from .ridges import ridge_response, ridge_sigmas
 from .segment import hysteresis_mask, robust_thresholds, roi_mask, segment_ridges
 from .skeleton_graph import (SkeletonGraph, bridge_gaps, build_graph, chain_traces, prune_spurs,
                              repair_crossings, skeletonize)
-from .synthetic import (DIFFICULTIES, FaceStyle, JointSetSpec, SyntheticFace, save_synthetic_face,
-                        synthetic_face, synthetic_network)
+from .synthetic import (DIFFICULTIES, FaceStyle, JointSetSpec, SyntheticFace, joints_on_photo,
+                        save_synthetic_face, synthetic_face, synthetic_network)
 from .synthetic_field import FieldStyle, field_face
 from .vectorize import axial_angle_deg, simplify_polylines, to_trace_map
 
@@ -49,6 +49,6 @@ __all__ = [
     "trace_accuracy", "Accuracy", "buffered_match", "raster_match", "render_traces", "count_nodes",
     "set_mean_angles",
     "rc_to_uv", "uv_to_rc",
-    "DIFFICULTIES", "FaceStyle", "JointSetSpec", "SyntheticFace", "synthetic_face",
+    "DIFFICULTIES", "FaceStyle", "JointSetSpec", "SyntheticFace", "synthetic_face", "joints_on_photo",
     "synthetic_network", "save_synthetic_face", "FieldStyle", "field_face",
 ]

@@ -261,7 +261,8 @@ def _near(mask, reference, tolerance_px) -> np.ndarray:
 
 
 def _sample(trace_map, height_px, m_per_px, step_px=0.5):
-    """Points every ``step_px`` along all traces (pixel rc) and the length (px) each stands for."""
+    """Points every ``step_px`` along all traces (pixel rc), the length (px) each stands for and the
+    segment (row of ``trace_map.segments()``) each lies on."""
     seg = trace_map.segments()
     a = uv_to_rc(seg[:, :2], height_px, m_per_px)
     b = uv_to_rc(seg[:, 2:], height_px, m_per_px)
@@ -270,11 +271,18 @@ def _sample(trace_map, height_px, m_per_px, step_px=0.5):
     index = np.repeat(np.arange(seg.shape[0]), n)
     t = (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n) + 0.5) / np.repeat(n, n)
     points = a[index] + t[:, None] * (b - a)[index]
-    return points, (length / n)[index]
+    return points, (length / n)[index], index
+
+
+def _pixel_of(points, shape_px):
+    """The (row, col) pixel each point falls in, clipped to the grid."""
+    h, w = shape_px
+    return (np.clip(np.round(points[:, 0]).astype(np.int64), 0, h - 1),
+            np.clip(np.round(points[:, 1]).astype(np.int64), 0, w - 1))
 
 
 def buffered_match(extracted, truth, *, m_per_px: float, buffer_px: float = 3.0,
-                   shape_px=None) -> tuple[float, float, float]:
+                   shape_px=None, ignore=None) -> tuple[float, float, float]:
     r"""Buffered trace precision, recall and F1.
 
     Parameters
@@ -286,13 +294,19 @@ def buffered_match(extracted, truth, *, m_per_px: float, buffer_px: float = 3.0,
     buffer_px : float, default 3.0
         Buffer half-width k, pixels.
     shape_px : (rows, cols), optional
-        The image; default the truth window's (or the traces') bounding box from the origin.
+        The image; default the truth window's (or the traces') bounding box from the origin, or
+        ``ignore``'s shape when given.
+    ignore : (rows, cols) bool array_like, optional
+        Pixels where neither map is scored (e.g. fractures a photograph shows that the truth does
+        not hold): the length of either map over them counts neither as matched nor as drawn.
+        Both maps are still whole when distances are measured.
 
     Returns
     -------
     (precision, recall, f1) : tuple of float
         precision = extracted length within k px of a true trace / extracted length; recall = true
-        length within k px of an extracted trace / true length; F1 their harmonic mean.
+        length within k px of an extracted trace / true length (lengths outside ``ignore``); F1
+        their harmonic mean.
 
     Notes
     -----
@@ -300,6 +314,10 @@ def buffered_match(extracted, truth, *, m_per_px: float, buffer_px: float = 3.0,
     every half pixel along the other map; the raster adds at most about half a pixel to a distance.
     """
     scale = check_scale(m_per_px)
+    if ignore is not None:
+        ignore = np.asarray(ignore, dtype=bool)
+        if shape_px is None:
+            shape_px = ignore.shape
     if shape_px is None:
         maps = [m for m in (truth, extracted) if m.n_traces]
         corners = [truth.window_xy_m] if truth.window_xy_m is not None else []
@@ -307,17 +325,22 @@ def buffered_match(extracted, truth, *, m_per_px: float, buffer_px: float = 3.0,
         top = np.vstack(corners).max(axis=0) if corners else np.ones(2) * scale
         shape_px = (int(np.ceil(top[1] / scale)) + 1, int(np.ceil(top[0] / scale)) + 1)
     h, w = (int(v) for v in shape_px)
+    if ignore is not None and ignore.shape != (h, w):
+        raise ValueError(f"ignore must be a mask of the image's shape {(h, w)}, got {ignore.shape}")
 
     def matched_fraction(a, b):
         if a.n_traces == 0:
             return float("nan")
+        points, weight, _ = _sample(a, h, scale)
+        r, c = _pixel_of(points, (h, w))
+        if ignore is not None:
+            kept = ~ignore[r, c]
+            r, c, weight = r[kept], c[kept], weight[kept]
+        if not weight.sum() > 0:
+            return float("nan")
         if b.n_traces == 0:
             return 0.0
-        distance = _render_distance(b, (h, w), scale)
-        points, weight = _sample(a, h, scale)
-        r = np.clip(np.round(points[:, 0]).astype(np.int64), 0, h - 1)
-        c = np.clip(np.round(points[:, 1]).astype(np.int64), 0, w - 1)
-        inside = distance[r, c] <= buffer_px
+        inside = _render_distance(b, (h, w), scale)[r, c] <= buffer_px
         return float(weight[inside].sum() / weight.sum())
 
     precision = matched_fraction(extracted, truth)
@@ -435,10 +458,24 @@ def _window_area(truth, extracted) -> float:
     raise ValueError("truth has no window: P21 and P20 need the sampling window's area")
 
 
+def _scored_part(trace_map, ignore, m_per_px):
+    """The traces of ``trace_map`` with at least half their length outside the ``ignore`` mask, and
+    the length of the whole map outside it (metres)."""
+    if trace_map.n_traces == 0:
+        return trace_map, 0.0
+    points, weight, segment = _sample(trace_map, ignore.shape[0], m_per_px)
+    outside = np.where(ignore[_pixel_of(points, ignore.shape)], 0.0, weight)
+    trace_of_point = trace_map.segment_trace_index()[segment]
+    n = trace_map.n_traces
+    share = (np.bincount(trace_of_point, outside, minlength=n)
+             / np.maximum(np.bincount(trace_of_point, weight, minlength=n), 1e-300))
+    return trace_map.subset(share >= 0.5), float(outside.sum()) * m_per_px
+
+
 def trace_accuracy(extracted, truth, *, m_per_px: float, buffer_px: float = 3.0,
                    n_sets: int | None = None, snap_px: float = 3.0, shape_px=None,
                    d_box_true: float | None = None,
-                   d_box_extracted: float | None = None) -> Accuracy:
+                   d_box_extracted: float | None = None, ignore=None) -> Accuracy:
     """Accuracy of extracted traces against ground truth.
 
     Parameters
@@ -459,6 +496,10 @@ def trace_accuracy(extracted, truth, *, m_per_px: float, buffer_px: float = 3.0,
     d_box_true, d_box_extracted : float, optional
         Box-counting dimensions of the two maps, measured by the caller on the same grid and
         window (:func:`rockmass.accuracy.trace_accuracy` does); default None: not measured (NaN).
+    ignore : (rows, cols) bool array_like, optional
+        Pixels of the image where neither map is scored (see :func:`buffered_match`); the
+        image's shape. The P21 of each map is then its length outside them, and the trace counts,
+        set angles and nodes are those of the traces with at least half their length outside.
 
     Returns
     -------
@@ -467,17 +508,26 @@ def trace_accuracy(extracted, truth, *, m_per_px: float, buffer_px: float = 3.0,
     Notes
     -----
     P21 = Σ length / window area and P20 = number of traces / window area, both maps over the
-    truth's window. Extracted sets are matched to true ones by the assignment that minimises
-    the summed axial angle differences (Hungarian method).
+    truth's window (the window less the ignored share of the image, with ``ignore``). Extracted
+    sets are matched to true ones by the assignment that minimises the summed axial angle
+    differences (Hungarian method).
     """
     from scipy.optimize import linear_sum_assignment
 
     scale = check_scale(m_per_px)
     precision, recall, f1 = buffered_match(extracted, truth, m_per_px=scale, buffer_px=buffer_px,
-                                           shape_px=shape_px)
+                                           shape_px=shape_px, ignore=ignore)
     area = _window_area(truth, extracted)
-    p21_true = truth.total_length_m() / area
-    p21_ext = extracted.total_length_m() / area
+    if ignore is None:
+        p21_true, p21_ext = truth.total_length_m() / area, extracted.total_length_m() / area
+    else:
+        ignore = np.asarray(ignore, dtype=bool)
+        if ignore.all():
+            raise ValueError("ignore covers the whole image: nothing is left to score")
+        area *= 1.0 - float(ignore.mean())
+        (truth, true_length), (extracted, ext_length) = (
+            _scored_part(m, ignore, scale) for m in (truth, extracted))
+        p21_true, p21_ext = true_length / area, ext_length / area
     p20_true, p20_ext = truth.n_traces / area, extracted.n_traces / area
     if "set" in truth.attributes and n_sets is None:
         true_sets = _labelled_set_means(truth, np.asarray(truth.attributes["set"]))

@@ -22,7 +22,7 @@ import numpy as np
 from .frame import check_scale, uv_to_rc
 
 __all__ = ["JointSetSpec", "FaceStyle", "DIFFICULTIES", "DEFAULT_SETS", "SyntheticFace",
-           "synthetic_network", "synthetic_face", "in_flat_light", "save_synthetic_face"]
+           "synthetic_network", "synthetic_face", "joints_on_photo", "in_flat_light", "save_synthetic_face"]
 
 
 @dataclass(frozen=True)
@@ -229,9 +229,32 @@ def _lighting(rng, shape, amount, n_shadows):
     return gain
 
 
+def _joint_darkness(polylines, shape, m_per_px, style, rng):
+    """Where the joints darken the face: 0-1 per pixel (anti-aliased lines of ``style.width_px``,
+    a share ``style.gap_fraction`` of them with a hidden stretch), and each joint's width (px)."""
+    import cv2
+
+    h, w = shape
+    darkness = np.zeros((h, w), dtype=np.float32)
+    widths = rng.integers(style.width_px[0], style.width_px[1] + 1, size=len(polylines))
+    gaps = rng.random(len(polylines)) < style.gap_fraction
+    for poly, width, gap in zip(polylines, widths, gaps):
+        rc = uv_to_rc(poly, h, m_per_px)
+        xy = np.round(rc[:, ::-1] * 16).astype(np.int32)  # cv2 wants (x=col, y=row), 4-bit subpixel
+        cv2.polylines(darkness, [xy], False, 1.0, thickness=int(width), lineType=cv2.LINE_AA, shift=4)
+        if gap:  # hide a stretch of 5-15 % of the trace around a random point
+            t = rng.uniform(0.2, 0.8)
+            length = np.hypot(*np.diff(poly, axis=0).T).sum()
+            centre = poly[0] + t * (poly[-1] - poly[0])
+            radius_px = 0.5 * rng.uniform(0.05, 0.15) * length / m_per_px
+            c_rc = uv_to_rc(centre[None, :], h, m_per_px)[0]
+            cv2.circle(darkness, (int(c_rc[1]), int(c_rc[0])), max(int(radius_px), 2), 0.0, -1)
+    return darkness, widths
+
+
 def synthetic_face(difficulty: str = "moderate", *, seed: int = 0, shape_px=(1000, 1500),
-                   m_per_px: float = 0.008, sets=DEFAULT_SETS, style: FaceStyle | None = None
-                   ) -> SyntheticFace:
+                   m_per_px: float = 0.008, sets=DEFAULT_SETS, style: FaceStyle | None = None,
+                   traces=None) -> SyntheticFace:
     """Render a synthetic face photograph and its ground-truth traces.
 
     Parameters
@@ -247,6 +270,11 @@ def synthetic_face(difficulty: str = "moderate", *, seed: int = 0, shape_px=(100
     sets : sequence of JointSetSpec, default DEFAULT_SETS
     style : FaceStyle, optional
         Overrides the difficulty's style.
+    traces : TraceMap, optional
+        The traces to draw, in metres on the face frame (u right, v up from the image's bottom-left
+        corner), e.g. a 3D network's section (:func:`rockmass.dfn.sample_plane`); its ``set``
+        attribute is kept (default 1). Default: a network drawn from ``sets``
+        (:func:`synthetic_network`). The rendering is that of the seed either way.
 
     Returns
     -------
@@ -266,36 +294,101 @@ def synthetic_face(difficulty: str = "moderate", *, seed: int = 0, shape_px=(100
     network_rng, render_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
     window = np.array([[0.0, 0.0], [w * m_per_px, 0.0], [w * m_per_px, h * m_per_px],
                        [0.0, h * m_per_px]])
-    polylines, set_ids = synthetic_network(window, sets, rng=network_rng)
+    if traces is None:
+        polylines, set_ids = synthetic_network(window, sets, rng=network_rng)
+    else:
+        polylines = [np.asarray(traces.polyline(i), dtype=np.float64) for i in range(traces.n_traces)]
+        set_ids = np.asarray(traces.attributes.get("set", np.ones(traces.n_traces)), dtype=np.int64)
 
     rock = _rock_texture(render_rng, (h, w), style.texture)
-    darkness = np.zeros((h, w), dtype=np.float32)
-    widths = render_rng.integers(style.width_px[0], style.width_px[1] + 1, size=len(polylines))
-    gaps = render_rng.random(len(polylines)) < style.gap_fraction
-    for poly, width, gap in zip(polylines, widths, gaps):
-        rc = uv_to_rc(poly, h, m_per_px)
-        xy = np.round(rc[:, ::-1] * 16).astype(np.int32)  # cv2 wants (x=col, y=row), 4-bit subpixel
-        cv2.polylines(darkness, [xy], False, 1.0, thickness=int(width), lineType=cv2.LINE_AA, shift=4)
-        if gap:  # hide a stretch of 5-15 % of the trace around a random point
-            t = render_rng.uniform(0.2, 0.8)
-            length = np.hypot(*np.diff(poly, axis=0).T).sum()
-            centre = poly[0] + t * (poly[-1] - poly[0])
-            radius_px = 0.5 * render_rng.uniform(0.05, 0.15) * length / m_per_px
-            c_rc = uv_to_rc(centre[None, :], h, m_per_px)[0]
-            cv2.circle(darkness, (int(c_rc[1]), int(c_rc[0])), max(int(radius_px), 2), 0.0, -1)
+    darkness, widths = _joint_darkness(polylines, (h, w), m_per_px, style, render_rng)
     image = rock * _lighting(render_rng, (h, w), style.lighting, style.shadows)
     image -= style.contrast * np.clip(darkness, 0.0, 1.0) * (image / 150.0)
     image += style.noise * render_rng.standard_normal((h, w)).astype(np.float32)
     if style.blur_px > 0:
         image = cv2.GaussianBlur(image, (0, 0), style.blur_px)
-    image = np.clip(np.round(image), 0, 255).astype(np.uint8)
-    ok, encoded = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, int(style.jpeg_quality)])
-    image = cv2.imdecode(encoded, cv2.IMREAD_GRAYSCALE)
     truth = TraceMap.from_polylines(
         polylines, attributes={"set": set_ids, "width_px": widths.astype(np.int64)},
         window=window, frame="face")
-    return SyntheticFace(image=image, truth=truth, m_per_px=m_per_px, difficulty=difficulty,
-                         seed=int(seed), style=replace(style))
+    return SyntheticFace(image=_as_jpeg(image, style.jpeg_quality), truth=truth, m_per_px=m_per_px,
+                         difficulty=difficulty, seed=int(seed), style=replace(style))
+
+
+def _as_jpeg(image, quality: int) -> np.ndarray:
+    """A float grey image rounded to 8 bits and passed through JPEG at ``quality`` (uint8)."""
+    import cv2
+
+    image = np.clip(np.round(image), 0, 255).astype(np.uint8)
+    ok, encoded = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, int(quality)])
+    return cv2.imdecode(encoded, cv2.IMREAD_GRAYSCALE)
+
+
+def joints_on_photo(photo, difficulty: str = "moderate", *, seed: int = 0, m_per_px: float = 0.008,
+                    sets=DEFAULT_SETS, style: FaceStyle | None = None) -> SyntheticFace:
+    r"""Joints of known position drawn on a real photograph: the rock is real, the truth exact.
+
+    The faces of :func:`synthetic_face` put the joints on a rock texture the same module draws, so a
+    detector tuned on them may have learnt the texture. Here the network of :func:`synthetic_network`
+    (window: the photo's rectangle at ``m_per_px``) is drawn onto a photograph of rock as
+    :func:`synthetic_face` draws it onto its own rock: anti-aliased lines of the style's widths,
+    some with a hidden stretch, each darkening the photo by the same share of its local grey level,
+
+    .. math:: I' = I\,(1 - c\,d / 150),
+
+    with :math:`c` the style's ``contrast`` (grey levels at the synthetic rock's mid-grey, 150) and
+    :math:`d \in [0, 1]` the line's coverage of the pixel, blurred by the style's ``blur_px``. The
+    photo keeps its own light, noise and sharpness (the style's lighting, shadows, noise and texture
+    are not applied); the result passes through JPEG at the style's quality. Fractures the photo
+    already shows are not in the truth: score with them masked out (the benchmark
+    ``benchmarks/bench_texture_faces.py`` does).
+
+    Parameters
+    ----------
+    photo : (H, W) or (H, W, 3) uint8 array_like
+        The rock, grey or RGB (converted to grey as :func:`rockmass.imaging.enhance.to_grey`).
+    difficulty, seed, m_per_px, sets, style
+        As :func:`synthetic_face`; ``seed`` draws the network and the rendering.
+
+    Returns
+    -------
+    SyntheticFace
+        ``image`` the photo's shape, grey uint8; ``truth`` the drawn centre lines in metres.
+
+    Examples
+    --------
+    >>> rock = np.full((64, 96), 120, dtype=np.uint8)
+    >>> face = joints_on_photo(rock, seed=3, m_per_px=0.05)
+    >>> face.image.shape, float(face.image.mean()) < 119.5, face.truth.n_traces > 0
+    ((64, 96), True, True)
+    """
+    import cv2
+
+    from ..dfn import TraceMap
+    from .enhance import to_grey
+
+    if difficulty not in DIFFICULTIES:
+        raise ValueError(f"difficulty must be one of {', '.join(DIFFICULTIES)}, got {difficulty!r}")
+    style = style or DIFFICULTIES[difficulty]
+    m_per_px = check_scale(m_per_px)
+    photo = np.asarray(photo)
+    if photo.dtype != np.uint8 or photo.ndim not in (2, 3) or min(photo.shape[:2]) < 16:
+        raise ValueError("photo must be a grey or RGB uint8 image of at least 16 x 16 pixels, got "
+                         f"{photo.dtype} of shape {photo.shape}")
+    grey = 255.0 * to_grey(photo, name="photo")
+    h, w = grey.shape
+    network_rng, render_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
+    window = np.array([[0.0, 0.0], [w * m_per_px, 0.0], [w * m_per_px, h * m_per_px],
+                       [0.0, h * m_per_px]])
+    polylines, set_ids = synthetic_network(window, sets, rng=network_rng)
+    darkness, widths = _joint_darkness(polylines, (h, w), m_per_px, style, render_rng)
+    if style.blur_px > 0:
+        darkness = cv2.GaussianBlur(darkness, (0, 0), style.blur_px)
+    image = grey * (1.0 - style.contrast / 150.0 * np.clip(darkness, 0.0, 1.0))
+    truth = TraceMap.from_polylines(
+        polylines, attributes={"set": set_ids, "width_px": widths.astype(np.int64)},
+        window=window, frame="face")
+    return SyntheticFace(image=_as_jpeg(image, style.jpeg_quality), truth=truth, m_per_px=m_per_px,
+                         difficulty=difficulty, seed=int(seed), style=replace(style))
 
 
 def in_flat_light(face: SyntheticFace, factor: float) -> SyntheticFace:

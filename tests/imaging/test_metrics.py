@@ -118,3 +118,55 @@ def test_pixels_within_refuses_a_tolerance_that_is_no_distance(tolerance):
         pixels_within(a, a, tolerance)
     with pytest.raises(ValueError, match="mask and reference must be 2-D masks of one shape"):
         pixels_within(a, np.ones((4, 5), bool), 1.0)
+
+
+def _band_around(v_m, shape=(200, 200), m_per_px=0.05, half_px=10):
+    """An ignore mask: the rows within ``half_px`` of the horizontal line v = ``v_m``."""
+    from rockmass.imaging.frame import uv_to_rc
+
+    row = uv_to_rc(np.array([[0.0, v_m]]), shape[0], m_per_px)[0, 0]
+    mask = np.zeros(shape, dtype=bool)
+    mask[int(round(row)) - half_px:int(round(row)) + half_px + 1] = True
+    return mask
+
+
+def test_ignored_pixels_count_neither_as_drawn_nor_as_missed():
+    # truth A (v = 2) and B (v = 8); drawn A and a false line C (v = 5): P = R = 1/2 scored whole
+    truth = TraceMap.from_segments([[1, 2, 9, 2], [1, 8, 9, 8]], window=WINDOW)
+    drawn = TraceMap.from_segments([[1, 2, 9, 2], [1, 5, 9, 5]], window=WINDOW)
+    p, r, _ = buffered_match(drawn, truth, m_per_px=0.05, shape_px=(200, 200))
+    assert p == pytest.approx(0.5, abs=0.01) and r == pytest.approx(0.5, abs=0.01)
+    ignore = _band_around(8.0) | _band_around(5.0)          # B missed and C drawn, both ignored
+    assert buffered_match(drawn, truth, m_per_px=0.05, ignore=ignore) == pytest.approx((1, 1, 1))
+    only_b = _band_around(8.0)                              # C is scored: precision 1/2, recall 1
+    p, r, _ = buffered_match(drawn, truth, m_per_px=0.05, ignore=only_b)
+    assert p == pytest.approx(0.5, abs=0.01) and r == pytest.approx(1.0)
+
+
+def test_trace_accuracy_outside_the_ignored_pixels():
+    from rockmass.imaging.metrics import trace_accuracy as imaging_accuracy
+
+    truth = TraceMap.from_segments([[1, 2, 9, 2], [1, 8, 9, 8], [5, 1, 5, 9]], {"set": [1, 1, 2]},
+                                   window=WINDOW)
+    # half of the vertical trace drawn, the whole of A, a false 8 m line on the ignored band
+    drawn = TraceMap.from_segments([[1, 2, 9, 2], [5, 1, 5, 5], [1, 8.1, 9, 8.1]], window=WINDOW)
+    ignore = _band_around(8.0)
+    acc = imaging_accuracy(drawn, truth, m_per_px=0.05, ignore=ignore)
+    # lengths outside the band: truth 8 + 8 - 21 px of the vertical one; drawn 8 + 4 (m)
+    outside_true = 16.0 - 21 * 0.05
+    assert acc.p21_rel_error == pytest.approx(12.0 / outside_true - 1.0, abs=0.01)
+    assert acc.p20_rel_error == pytest.approx(0.0)          # 2 traces scored on either side
+    assert acc.precision == pytest.approx(1.0)
+    assert max(acc.set_angle_errors_deg) == pytest.approx(0.0, abs=1e-6)
+    whole = imaging_accuracy(drawn, truth, m_per_px=0.05, shape_px=(200, 200))
+    assert whole.p21_rel_error == pytest.approx(20.0 / 24.0 - 1.0, abs=1e-9)
+
+
+def test_an_ignore_mask_of_another_shape_or_covering_everything_is_refused():
+    from rockmass.imaging.metrics import trace_accuracy as imaging_accuracy
+
+    truth = TraceMap.from_segments([[1, 2, 9, 2]], window=WINDOW)
+    with pytest.raises(ValueError, match="shape"):
+        buffered_match(truth, truth, m_per_px=0.05, shape_px=(200, 200), ignore=np.zeros((10, 10), bool))
+    with pytest.raises(ValueError, match="whole image"):
+        imaging_accuracy(truth, truth, m_per_px=0.05, ignore=np.ones((200, 200), bool))

@@ -86,3 +86,61 @@ def test_saved_face_reads_back(tmp_path):
 def test_bad_arguments_name_the_field(kwargs, field):
     with pytest.raises(ValueError, match=field):
         synthetic_face(**{"difficulty": "easy", **kwargs})
+
+
+def _photo(shape=(300, 450), seed=11):
+    """A stand-in rock photograph: smooth blotches and grain around grey 110 (RGB, uint8)."""
+    import cv2
+
+    rng = np.random.default_rng(seed)
+    grey = 110 + 25 * cv2.GaussianBlur(rng.standard_normal(shape), (0, 0), 6) * 6 \
+        + 6 * rng.standard_normal(shape)
+    grey = np.clip(grey, 20, 235).astype(np.uint8)
+    return np.dstack([grey] * 3)
+
+
+def test_joints_on_a_photo_are_the_synthetic_face_network_and_leave_the_rest_of_the_photo():
+    from rockmass.imaging import joints_on_photo
+    from rockmass.imaging.metrics import render_traces
+
+    photo = _photo()
+    face = joints_on_photo(photo, seed=5, m_per_px=0.02)
+    plain = synthetic_face("moderate", seed=5, **SMALL)
+    assert np.array_equal(face.truth.xy_m, plain.truth.xy_m)       # the same network, seed for seed
+    again = joints_on_photo(photo, seed=5, m_per_px=0.02)
+    assert np.array_equal(face.image, again.image)
+    import cv2
+
+    lines = render_traces(face.truth, photo.shape[:2], 0.02)
+    far = cv2.distanceTransform(np.where(lines, 0, 255).astype(np.uint8), cv2.DIST_L2, 5) > 12
+    difference = face.image[far].astype(float) - photo[..., 0][far]
+    assert abs(difference.mean()) < 1.0 and np.abs(difference).mean() < 4.0  # JPEG only
+    # on the centre lines of the wide joints (lines overlap without adding: darkness is at most 1,
+    # and hidden stretches are a minority), darker by the style's contrast / 150 of the photo's grey
+    wide = face.truth.subset(np.asarray(face.truth.attributes["width_px"]) >= 4)
+    on = render_traces(wide, photo.shape[:2], 0.02)
+    ratio = np.median(face.image[on] / np.maximum(photo[..., 0][on].astype(float), 1.0))
+    assert ratio == pytest.approx(1.0 - DIFFICULTIES["moderate"].contrast / 150.0, abs=0.05)
+
+
+@pytest.mark.parametrize("photo", [np.zeros((8, 40), np.uint8), np.zeros((40, 40), np.float32),
+                                   np.zeros((40, 40, 2), np.uint8)])
+def test_joints_on_photo_refuses_what_is_not_a_photo(photo):
+    from rockmass.imaging import joints_on_photo
+
+    with pytest.raises(ValueError, match="photo"):
+        joints_on_photo(photo, seed=1, m_per_px=0.02)
+
+
+def test_a_face_drawn_from_given_traces_keeps_them_as_its_truth():
+    from rockmass.dfn import TraceMap
+    from rockmass.imaging.metrics import render_traces
+
+    given = TraceMap.from_segments([[1.0, 1.0, 8.0, 5.0], [2.0, 5.5, 7.0, 0.5]], {"set": [0, 3]})
+    face = synthetic_face("easy", seed=2, traces=given, **SMALL)
+    assert np.array_equal(face.truth.xy_m, given.xy_m)
+    assert np.asarray(face.truth.attributes["set"]).tolist() == [0, 3]
+    on = render_traces(given, face.image.shape, SMALL["m_per_px"])
+    assert np.median(face.image[on]) < np.median(face.image[~on]) - 40   # easy: 80 grey levels darker
+    other = synthetic_face("easy", seed=2, **SMALL)                      # same seed, its own network
+    assert not np.array_equal(other.truth.xy_m, given.xy_m)
