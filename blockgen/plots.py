@@ -61,8 +61,8 @@ def plot_blocks(model: BlockModel, path, title: str | None = None, dpi: int = 15
         ax.set_title(title or f"{model.n_blocks} blocks; contacts {counts}", fontsize=8)
         if len(model.region_names) > 1:
             ax.legend(fontsize=7, loc="upper right")
-        with atomic_path(Path(path)) as tmp:
-            fig.savefig(tmp, dpi=dpi, format="png")
+        with atomic_path(Path(path)) as tmp:  # "tight": a wide, flat domain keeps its axis labels
+            fig.savefig(tmp, dpi=dpi, format="png", bbox_inches="tight")
     finally:
         plt.close(fig)
     return Path(path)

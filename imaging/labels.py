@@ -114,7 +114,12 @@ def labelled_pairs(photos_dir, labels_dir) -> list[tuple[Path, Path]]:
             raise ValueError(f"{labels_dir}: two labels of one name, {labels[path.stem].name} and "
                              f"{path.name}: keep one")
         labels[path.stem] = path
-    pairs = [(p, labels[p.stem]) for p in sorted(_images(photos_dir)) if p.stem in labels]
+    photos = sorted(_images(photos_dir))
+    suffixes = ", ".join(sorted(PHOTO_SUFFIXES))
+    for folder, found, what in ((photos_dir, photos, "photo"), (labels_dir, labels, "label")):
+        if not found:
+            raise FileNotFoundError(f"{folder}: no {what} in the folder (image files: {suffixes})")
+    pairs = [(p, labels[p.stem]) for p in photos if p.stem in labels]
     if not pairs:
         raise FileNotFoundError(f"{photos_dir}: no photo has a label of the same name in {labels_dir}")
     return pairs

@@ -44,6 +44,23 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _refuse_unknown(parser: argparse.ArgumentParser, command: str, extras: list[str]) -> None:
+    """Exit 2 with the subcommand's usage, naming the arguments it does not know and, for a
+    misspelt option, the closest option it has (``--m-per-pix``: did you mean ``--m-per-px``?)."""
+    import difflib
+
+    subcommands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    sub = subcommands.choices[command]
+    options = [o for action in sub._actions for o in action.option_strings]
+    hints = []
+    for extra in extras:
+        name = extra.split("=", 1)[0]
+        close = difflib.get_close_matches(name, options, n=1, cutoff=0.6) if name.startswith("-") else []
+        if close:
+            hints.append(f"{name}: did you mean {close[0]}?")
+    sub.error(f"unrecognized arguments: {' '.join(extras)}" + "".join(f"; {h}" for h in hints))
+
+
 def _error(command: str, kind: str, exc: BaseException) -> None:
     print(f"rockmass {command}: {kind}: {exc}", file=sys.stderr)
 
@@ -85,7 +102,9 @@ def main(argv: list[str] | None = None) -> int:
 
 def _main(argv: list[str] | None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)  # usage errors exit with code 2 by argparse's own rule
+    args, extras = parser.parse_known_args(argv)  # usage errors exit with code 2 (argparse's rule)
+    if extras:
+        _refuse_unknown(parser, args.command, extras)
     args.argv = ["rockmass", *(sys.argv[1:] if argv is None else argv)]  # for manifests
     out = getattr(args, "out", None)
     if out and os.path.lexists(out) and not os.path.isdir(out):  # bad input, found before any work

@@ -49,9 +49,12 @@ def drop_zero_length(trace_map, path):
     indices = where[:MAX_NAMED].tolist()
     ids = trace_map.attributes["id"][where[:MAX_NAMED]].tolist()
     more = f" and {where.size - len(indices)} more" if where.size > len(indices) else ""
+    names = ""
+    if "name" in trace_map.attributes:  # the feature names a user digitised, when the file has them
+        names = f", names {[str(v) for v in trace_map.attributes['name'][where[:MAX_NAMED]]]}{more}"
     text = (f"{path}: dropped {where.size} zero-length trace{'s' if where.size > 1 else ''} "
             f"(every point the same: a digitising slip?) of {trace_map.n_traces}, not counted: "
-            f"traces {indices}{more} (0-based, in the file's order), ids {ids}{more}")
+            f"traces {indices}{more} (0-based, in the file's order), ids {ids}{more}{names}")
     return trace_map.subset(~zero), {"count": int(where.size), "trace_indices": indices,
                                      "ids": ids, "text": text}
 

@@ -40,8 +40,9 @@ def _pairs(args):
 
     try:
         return labelled_pairs(args.photos, args.labels)
-    except (OSError, ValueError) as exc:  # missing, unlistable, labels mixed up
-        text = exc if isinstance(exc, ValueError) else f"cannot list the folders: {exc}"
+    except (OSError, ValueError) as exc:  # missing, empty, unlistable, labels mixed up
+        plain = isinstance(exc, (ValueError, FileNotFoundError))  # the message names the folder
+        text = exc if plain else f"cannot list the folders: {exc}"
         raise InputError(f"--photos / --labels: {text}") from None
 
 

@@ -20,6 +20,11 @@ Parts (:data:`PARTS`; each prints one line with its time):
 - ``boxcount``: :func:`rockmass.fractal.box_count` of the section's traces (raster and vector)
   and of a binary image;
 - ``blocks``: :func:`rockmass.blockgen.build` from joint sets and from the section's traces;
+- ``blocks3d`` (``--all``, since session 24): the network's cube cut into 3D blocks around a
+  tunnel (:func:`rockmass.blockgen.blocks3d.cut_box`), its keyblocks and block shapes: the
+  polyhedron kernels of the ``blocks3d`` command, whose first run otherwise compiles them (about
+  12 CPU-s; the default parts take 20 s of CPU, so a run that never cuts 3D blocks does not pay
+  for them);
 - ``solve``: :func:`rockmass.solver.run` on a jointed square with a tunnel: a static stage, the
   excavation and a short dynamic stage (velocity input, quiet boundary, bolts);
 - ``zones`` (``--all``): the same with its blocks deformable (zone kernels).
@@ -50,7 +55,8 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p = subparsers.add_parser(
         "warmup", help="compile the numba kernels once (after installing), so the first run is warm",
         description="Compile the numba kernels a typical run needs into numba's cache by running "
-                    "small built-in problems (extract, dfn, boxcount, blocks, solve); writes "
+                    "small built-in problems (extract, dfn, boxcount, blocks, solve; with --all also "
+                    "deformable blocks and 3D blocks); writes "
                     "nothing else. Run it once after installing, or after an upgrade; in a shared "
                     "install, with the users' NUMBA_CACHE_DIR.")
     p.add_argument("--workers", type=_workers_arg, default=None, metavar="N",
@@ -58,7 +64,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "this process)")
     p.add_argument("--all", action="store_true", dest="all_parts",
                    help="also the deformable-block (zone) kernels, which only runs with "
-                        "[[solve.deformable]] need")
+                        "[[solve.deformable]] need, and the 3D block kernels of blocks3d")
     p.set_defaults(handler=run)
     return p
 
@@ -197,6 +203,25 @@ def _part_blocks() -> str:
     return f"{sets.n_blocks} blocks from sets, {traces.n_blocks} from traces"
 
 
+def _part_blocks3d() -> str:
+    """3D blocks: the disk network's 10 m cube cut by its disks and a tunnel, the keyblocks and the
+    block shapes (the ``blocks3d`` command's polyhedron kernels)."""
+    import numpy as np
+
+    from .blockgen.block_shapes import block_shapes
+    from .blockgen.blocks3d import cut_box, disk_planes
+    from .blockgen.keyblocks import keyblocks
+    from .blockgen.openings3d import Tunnel, horseshoe_section
+
+    network = _network()
+    box = np.array([[0.0, 0.0, 0.0], [10.0, 10.0, 10.0]])
+    tunnel = Tunnel(horseshoe_section(3.0, 1.5), centre_m=(5.0, 0.0, 4.0), trend_deg=0.0)
+    blocks = cut_box(box, disk_planes(network), tunnels=(tunnel,))
+    found = keyblocks(blocks, {i: (30.0, 0.0) for i in range(len(network.radius_m))})
+    block_shapes(blocks)
+    return f"{blocks.n_blocks} blocks in a 10 m cube, {len(found)} on the tunnel"
+
+
 def _part_solve(deformable: bool = False) -> str:
     """Static, excavation and dynamic stages on the jointed tunnel."""
     from .solver import run as solve
@@ -223,6 +248,7 @@ PARTS: dict[str, tuple[Callable[[], str], str, bool]] = {
     "dfn": (_part_dfn, "field", False),
     "boxcount": (_part_boxcount, "field", False),
     "blocks": (_part_blocks, "field", False),
+    "blocks3d": (_part_blocks3d, "field", True),
 }
 
 

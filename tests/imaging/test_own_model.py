@@ -103,9 +103,15 @@ def test_labels_of_16_bits_with_an_alpha_channel_or_of_0_and_1_read_as_8_bit_one
 def test_photos_without_labels_and_missing_folders_are_named(tmp_path):
     (tmp_path / "photos").mkdir()
     (tmp_path / "labels").mkdir()
-    cv2.imwrite(str(tmp_path / "photos" / "a.jpg"), np.zeros((8, 8), np.uint8))
-    with pytest.raises(FileNotFoundError, match="no photo has a label"):
+    with pytest.raises(FileNotFoundError, match="photos: no photo in the folder"):
         labelled_pairs(tmp_path / "photos", tmp_path / "labels")
+    cv2.imwrite(str(tmp_path / "photos" / "a.jpg"), np.zeros((8, 8), np.uint8))
+    with pytest.raises(FileNotFoundError, match="labels: no label in the folder"):
+        labelled_pairs(tmp_path / "photos", tmp_path / "labels")
+    cv2.imwrite(str(tmp_path / "labels" / "b.png"), np.zeros((8, 8), np.uint8))
+    with pytest.raises(FileNotFoundError, match="no photo has a label of the same name"):
+        labelled_pairs(tmp_path / "photos", tmp_path / "labels")
+    (tmp_path / "labels" / "b.png").unlink()
     with pytest.raises(FileNotFoundError, match="no such folder of labels"):
         labelled_pairs(tmp_path / "photos", tmp_path / "nowhere")
     cv2.imwrite(str(tmp_path / "labels" / "a.png"), np.zeros((8, 9), np.uint8))

@@ -149,6 +149,7 @@ def test_bad_input_stops_with_exit_2_naming_the_file_and_keeps_the_previous_outp
         args[4], named = str(labels), "face2.png"
     elif case == "no pairs":
         (tmp_path / "elsewhere").mkdir()
+        cv2.imwrite(str(tmp_path / "elsewhere" / "other.png"), np.zeros((8, 8), np.uint8))
         args[4], named = str(tmp_path / "elsewhere"), "no photo has a label"
     elif case == "all empty":
         blank = {stem: np.zeros((300, 400), np.uint8) for stem in lines}

@@ -53,6 +53,16 @@ def test_zero_length_traces_are_dropped_warned_and_counted(tmp_path, capsys):
     assert summary["input"]["n_traces"] == 3
 
 
+
+def test_the_zero_length_warning_names_the_features_by_their_name_property(tmp_path, capsys):
+    path = _map(tmp_path / "slips.geojson", SLIPS)
+    doc = json.loads(path.read_text())
+    for feature, name in zip(doc["features"], ["A1", "A2", "A3", "A4", "A5"]):
+        feature["properties"]["name"] = name
+    path.write_text(json.dumps(doc))
+    assert main(["traces", str(path), "--out", str(tmp_path / "out")]) == 0
+    assert "ids ['B', 'D'], names ['A2', 'A4']" in capsys.readouterr().err
+
 def test_boxcount_drops_zero_length_traces_with_a_warning(tmp_path, capsys):
     path = _map(tmp_path / "slips.geojson", SLIPS)
     assert main(["boxcount", str(path), "--json"]) == 0
