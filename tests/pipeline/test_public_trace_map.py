@@ -35,3 +35,17 @@ def test_kb11_gives_fractopos_numbers(tmp_path, capsys):
     # E nodes (trace ends at the area's edge) are counted differently: fractopo 114, rockmass 112
     assert nodes["E"] == 112
     assert summary["crs"] and "3067" in summary["crs"]
+
+
+def test_a_broad_set_is_named_in_the_printed_summary(tmp_path, capsys):
+    """KB11's BIC fit gives a third component of spread 54° beside sets of 6°: the printed lines
+    say it is scattered traces rather than a set; a map of clear sets gets no such note."""
+    from rockmass.traces_cmd import summary_text
+
+    assert main(["traces", str(KB11 / "KB11_traces.geojson"), "--area",
+                 str(KB11 / "KB11_area.geojson"), "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "note: set 0 spreads over 40°" in out and "--sets N" in out
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    clear = [s for s in summary["sets"] if s["Circular Spread"]["value"] < 40]
+    assert len(clear) == 2 and "note:" not in summary_text({**summary, "sets": clear})
