@@ -651,3 +651,34 @@ def test_report_renders_in_headless_chromium_with_every_image_loaded(run_dir, tm
     assert total == sum(IMAGES_PER_STAGE.values()) and loaded == total
     shot = _chromium.screenshot(path, tmp_path / "run_report.png", size=(1250, 3000))
     assert shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_the_histories_section_reports_a_failed_monitor_as_failed(tmp_path):
+    """A monitor whose block failed: its table row says so instead of a final displacement, and
+    its curve ends where the block was taken out (the rows after, frozen, are not drawn)."""
+    import csv
+
+    from rockmass.report_solve import _removal_row, _section_histories
+    from rockmass.run_report import _Run
+
+    solve = tmp_path / "solve"
+    solve.mkdir()
+    rows = [("settle", 0.0, 0.0, 0.0), ("settle", 0.1, 0.0, -0.0001), ("arch", 0.2, 0.0, -0.004),
+            ("arch", 0.3, 0.001, -0.02), ("arch", 0.4, 0.001, -0.02), ("arch", 0.5, 0.001, -0.02)]
+    with (solve / "history.csv").open("w", newline="") as fh:
+        writer = csv.writer(fh)
+        writer.writerow(["time_s", "stage", "crown_ux_m", "crown_uy_m", "wall_ux_m", "wall_uy_m"])
+        for stage, t, ux, uy in rows:
+            writer.writerow([t, stage, ux, uy, 0.0005 * t, 0.0])
+    monitors = {"crown": {"block": 7, "stages": [], "failed": {
+                    "stage": "arch", "mechanism": "fall", "displacement_at_removal_m": 0.02}},
+                "wall": {"block": 3, "stages": [], "final_ux_m": 0.00025, "final_uy_m": 0.0,
+                         "final_displacement_m": 0.00025}}
+    (solve / "result.json").write_text(json.dumps({"monitors": monitors}))
+    history = {"stage": [r[0] for r in rows], "crown_ux_m": [r[2] for r in rows],
+               "crown_uy_m": [r[3] for r in rows]}
+    assert _removal_row(history, "crown", "arch") == 3  # the first of the frozen rows
+    html = _section_histories(_Run(tmp_path))
+    assert "failed in stage arch (fall): no displacement" in html
+    assert "ends with a cross where the block was taken out" in html
+    assert "0.00025" in html  # the other monitor keeps its final displacement
