@@ -20,8 +20,10 @@ joint there counts (:func:`rockmass.imaging.metrics.trace_accuracy` with ``ignor
 pixels are ignored on the synthetic twin. Fractures the labels leave out (fine cracks, the
 rock-face labels mark only the major ones) stay in the scored part, as the clutter of a real photo.
 
-Scoring: the buffered F1 of the synthetic benchmark (3 px), dP21 over the scored part, the largest
-error of the three set mean angles, averaged over the photographs; "auto" also reports how often it
+Scoring: the buffered F1 of the synthetic benchmark (3 px), the recall of the joints drawn 1-2, 3-4
+and 5-6 px wide apart (``R_w12`` ...; the mean over the photographs that have such joints), dP21
+over the scored part, the largest error of the three set mean angles, averaged over the
+photographs; "auto" also reports how often it
 kept the ridge traces, and "better of the two" is the mean over the photographs of the higher F1 of
 the learned and the ridge detector: the most a per-photo choice between them could reach. Sets: ``val`` and ``train`` of ``../shared/data/rock-face-fractures`` (AGPL;
 read, never shipped; about 400 px square) and ``tiles``, the 20 drone tiles of
@@ -52,9 +54,12 @@ BUFFER_PX = 3.0
 #: (px): the buffer and a few pixels of a stroke's uncertain edge.
 IGNORE_MARGIN_PX = 6.0
 SETS = ("val", "train", "tiles")
+#: Joint widths (px, inclusive) whose recall is reported apart: the style draws 1-6 px at "moderate".
+WIDTH_CLASSES = ((1, 2), (3, 4), (5, 6))
 COLUMNS = [("set", "s"), ("texture", "s"), ("detector", "s"), ("faces", "d"), ("F1", ".3f"),
-           ("P", ".3f"), ("R", ".3f"), ("dP21_pct", "+.0f"), ("set_angle_deg", ".1f"),
-           ("ridge_kept", "s"), ("ignored_pct", ".1f"), ("s_per_face", ".2f")]
+           ("P", ".3f"), ("R", ".3f"), *((f"R_w{lo}{hi}", ".3f") for lo, hi in WIDTH_CLASSES),
+           ("dP21_pct", "+.0f"), ("set_angle_deg", ".1f"), ("ridge_kept", "s"), ("ignored_pct", ".1f"),
+           ("s_per_face", ".2f")]
 
 
 def photos(name: str) -> list[tuple[Path, Path | None]]:
@@ -94,7 +99,7 @@ def score_photo(job) -> list[dict]:
 
     from rockmass.imaging import joints_on_photo, synthetic_face
     from rockmass.imaging.extract import ExtractParams, extract
-    from rockmass.imaging.metrics import trace_accuracy
+    from rockmass.imaging.metrics import buffered_match, trace_accuracy
 
     photo_path, label, seed, difficulty, detectors = job
     photo = cv2.imread(str(photo_path), cv2.IMREAD_COLOR)
@@ -112,13 +117,18 @@ def score_photo(job) -> list[dict]:
             seconds = time.perf_counter() - t0
             accuracy = trace_accuracy(result.traces, face.truth, buffer_px=BUFFER_PX, ignore=ignore,
                                       m_per_px=face.m_per_px / result.scale.work_factor)
+            widths = np.asarray(face.truth.attributes["width_px"])
+            by_width = {f"R_w{lo}{hi}": buffered_match(
+                result.traces, face.truth.subset((widths >= lo) & (widths <= hi)), buffer_px=BUFFER_PX,
+                ignore=ignore, m_per_px=face.m_per_px / result.scale.work_factor)[1]
+                for lo, hi in WIDTH_CLASSES}
             kept = (result.detector_choice or {}).get("kept")
             rows.append({"photo": photo_path.name, "seed": seed, "texture": texture, "detector": detector,
                          "F1": accuracy.f1, "P": accuracy.precision, "R": accuracy.recall,
                          "dP21_pct": 100 * accuracy.p21_rel_error,
                          "set_angle_deg": max(accuracy.set_angle_errors_deg, default=float("nan")),
                          "ridge_kept": kept == "ridge" if detector == "auto" else None,
-                         "ignored_pct": 100 * float(ignore.mean()), "seconds": seconds})
+                         "ignored_pct": 100 * float(ignore.mean()), "seconds": seconds, **by_width})
     return rows
 
 
@@ -137,6 +147,7 @@ def summary(rows: list[dict], set_name: str) -> list[dict]:
             kept = [r["ridge_kept"] for r in mine if r["ridge_kept"] is not None]
             out.append({"set": set_name, "texture": texture, "detector": detector, "faces": len(mine),
                         "F1": mean("F1"), "P": mean("P"), "R": mean("R"), "dP21_pct": mean("dP21_pct"),
+                        **{key: mean(key) for key in (f"R_w{lo}{hi}" for lo, hi in WIDTH_CLASSES)},
                         "set_angle_deg": mean("set_angle_deg"),
                         "ridge_kept": f"{sum(kept)}/{len(kept)}" if kept else None,
                         "ignored_pct": mean("ignored_pct"), "s_per_face": mean("seconds")})
