@@ -115,12 +115,15 @@ def score_photo(job) -> list[dict]:
             t0 = time.perf_counter()
             result = extract(face.image, m_per_px=face.m_per_px, params=ExtractParams(detector=detector))
             seconds = time.perf_counter() - t0
+            if result.scale.work_factor != 1:  # the ignore mask is on the photo's own pixels
+                raise SystemExit(f"{photo_path}: processed down-sampled ({result.scale.work_factor:g}x); "
+                                 "this benchmark expects photographs under max_megapixels")
             accuracy = trace_accuracy(result.traces, face.truth, buffer_px=BUFFER_PX, ignore=ignore,
-                                      m_per_px=face.m_per_px / result.scale.work_factor)
+                                      m_per_px=face.m_per_px)
             widths = np.asarray(face.truth.attributes["width_px"])
             by_width = {f"R_w{lo}{hi}": buffered_match(
                 result.traces, face.truth.subset((widths >= lo) & (widths <= hi)), buffer_px=BUFFER_PX,
-                ignore=ignore, m_per_px=face.m_per_px / result.scale.work_factor)[1]
+                ignore=ignore, m_per_px=face.m_per_px)[1]
                 for lo, hi in WIDTH_CLASSES}
             kept = (result.detector_choice or {}).get("kept")
             rows.append({"photo": photo_path.name, "seed": seed, "texture": texture, "detector": detector,

@@ -50,9 +50,11 @@ Not checked: ``NULL GEOMETRY`` (the readers refuse it), ``TRACE UNDERLAPS TARGET
 ``EMPTY TARGET AREA``, and the buffered part of ``STACKED TRACES`` (fractopo also flags stretches
 that run within a buffer of another trace without touching it, and small triangles where two traces
 cross twice). Measured against fractopo 0.9.2 with the same snap threshold
-(``benchmarks/fractopo_crosscheck.py``): the 78 traces extracted from the quickstart photo get the
-same labels trace by trace (15 flagged: 14 SHARP TURNS, 2 V NODE); on maps dense with defects
-UNDERLAPPING SNAP counts differ and the buffered STACKED TRACES are missed (docs/fractures.md §9.1).
+(``benchmarks/fractopo_crosscheck.py``): the 78 traces extracted from the quickstart photo before
+session 24 get the same labels trace by trace (14 flagged: 13 SHARP TURNS, 2 V NODE); on the
+quickstart photo of session 24, two traces that overlap each other get other labels and Y nodes
+than fractopo gives them; on maps dense with defects UNDERLAPPING SNAP counts differ and the
+buffered STACKED TRACES are missed (docs/fractures.md §9.1).
 
 References
 ----------

@@ -95,7 +95,7 @@ def labelled_pairs(photos_dir, labels_dir) -> list[tuple[Path, Path]]:
     Raises
     ------
     FileNotFoundError
-        A folder is missing, or no photo has a label.
+        A folder is missing, holds no image, or no photo has a label.
     ValueError
         The labels are in the photos' folder, or two labels have one name (``a.png``, ``a.tif``).
     OSError

@@ -499,7 +499,8 @@ def trace_accuracy(extracted, truth, *, m_per_px: float, buffer_px: float = 3.0,
     ignore : (rows, cols) bool array_like, optional
         Pixels of the image where neither map is scored (see :func:`buffered_match`); the
         image's shape. The P21 of each map is then its length outside them, and the trace counts,
-        set angles and nodes are those of the traces with at least half their length outside.
+        set angles and nodes are those of the traces with at least half their length outside (at
+        least one true trace must be).
 
     Returns
     -------
@@ -508,7 +509,7 @@ def trace_accuracy(extracted, truth, *, m_per_px: float, buffer_px: float = 3.0,
     Notes
     -----
     P21 = Σ length / window area and P20 = number of traces / window area, both maps over the
-    truth's window (the window less the ignored share of the image, with ``ignore``). Extracted
+    truth's window. Extracted
     sets are matched to true ones by the assignment that minimises the summed axial angle
     differences (Hungarian method).
     """
@@ -522,12 +523,12 @@ def trace_accuracy(extracted, truth, *, m_per_px: float, buffer_px: float = 3.0,
         p21_true, p21_ext = truth.total_length_m() / area, extracted.total_length_m() / area
     else:
         ignore = np.asarray(ignore, dtype=bool)
-        if ignore.all():
-            raise ValueError("ignore covers the whole image: nothing is left to score")
-        area *= 1.0 - float(ignore.mean())
         (truth, true_length), (extracted, ext_length) = (
             _scored_part(m, ignore, scale) for m in (truth, extracted))
-        p21_true, p21_ext = true_length / area, ext_length / area
+        if truth.n_traces == 0:
+            raise ValueError("ignore covers the truth: no true trace has half its length outside it, "
+                             "so nothing of the truth is left to score")
+        p21_true, p21_ext = true_length / area, ext_length / area  # relative errors: area cancels
     p20_true, p20_ext = truth.n_traces / area, extracted.n_traces / area
     if "set" in truth.attributes and n_sets is None:
         true_sets = _labelled_set_means(truth, np.asarray(truth.attributes["set"]))

@@ -282,36 +282,59 @@ def synthetic_face(difficulty: str = "moderate", *, seed: int = 0, shape_px=(100
     """
     import cv2
 
-    from ..dfn import TraceMap
-
-    if difficulty not in DIFFICULTIES:
-        raise ValueError(f"difficulty must be one of {', '.join(DIFFICULTIES)}, got {difficulty!r}")
-    style = style or DIFFICULTIES[difficulty]
-    m_per_px = check_scale(m_per_px)
+    style, m_per_px = _checked_style(difficulty, style), check_scale(m_per_px)
     h, w = (int(v) for v in shape_px)
     if h < 16 or w < 16:
         raise ValueError(f"shape_px must be at least 16 x 16 pixels, got {shape_px}")
-    network_rng, render_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
-    window = np.array([[0.0, 0.0], [w * m_per_px, 0.0], [w * m_per_px, h * m_per_px],
-                       [0.0, h * m_per_px]])
-    if traces is None:
-        polylines, set_ids = synthetic_network(window, sets, rng=network_rng)
-    else:
-        polylines = [np.asarray(traces.polyline(i), dtype=np.float64) for i in range(traces.n_traces)]
-        set_ids = np.asarray(traces.attributes.get("set", np.ones(traces.n_traces)), dtype=np.int64)
-
-    rock = _rock_texture(render_rng, (h, w), style.texture)
-    darkness, widths = _joint_darkness(polylines, (h, w), m_per_px, style, render_rng)
-    image = rock * _lighting(render_rng, (h, w), style.lighting, style.shadows)
+    network = _Network.draw(seed, (h, w), m_per_px, sets, traces)
+    rock = _rock_texture(network.render_rng, (h, w), style.texture)
+    darkness, widths = _joint_darkness(network.polylines, (h, w), m_per_px, style, network.render_rng)
+    image = rock * _lighting(network.render_rng, (h, w), style.lighting, style.shadows)
     image -= style.contrast * np.clip(darkness, 0.0, 1.0) * (image / 150.0)
-    image += style.noise * render_rng.standard_normal((h, w)).astype(np.float32)
+    image += style.noise * network.render_rng.standard_normal((h, w)).astype(np.float32)
     if style.blur_px > 0:
         image = cv2.GaussianBlur(image, (0, 0), style.blur_px)
-    truth = TraceMap.from_polylines(
-        polylines, attributes={"set": set_ids, "width_px": widths.astype(np.int64)},
-        window=window, frame="face")
-    return SyntheticFace(image=_as_jpeg(image, style.jpeg_quality), truth=truth, m_per_px=m_per_px,
-                         difficulty=difficulty, seed=int(seed), style=replace(style))
+    return SyntheticFace(image=_as_jpeg(image, style.jpeg_quality), truth=network.truth(widths),
+                         m_per_px=m_per_px, difficulty=difficulty, seed=int(seed), style=replace(style))
+
+
+def _checked_style(difficulty: str, style: FaceStyle | None) -> FaceStyle:
+    """``style``, or the style of a known ``difficulty``."""
+    if difficulty not in DIFFICULTIES:
+        raise ValueError(f"difficulty must be one of {', '.join(DIFFICULTIES)}, got {difficulty!r}")
+    return style or DIFFICULTIES[difficulty]
+
+
+@dataclass
+class _Network:
+    """The joints of a face of ``seed`` (drawn from ``sets``, or given) in the image rectangle, and
+    the random stream that renders them (the second child of the seed's ``SeedSequence``)."""
+
+    window: np.ndarray
+    polylines: list
+    set_ids: np.ndarray
+    render_rng: np.random.Generator
+
+    @classmethod
+    def draw(cls, seed, shape, m_per_px, sets, traces=None) -> _Network:
+        h, w = shape
+        network_rng, render_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
+        window = np.array([[0.0, 0.0], [w * m_per_px, 0.0], [w * m_per_px, h * m_per_px],
+                           [0.0, h * m_per_px]])
+        if traces is None:
+            polylines, set_ids = synthetic_network(window, sets, rng=network_rng)
+        else:
+            polylines = [np.asarray(traces.polyline(i), dtype=np.float64) for i in range(traces.n_traces)]
+            set_ids = np.asarray(traces.attributes.get("set", np.ones(traces.n_traces)), dtype=np.int64)
+        return cls(window, polylines, set_ids, render_rng)
+
+    def truth(self, widths):
+        """The drawn centre lines as a trace map (metres, the face frame), with set and width."""
+        from ..dfn import TraceMap
+
+        return TraceMap.from_polylines(
+            self.polylines, attributes={"set": self.set_ids, "width_px": widths.astype(np.int64)},
+            window=self.window, frame="face")
 
 
 def _as_jpeg(image, quality: int) -> np.ndarray:
@@ -331,7 +354,9 @@ def joints_on_photo(photo, difficulty: str = "moderate", *, seed: int = 0, m_per
     detector tuned on them may have learnt the texture. Here the network of :func:`synthetic_network`
     (window: the photo's rectangle at ``m_per_px``) is drawn onto a photograph of rock as
     :func:`synthetic_face` draws it onto its own rock: anti-aliased lines of the style's widths,
-    some with a hidden stretch, each darkening the photo by the same share of its local grey level,
+    some with a hidden stretch (the same joints, widths and hidden stretches as the synthetic face of
+    the same seed, size and style), each darkening the photo by the same share of its local grey
+    level,
 
     .. math:: I' = I\,(1 - c\,d / 150),
 
@@ -363,33 +388,23 @@ def joints_on_photo(photo, difficulty: str = "moderate", *, seed: int = 0, m_per
     """
     import cv2
 
-    from ..dfn import TraceMap
     from .enhance import to_grey
 
-    if difficulty not in DIFFICULTIES:
-        raise ValueError(f"difficulty must be one of {', '.join(DIFFICULTIES)}, got {difficulty!r}")
-    style = style or DIFFICULTIES[difficulty]
-    m_per_px = check_scale(m_per_px)
+    style, m_per_px = _checked_style(difficulty, style), check_scale(m_per_px)
     photo = np.asarray(photo)
     if photo.dtype != np.uint8 or photo.ndim not in (2, 3) or min(photo.shape[:2]) < 16:
         raise ValueError("photo must be a grey or RGB uint8 image of at least 16 x 16 pixels, got "
                          f"{photo.dtype} of shape {photo.shape}")
     grey = 255.0 * to_grey(photo, name="photo")
-    h, w = grey.shape
-    network_rng, render_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
-    window = np.array([[0.0, 0.0], [w * m_per_px, 0.0], [w * m_per_px, h * m_per_px],
-                       [0.0, h * m_per_px]])
-    polylines, set_ids = synthetic_network(window, sets, rng=network_rng)
-    darkness, widths = _joint_darkness(polylines, (h, w), m_per_px, style, render_rng)
+    shape = grey.shape
+    network = _Network.draw(seed, shape, m_per_px, sets)
+    _rock_texture(network.render_rng, shape, style.texture)  # drawn, not used: the same stream below
+    darkness, widths = _joint_darkness(network.polylines, shape, m_per_px, style, network.render_rng)
     if style.blur_px > 0:
         darkness = cv2.GaussianBlur(darkness, (0, 0), style.blur_px)
     image = grey * (1.0 - style.contrast / 150.0 * np.clip(darkness, 0.0, 1.0))
-    truth = TraceMap.from_polylines(
-        polylines, attributes={"set": set_ids, "width_px": widths.astype(np.int64)},
-        window=window, frame="face")
-    return SyntheticFace(image=_as_jpeg(image, style.jpeg_quality), truth=truth, m_per_px=m_per_px,
-                         difficulty=difficulty, seed=int(seed), style=replace(style))
-
+    return SyntheticFace(image=_as_jpeg(image, style.jpeg_quality), truth=network.truth(widths),
+                         m_per_px=m_per_px, difficulty=difficulty, seed=int(seed), style=replace(style))
 
 def in_flat_light(face: SyntheticFace, factor: float) -> SyntheticFace:
     r"""The same face photographed in flatter light: every grey level pulled towards the image's

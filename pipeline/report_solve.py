@@ -169,5 +169,5 @@ def _removal_row(history: dict, monitor: str, stage: str) -> int:
     if not rows:
         return len(ux) - 1
     last = (ux[rows[-1]], uy[rows[-1]])
-    return next(i for i in rows if (ux[i], uy[i]) == last)
+    return next((i for i in rows if (ux[i], uy[i]) == last), rows[-1])
 

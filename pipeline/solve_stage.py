@@ -163,10 +163,22 @@ def _monitor_summary(result, model, settings) -> dict:
 
 
 def _failure_of(result, block: int) -> dict | None:
-    """Where ``block`` failed: the stage, mechanism and displacement when it was taken out, or None."""
+    """Where ``block`` failed: the stage, mechanism and displacement when it was taken out, or None.
+
+    With deformable blocks the result's blocks are pieces (rigid blocks and zones): a failure names
+    one piece of the block that fell and a monitor follows another (the zone under its point), so
+    both are compared by the block they belong to (``result.zones["parent_block"]``)."""
+    import numpy as np
+
+    parent = (np.asarray(result.zones["parent_block"]) if result.zones and "parent_block" in result.zones
+              else None)
+
+    def original(piece: int) -> int:
+        return int(parent[piece]) if parent is not None else piece
+
     for stage in result.stages:
         for failed in stage.failed_blocks:
-            if int(failed["block"]) == block:
+            if original(int(failed["block"])) == original(block):
                 return {"stage": stage.name, "mechanism": failed["mechanism"],
                         "displacement_at_removal_m": float(failed["displacement_m"])}
     return None

@@ -3,7 +3,7 @@
 Every kernel is ``@njit(cache=True)`` (README, "Compiled kernels and numba's cache"): the first
 process that calls one compiles it and writes it to numba's cache, and every later process reads it
 from there. A fresh install therefore pays the compilation in its first ``rockmass run`` (about
-14 CPU-s of the quickstart's 21, ``benchmarks/bench_compile.py``). ``rockmass warmup`` pays it up
+20 CPU-s of the quickstart's 27 in session 24, ``benchmarks/bench_run.py``). ``rockmass warmup`` pays it up
 front: it runs small built-in problems through the library's public stage functions, which call
 the kernels with the types a real run calls them with (every call site passes C-contiguous
 float64 / int64 arrays: one signature per kernel, two for the solver's ``advance``, rigid and with

@@ -162,11 +162,13 @@ def test_trace_accuracy_outside_the_ignored_pixels():
     assert whole.p21_rel_error == pytest.approx(20.0 / 24.0 - 1.0, abs=1e-9)
 
 
-def test_an_ignore_mask_of_another_shape_or_covering_everything_is_refused():
+def test_an_ignore_mask_of_another_shape_or_covering_the_truth_is_refused():
     from rockmass.imaging.metrics import trace_accuracy as imaging_accuracy
 
     truth = TraceMap.from_segments([[1, 2, 9, 2]], window=WINDOW)
     with pytest.raises(ValueError, match="shape"):
         buffered_match(truth, truth, m_per_px=0.05, shape_px=(200, 200), ignore=np.zeros((10, 10), bool))
-    with pytest.raises(ValueError, match="whole image"):
+    with pytest.raises(ValueError, match="ignore covers the truth"):
         imaging_accuracy(truth, truth, m_per_px=0.05, ignore=np.ones((200, 200), bool))
+    with pytest.raises(ValueError, match="ignore covers the truth"):  # the truth's only trace
+        imaging_accuracy(truth, truth, m_per_px=0.05, ignore=_band_around(2.0))

@@ -107,6 +107,8 @@ def test_joints_on_a_photo_are_the_synthetic_face_network_and_leave_the_rest_of_
     face = joints_on_photo(photo, seed=5, m_per_px=0.02)
     plain = synthetic_face("moderate", seed=5, **SMALL)
     assert np.array_equal(face.truth.xy_m, plain.truth.xy_m)       # the same network, seed for seed
+    for name in ("width_px", "set"):                                # drawn as wide, set by set
+        assert np.array_equal(face.truth.attributes[name], plain.truth.attributes[name])
     again = joints_on_photo(photo, seed=5, m_per_px=0.02)
     assert np.array_equal(face.image, again.image)
     import cv2

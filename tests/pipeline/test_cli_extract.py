@@ -167,7 +167,6 @@ def test_face_mask_flags_are_exclusive(face_png, tmp_path, capsys):
     assert exc.value.code == 2
 
 
-
 @pytest.mark.parametrize("argv, hint", [
     (["--m-per-pix", "0.02"], "--m-per-pix: did you mean --m-per-px?"),
     (["--detecter=ridge"], "--detecter: did you mean --detector?"),
@@ -182,6 +181,7 @@ def test_an_unknown_option_exits_2_with_the_subcommands_usage_and_the_closest_op
     assert exc.value.code == 2 and not (tmp_path / "o").exists()
     assert "usage: rockmass extract" in err and f"unrecognized arguments: {' '.join(argv)}" in err
     assert (hint in err) if hint else "did you mean" not in err
+
 
 def test_confident_statistics_fall_back_to_bic_when_too_few_traces_are_kept():
     # three traces at two angles, the two of one angle scored low: --sets 2 fits all traces, not

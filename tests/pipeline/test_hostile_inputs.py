@@ -53,7 +53,6 @@ def test_zero_length_traces_are_dropped_warned_and_counted(tmp_path, capsys):
     assert summary["input"]["n_traces"] == 3
 
 
-
 def test_the_zero_length_warning_names_the_features_by_their_name_property(tmp_path, capsys):
     path = _map(tmp_path / "slips.geojson", SLIPS)
     doc = json.loads(path.read_text())
@@ -62,6 +61,7 @@ def test_the_zero_length_warning_names_the_features_by_their_name_property(tmp_p
     path.write_text(json.dumps(doc))
     assert main(["traces", str(path), "--out", str(tmp_path / "out")]) == 0
     assert "ids ['B', 'D'], names ['A2', 'A4']" in capsys.readouterr().err
+
 
 def test_boxcount_drops_zero_length_traces_with_a_warning(tmp_path, capsys):
     path = _map(tmp_path / "slips.geojson", SLIPS)

@@ -13,7 +13,6 @@ import pytest
 
 from rockmass.solver import (BoundaryStress, Coulomb, Fix, InSituStress, Material, Monitor,
                              Settings, Stage, run)
-from rockmass.solver import _kernels as K
 from rockmass.solver.settings import Deformable
 from rockmass.solver.zones import Elastic, MohrCoulomb
 
@@ -169,6 +168,26 @@ def test_a_zoned_keyblock_fails_whole_and_is_reported_once():
     assert failed["mechanism"] == "fall" and failed["area_m2"] == pytest.approx(1.0)
     zoned = r.zones["parent_block"][r.zones["zone_block"]] == 1
     assert not r.zones["live"][zoned].any()  # every zone of the block is out
+
+
+def test_monitors_on_a_zoned_keyblock_that_fell_report_the_failure_whether_by_block_or_by_point():
+    """The failure names one zone of the fallen block and a monitor by point follows the zone under
+    its point: ``rockmass solve``'s summary compares them by their block, so neither monitor reports
+    the fall as a displacement (found by review: the point monitor printed u = 6 cm)."""
+    from rockmass.solve_stage import _monitor_summary
+
+    model = hand_model([rect(0, 0, 2, 1), rect(0.5, -1, 1.5, 0)], pairs=[(0, 1)])
+    settings = Settings(joints={"default": Coulomb(1e9, 1e9, 30.0)},
+                        stages=(Stage("hang", max_steps=30_000),),
+                        material=Material(RHO), fixes=(Fix("blocks:0"),),
+                        monitors=(Monitor("by_block", block=1), Monitor("by_point", point_xy_m=(0.7, -0.8))),
+                        deformable=(Deformable("blocks:1", Elastic(KB, GB), 0.25),))
+    result = run(model, settings)
+    summary = _monitor_summary(result, result.pieces, settings)  # as rockmass solve passes them
+    assert summary["by_block"]["block"] != summary["by_point"]["block"]  # two zones of one block
+    for name in ("by_block", "by_point"):
+        assert summary[name]["failed"]["stage"] == "hang", name
+        assert "final_displacement_m" not in summary[name], name
 
 
 def test_a_zoned_block_shaken_through_its_own_nodes_keeps_the_ledger():

@@ -52,7 +52,6 @@ def test_a_falling_block_among_loaded_ones_is_named_not_converged():
     assert st.worst_ratio < Stage("x").block_tolerance
 
 
-
 def test_a_monitor_on_a_failed_block_reports_the_failure_not_a_displacement():
     """``rockmass solve`` summarises each monitor (result.json, the CLI line, the report): a
     monitor whose block fell says so and gives no final displacement (before session 24 it gave
@@ -86,6 +85,7 @@ def test_a_monitor_on_a_failed_block_reports_the_failure_not_a_displacement():
     assert 0 < end < len(history["stage"]) - 1           # taken out before the stage ended
     assert drop == pytest.approx(fell["displacement_m"], rel=0.05)
     assert np.hypot(history["loose_ux_m"][end - 1], history["loose_uy_m"][end - 1]) < drop
+
 
 def test_converged_means_every_block_and_its_moment():
     """A converged stage reports its worst block's own ratio below the block tolerance, and a
