@@ -1,6 +1,6 @@
 """Joints of known position drawn on real rock: the detectors on a texture they were not made on.
 
-    python benchmarks/bench_texture_faces.py [--sets val,train,tiles] [--difficulty moderate]
+    python benchmarks/bench_texture_faces.py [--sets val,train,tiles,gravel] [--difficulty moderate]
                                              [--detectors auto,learned,ridge] [--limit N]
 
 The plain synthetic faces (:func:`rockmass.imaging.synthetic_face`) draw their joints on a rock
@@ -26,8 +26,9 @@ over the scored part, the largest error of the three set mean angles, averaged o
 photographs; "auto" also reports how often it
 kept the ridge traces, and "better of the two" is the mean over the photographs of the higher F1 of
 the learned and the ridge detector: the most a per-photo choice between them could reach. Sets: ``val`` and ``train`` of ``../shared/data/rock-face-fractures`` (AGPL;
-read, never shipped; about 400 px square) and ``tiles``, the 20 drone tiles of
-``benchmarks/data/marques2022`` (MIT; 500 px). Every photo is drawn at :data:`M_PER_PX` (the
+read, never shipped; about 400 px square), ``tiles``, the 20 drone tiles of
+``benchmarks/data/marques2022`` (MIT; 500 px), and ``gravel``, scikit-image's photograph of gravel
+(CC0; 512 px; no fractures of its own), under the networks of seeds 1-8. Every photo is drawn at :data:`M_PER_PX` (the
 synthetic benchmark's 8 mm per pixel, so the joints have the density in pixels of its faces) with
 seed = 1 + its index in the set, sorted by name. Nothing is tuned on these faces. Rows also go to
 benchmarks/results/bench_texture_faces.json.
@@ -53,7 +54,11 @@ BUFFER_PX = 3.0
 #: A photograph's own labelled fractures are ignored within this distance of their labelled pixels
 #: (px): the buffer and a few pixels of a stroke's uncertain edge.
 IGNORE_MARGIN_PX = 6.0
-SETS = ("val", "train", "tiles")
+SETS = ("val", "train", "tiles", "gravel")
+#: The ``gravel`` set: scikit-image's gravel photograph (512 x 512 px, CC0, shipped with
+#: scikit-image), one face per seed 1..GRAVEL_FACES (other joints on the same rock).
+GRAVEL = "skimage:gravel"
+GRAVEL_FACES = 8
 #: Joint widths (px, inclusive) whose recall is reported apart: the style draws 1-6 px at "moderate".
 WIDTH_CLASSES = ((1, 2), (3, 4), (5, 6))
 COLUMNS = [("set", "s"), ("texture", "s"), ("detector", "s"), ("faces", "d"), ("F1", ".3f"),
@@ -62,8 +67,11 @@ COLUMNS = [("set", "s"), ("texture", "s"), ("detector", "s"), ("faces", "d"), ("
            ("s_per_face", ".2f")]
 
 
-def photos(name: str) -> list[tuple[Path, Path | None]]:
-    """(photo, label) pairs of one set, sorted by name; the tiles' label is their folder of masks."""
+def photos(name: str) -> list[tuple[Path | str, Path | None]]:
+    """(photo, label) pairs of one set, sorted by name; the tiles' label is their folder of masks;
+    the gravel set is :data:`GRAVEL` (no fractures of its own) :data:`GRAVEL_FACES` times."""
+    if name == "gravel":
+        return [(GRAVEL, None)] * GRAVEL_FACES
     if name == "tiles":
         from bench_imaging_outcrop import tiles
 
@@ -77,6 +85,8 @@ def ignore_mask(photo: Path, label: Path | None, shape) -> np.ndarray:
     """The photo's own fractures, widened by :data:`IGNORE_MARGIN_PX` (bool, the photo's shape)."""
     import cv2
 
+    if photo == GRAVEL:
+        return np.zeros(shape, dtype=bool)
     if label is None:
         from bench_imaging_outcrop import GEOLOGISTS, mask
 
@@ -102,10 +112,15 @@ def score_photo(job) -> list[dict]:
     from rockmass.imaging.metrics import buffered_match, trace_accuracy
 
     photo_path, label, seed, difficulty, detectors = job
-    photo = cv2.imread(str(photo_path), cv2.IMREAD_COLOR)
-    if photo is None:
-        raise SystemExit(f"{photo_path}: cannot read the photograph")
-    photo = np.ascontiguousarray(photo[..., ::-1])
+    if photo_path == GRAVEL:
+        from skimage.data import gravel
+
+        photo = gravel()
+    else:
+        photo = cv2.imread(str(photo_path), cv2.IMREAD_COLOR)
+        if photo is None:
+            raise SystemExit(f"{photo_path}: cannot read the photograph")
+        photo = np.ascontiguousarray(photo[..., ::-1])
     ignore = ignore_mask(photo_path, label, photo.shape[:2])
     faces = {"real": joints_on_photo(photo, difficulty, seed=seed, m_per_px=M_PER_PX),
              "own": synthetic_face(difficulty, seed=seed, shape_px=photo.shape[:2], m_per_px=M_PER_PX)}
@@ -126,7 +141,8 @@ def score_photo(job) -> list[dict]:
                 ignore=ignore, m_per_px=face.m_per_px)[1]
                 for lo, hi in WIDTH_CLASSES}
             kept = (result.detector_choice or {}).get("kept")
-            rows.append({"photo": photo_path.name, "seed": seed, "texture": texture, "detector": detector,
+            name = getattr(photo_path, "name", photo_path)
+            rows.append({"photo": name, "seed": seed, "texture": texture, "detector": detector,
                          "F1": accuracy.f1, "P": accuracy.precision, "R": accuracy.recall,
                          "dP21_pct": 100 * accuracy.p21_rel_error,
                          "set_angle_deg": max(accuracy.set_angle_errors_deg, default=float("nan")),
@@ -157,7 +173,7 @@ def summary(rows: list[dict], set_name: str) -> list[dict]:
         pairs = {}
         for r in rows:
             if r["texture"] == texture and r["detector"] in ("learned", "ridge"):
-                pairs.setdefault(r["photo"], {})[r["detector"]] = r["F1"]
+                pairs.setdefault((r["photo"], r["seed"]), {})[r["detector"]] = r["F1"]
         best = [max(p.values()) for p in pairs.values() if len(p) == 2]
         if best:  # what a per-photo choice between the two detectors could reach at best
             out.append({"set": set_name, "texture": texture, "detector": "better of the two", "faces": len(best),
