@@ -543,6 +543,7 @@ def _cell(value: Any) -> str:
 def results_rows(cases, finished: dict, displacement: str = "boundary") -> tuple[list[str], list[list[str]]]:
     """(header, rows) of results.csv: one row per finished case (any outcome), in case order.
 
+    A ``label`` column follows ``case_id`` when a case has a label (``[[study.cases]]`` ``label``).
     ``max_displacement_m`` is the record's boundary or overall displacement (``displacement``),
     over the blocks in equilibrium, for the outcomes in :data:`IN_EQUILIBRIUM` only; empty for a
     case whose model is not in equilibrium (not_converged, unstable, overlap, error).
@@ -552,7 +553,9 @@ def results_rows(cases, finished: dict, displacement: str = "boundary") -> tuple
         for p in case.params:
             if p not in param_paths:
                 param_paths.append(p)
-    header = ["case", "case_id", *param_paths, "realization", "seed", *CSV_COLUMNS]
+    labelled = any(case.label for case in cases)  # a label column when the study names its cases
+    header = ["case", "case_id", *(["label"] if labelled else []), *param_paths, "realization", "seed",
+              *CSV_COLUMNS]
     rows = []
     for case in cases:
         rec = finished.get(case.case_id)
@@ -560,7 +563,7 @@ def results_rows(cases, finished: dict, displacement: str = "boundary") -> tuple
             continue
         values = dict(rec)
         values["max_displacement_m"] = displacement_m(rec, displacement)
-        row = [str(case.index), case.short_id,
+        row = [str(case.index), case.short_id, *([case.label] if labelled else []),
                *[_cell(case.params.get(p)) for p in param_paths],
                str(case.realization), str(case.seed),
                *[_cell(values.get(c)) for c in CSV_COLUMNS]]

@@ -155,11 +155,11 @@ def _check_case_files(cases, config_path, digests: dict) -> None:
     too: no case could run. One that only some cases read (a grid over ``blocks.traces``) is left
     to fail its own cases (a re-run retries them once the file is there)."""
     from .errors import reading
-    from .study_config import _case_files, _show, params_text
+    from .study_config import _case_files, _show
     from .strict import config_file
 
     def where(case) -> str:
-        return (f"study case {case.index}: {params_text(case.params) or 'the base config'}; no "
+        return (f"study case {case.index}: {case.text}; no "
                 "case has run")
 
     checked: set[str] = set()
@@ -197,7 +197,6 @@ def _check_memory_budget(pending, config_path, workers: int) -> None:
     from .blocks_stage import block_memory_estimate
     from .budgets import check_memory
     from .study import case_domain_xy
-    from .study_config import params_text
 
     largest = None
     for case in pending:
@@ -213,17 +212,15 @@ def _check_memory_budget(pending, config_path, workers: int) -> None:
     (needed, field, what, fix), case = largest
     check_memory(workers * needed, f"{config_path}: {field}",
                  f"{workers} worker(s) at once, each on a case of up to {what} (study case "
-                 f"{case.index}: {params_text(case.params) or 'the base config'}, the largest of "
+                 f"{case.index}: {case.text}, the largest of "
                  f"{len(pending)} cases to run)",
                  f"{fix}, or run fewer workers (--workers)")
 
 
 def _case_header(case, config_path) -> str:
     """The comment lines that head a case's config.toml: where it comes from, how to rerun it."""
-    from .study_config import params_text
-
     return (f"# study case {case.index} ({case.case_id}) of {os.path.abspath(config_path)}\n"
-            f"# {params_text(case.params) or 'base config'}; realization {case.realization}, "
+            f"# {case.text}; realization {case.realization}, "
             f"seed {case.seed}\n# rerun it alone with its outputs: rockmass solve config.toml "
             "--out DIR (or rockmass blocks)\n")
 
@@ -275,7 +272,7 @@ def run(args) -> int:
     from .study import (CASE_FILE, RESULTS_FILE, RETRIED, case_cost, csv_text,
                         displacement_m, load_finished, outcome_counts, outcome_summary,
                         results_rows, run_tasks)
-    from .study_config import expand_cases, input_records, load_study, params_text
+    from .study_config import expand_cases, input_records, load_study
 
     t_start = time.perf_counter()
     document, raw = load_study(args.config)
@@ -295,7 +292,7 @@ def run(args) -> int:
         for c in cases:
             state = "finished" if c.case_id in finished else "pending"
             print(f"{c.index:5d}  {c.short_id}  {state:8s}  r={c.realization} seed={c.seed}  "
-                  f"{params_text(c.params) or '(base)'}")
+                  f"{c.text}")
         return 0
 
     scheduler = args.scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS") or None
@@ -341,7 +338,7 @@ def run(args) -> int:
             write_results()
             counter["done"] += 1
             _log(f"[{counter['done']}/{len(pending)}] case {case.index} ({case.short_id}) "
-                 f"{params_text(case.params)} r={case.realization}: "
+                 f"{case.text} r={case.realization}: "
                  f"{_case_outcome_text(result, displacement_m(result, study.displacement))} "
                  f"({result.get('wall_time_s') or 0.0:.1f} s)")
 

@@ -55,6 +55,17 @@ _PATH_TOKEN = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)|\[(\d+)\]")
 _PATH = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\[\d+\])*(\.[A-Za-z_][A-Za-z0-9_]*(\[\d+\])*)*$")
 
 
+#: The key of a ``[[study.cases]]`` table that names its cases rather than overriding a field.
+LABEL_KEY = "label"
+#: Longest case label (characters).
+MAX_LABEL = 60
+
+
+def case_overrides(entry: dict) -> dict:
+    """A ``[[study.cases]]`` table without its :data:`LABEL_KEY`: the field overrides alone."""
+    return {k: v for k, v in entry.items() if k != LABEL_KEY}
+
+
 class StudyConfig(StrictModel):
     """``[study]``: what varies across the cases of a study.
 
@@ -63,7 +74,10 @@ class StudyConfig(StrictModel):
     grid : table of field path -> list of values, default {}
         Cartesian product over the fields (each list non-empty, values as the field expects them).
     cases : list of tables of field path -> value, default []
-        Explicit override sets; combined with every grid point.
+        Explicit override sets; combined with every grid point. A ``label`` key (a line of text of
+        at most 60 characters, :data:`MAX_LABEL`) names its cases in results.csv (``label`` column), ``--list``,
+        the progress lines and the report, in place of their field values; it is not part of the
+        config, so it changes no case id.
     realizations : int, default 1
         Seeds per parameter combination, 1..10000.
     seed : int, default 0
@@ -104,8 +118,13 @@ class StudyConfig(StrictModel):
                     raise field_problem(self, name, f"{path}: empty list (a grid needs at least "
                                         "one value per field)", values)
         for i, entry in enumerate(self.cases):
+            label = entry.get(LABEL_KEY)
+            if label is not None and not (isinstance(label, str) and 0 < len(label.strip()) and
+                                          len(label) <= MAX_LABEL and label.isprintable()):
+                raise field_problem(self, "cases", f"[{i}].{LABEL_KEY}: must be a line of text of 1 to "
+                                    f"{MAX_LABEL} characters, got {label!r}", label)
             try:
-                flat = flatten_overrides(entry)
+                flat = flatten_overrides(case_overrides(entry))
             except ValueError as exc:
                 raise field_problem(self, "cases", f"[{i}]: {exc}", entry) from None
             if not flat:
@@ -245,10 +264,21 @@ class StudyCase:
     document: Any           # validated RockmassConfig
     case_id: str            # 64 hex digits
     inputs: dict = field(default_factory=dict)  # files read by the case -> sha256
+    label: str = ""         # the ``label`` of its [[study.cases]] table, if any
+    grid_paths: tuple = ()  # the fields of ``params`` set by study.grid
 
     @property
     def short_id(self) -> str:
         return self.case_id[:16]
+
+    @property
+    def text(self) -> str:
+        """How the case is named to the user: its label (with the grid's values, when it also has
+        grid fields), else its field values (:func:`params_text`), else ``base config``."""
+        if self.label:
+            grid = params_text({k: v for k, v in self.params.items() if k in self.grid_paths})
+            return f"{self.label} ({grid})" if grid else self.label
+        return params_text(self.params) or "base config"
 
 
 def load_study(config_path: str | os.PathLike) -> tuple[StudyDocument, dict]:
@@ -335,7 +365,8 @@ def expand_cases(document: StudyDocument, raw: dict, config_path,
         raise ConfigError(shown, [("blocks", "a study builds a block model per case: the base "
                                    "config needs a [blocks] section")])
     grid = flatten_overrides(study.grid)
-    listed = [flatten_overrides(entry) for entry in study.cases] or [{}]
+    listed = [flatten_overrides(case_overrides(entry)) for entry in study.cases] or [{}]
+    labels = [entry.get(LABEL_KEY, "") for entry in study.cases] or [""]
     seed_fields = _seed_fields(study, base)
     problems: list[tuple[str, str]] = []
     for path in seed_fields:
@@ -397,7 +428,8 @@ def expand_cases(document: StudyDocument, raw: dict, config_path,
                                                f"same config ({params_text(params) or 'the base config'}); a study "
                                                "runs each config once")])
                 seen[digest] = index
-                cases.append(StudyCase(index, params, r, seed, data, doc, digest, inputs))
+                cases.append(StudyCase(index, params, r, seed, data, doc, digest, inputs,
+                                       label=labels[entry_index], grid_paths=tuple(grid_paths)))
     return cases
 
 

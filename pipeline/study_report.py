@@ -31,7 +31,6 @@ from .html_report import BASE_CSS, figure, pyplot
 from .html_report import fmt as _fmt
 from .html_report import png_base64 as _png
 from .html_report import table as _table
-from .study_config import params_text
 
 __all__ = ["write_report", "report_data", "colour_field", "groups"]
 
@@ -140,7 +139,7 @@ def report_data(study, cases, records: dict) -> dict:
     for members in groups(cases, records).values():
         c0 = members[0][0]
         ok = [r for _, r in members if r.get("status") == "ok"]
-        entry = {"params": params_text(c0.params) or "base", "n": len(members), "n_ok": len(ok),
+        entry = {"params": c0.text, "n": len(members), "n_ok": len(ok),
                  "outcomes": outcome_counts(r for _, r in members)}
         for k in ("d_box", "d_box_r2", "p21_per_m", "n_blocks"):
             m, sd, n = _mean_sd([r.get(k) for r in ok])
@@ -152,7 +151,7 @@ def report_data(study, cases, records: dict) -> dict:
         rec = records.get(c.case_id)
         if rec is None or rec.get("status") == "ok":
             continue
-        base = {"case": c.index, "params": params_text(c.params) or "base",
+        base = {"case": c.index, "params": c.text,
                 "realization": c.realization}
         if rec.get("status") == "failed_blocks":
             out["failed_block_cases"].append({
@@ -258,7 +257,7 @@ def _figures(study, cases, records) -> list[tuple[str, str]]:
     for members in grouped.values():
         c0 = members[0][0]
         ok = [r for _, r in members if r.get("status") == "ok"]
-        labels.append(params_text(c0.params) or "base")
+        labels.append(c0.text)
         dvals.append([r["d_box"] for r in ok if r.get("d_box") is not None])
         yvals.append([y_of(r) for r in ok if y_of(r) is not None] if has_disp else [])
         fails = [r for _, r in members if r.get("status") == "failed_blocks"]
@@ -326,7 +325,7 @@ def _model_thumbnails(study, cases, records, config_path, limit: int = 6) -> lis
             except Exception:  # noqa: BLE001 - a missing thumbnail must not stop the report
                 continue
             disp = displacement_m(rec, study.displacement)
-            cap = (f"case {c.index}: {params_text(c.params) or 'base'}; D_box "
+            cap = (f"case {c.index}: {c.text}; D_box "
                    f"{rec['d_box']:.3f}, {model.n_blocks} blocks"
                    + (f", max displacement {disp * 1e3:.3g} mm" if disp is not None else "")
                    + (f"; {rec.get('status')}: {_reason(rec)}" if rec.get("status") != "ok"

@@ -316,6 +316,53 @@ blocks.two_sets.spacing_m = [4.0, 4.0]
     assert not (tmp_path / "o").exists()  # --list writes nothing
 
 
+
+LABELLED = """
+[study]
+[study.grid]
+blocks.two_sets.theta_deg = [60.0, 90.0]
+[[study.cases]]
+label = "steep set"
+"blocks.two_sets.alpha_deg" = 0.0
+[[study.cases]]
+blocks.two_sets.alpha_deg = 30.0
+"""
+
+
+def test_a_case_label_names_its_cases_and_changes_no_case_id(tmp_path, capsys):
+    """``label`` in a [[study.cases]] table names its cases (with the grid's values) in --list,
+    the progress lines and results.csv; it is not a config field, so the case ids are those of the
+    same study without it. The cases of an unlabelled table keep their field values."""
+    cfg = _write(tmp_path, BASE.split("[solve]")[0] + LABELLED)
+    plain = _write(tmp_path, BASE.split("[solve]")[0] + LABELLED.replace('label = "steep set"\n', ""),
+                   "plain.toml")
+    assert main(["study", str(cfg), "--out", str(tmp_path / "o"), "--list"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert main(["study", str(plain), "--out", str(tmp_path / "p"), "--list"]) == 0
+    plain_lines = capsys.readouterr().out.strip().splitlines()
+    assert [line.split()[1] for line in lines] == [line.split()[1] for line in plain_lines]
+    assert lines[0].endswith("steep set (theta_deg=60.0)") and lines[1].endswith("steep set (theta_deg=90.0)")
+    assert lines[3].endswith("alpha_deg=30.0, theta_deg=90.0")
+    out = tmp_path / "out"
+    assert main(["study", str(cfg), "--out", str(out), "--workers", "1"]) == 0
+    assert "steep set (theta_deg=60.0) r=0" in capsys.readouterr().err  # the progress line
+    rows = _rows(out / "results.csv")
+    assert [r["label"] for r in rows] == ["steep set", "steep set", "", ""]
+    assert list(rows[0])[:3] == ["case", "case_id", "label"]
+
+
+@pytest.mark.parametrize("label", ['""', "42", '"a\\nb"', '"' + "x" * 61 + '"'])
+def test_a_bad_case_label_exits_2_naming_it(tmp_path, capsys, label):
+    cfg = _write(tmp_path, BASE + f"""
+[study]
+[[study.cases]]
+label = {label}
+"blocks.two_sets.alpha_deg" = 0.0
+""")
+    assert main(["study", str(cfg), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "study.cases" in err and "[0].label: must be a line of text of 1 to 60 characters" in err
+
 @pytest.mark.parametrize("study, field, expected", [
     ('[study.grid]\nblocks.two_sets.thetaa_deg = [40.0]\n', "study.grid.blocks.two_sets.thetaa_deg",
      'unknown key .*did you mean "theta_deg"'),
