@@ -91,6 +91,11 @@ _PENALTY = 1e300
 #: Points of the first r_min grid of the power-law profile likelihood (then refined twice by 9 points;
 #: α is searched to 1e-4 in ln α at each, far below its statistical error).
 _R_MIN_GRID = 25
+#: Search range of the power-law exponent α (the density of radii ∝ r^(−α)). An α that ends
+#: within 0.1 % of either end is a boundary solution: the likelihood keeps rising beyond it, the
+#: traces do not bound α (too few, or of nearly one length), and the fit says so (``SizeFit.note``).
+ALPHA_RANGE = (0.02, 20.0)
+
 #: Log-parameter step of the power law's Hessian (see :func:`_profile_power_law`).
 _SMOOTH_STEP = 0.05
 
@@ -351,6 +356,9 @@ class SizeFit:
     ok : bool
     reason : str
         Why the fit failed ('' when ``ok``).
+    note : str
+        A caveat of a fit that is ``ok`` (e.g. a power-law exponent at the end of its search range,
+        :data:`ALPHA_RANGE`: the traces do not bound it), '' when there is none.
     """
 
     family: str
@@ -364,6 +372,7 @@ class SizeFit:
     counts: dict
     ok: bool = True
     reason: str = ""
+    note: str = ""
 
     def as_dict(self) -> dict:
         """JSON-ready (no NaN: undefined numbers are None)."""
@@ -372,7 +381,8 @@ class SizeFit:
         return {"family": self.family, "params": {k: clean(v) for k, v in self.params.items()},
                 "sd": {k: clean(v) for k, v in self.sd.items()}, "log_likelihood": clean(self.log_likelihood),
                 "aic": clean(self.aic), "mean_trace_length_m": clean(self.mean_trace_length_m),
-                "n_traces": self.n_traces, "counts": dict(self.counts), "ok": self.ok, "reason": self.reason}
+                "n_traces": self.n_traces, "counts": dict(self.counts), "ok": self.ok, "reason": self.reason,
+                "note": self.note}
 
 
 def _family(name: str, r_max: float):
@@ -525,7 +535,7 @@ def _profile_power_law(negative, samples: Sequence[CensoredTraces], lengths: np.
 
     def inner(log_rmin: float) -> tuple[float, float]:
         res = minimize_scalar(_power_law_at_r_min(samples, float(np.exp(log_rmin)), r_max),
-                              bounds=(np.log(0.02), np.log(20.0)), method="bounded", options={"xatol": 1e-4})
+                              bounds=tuple(np.log(ALPHA_RANGE)), method="bounded", options={"xatol": 1e-4})
         return float(res.x), float(res.fun)
 
     lo = np.log(0.01 * float(np.median(lengths)))
@@ -588,7 +598,13 @@ def _fit_family(family: str, samples: list[CensoredTraces], r_max: float) -> Siz
     if family == "power_law":
         params["r_max_m"] = float(r_max)
     ll = -float(best_fun)
-    return SizeFit(family, params, sd, size, ll, 2 * len(names) - 2 * ll, mean_trace_length_m(size), n, counts)
+    note = ""
+    if family == "power_law" and not (ALPHA_RANGE[0] * 1.001 < params["alpha"] < ALPHA_RANGE[1] / 1.001):
+        note = (f"alpha {params['alpha']:.4g} is at the end of its search range "
+                f"{ALPHA_RANGE[0]:g}-{ALPHA_RANGE[1]:g}: these {n} traces do not bound the power law's "
+                "exponent; compare the other families' AIC or map more traces")
+    return SizeFit(family, params, sd, size, ll, 2 * len(names) - 2 * ll, mean_trace_length_m(size), n, counts,
+                   note=note)
 
 
 def fit_sizes(samples: CensoredTraces | Sequence[CensoredTraces], *, families: Sequence[str] = FAMILIES,

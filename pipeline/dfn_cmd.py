@@ -70,6 +70,8 @@ def summary_text(seed, results, fit) -> str:
             size = "no size law" if s.size is None or not s.size.ok else s.size.family
             lines.append(f"fitted {s.name}: dip/dip direction {dip_text(s.mean_dip_deg, s.mean_dip_direction_deg)}, "
                          f"kappa {s.kappa:.3g}, P32 {s.p32:.4g} ± {s.p32_sd:.2g} m²/m³, {size}")
+            if s.size is not None and s.size.ok and s.size.note:
+                lines.append(f"  note: {s.name} size: {s.size.note}")
     for index, _, summary, rows in results:
         total = summary["total"]
         check = "" if not rows else f"; validation {sum(r['ok'] for r in rows)}/{len(rows)} within tolerance"

@@ -104,6 +104,19 @@ def test_power_law_exponent_is_recovered_within_0_1_from_1000_censored_traces():
     assert fit.ok
     assert abs(fit.params["alpha"] - truth.alpha) <= min(0.1, 3 * fit.sd["alpha"])
     assert abs(fit.params["r_min_m"] - truth.r_min_m) <= 3 * fit.sd["r_min_m"]
+    assert fit.note == "" and fit.as_dict()["note"] == ""
+
+
+def test_a_power_law_exponent_the_traces_do_not_bound_is_noted():
+    """Disks of one radius leave no tail for a power law: the likelihood rises with α up to the end
+    of its search range, and the fit says so instead of presenting α = 20 as a measurement (the
+    quickstart's second set, 7 traces, gave α = 20 ± 36 before session 24)."""
+    rng = np.random.default_rng(5)  # fixed seed
+    tm = _simulate(lambda n: np.full(n, 2.0), rng, 300, 20.0, 10.0, mean_len=3.1)
+    fit = fit_sizes(censored_traces(tm), families=("power_law",), r_max_m=50.0)["power_law"]
+    assert fit.ok and fit.params["alpha"] > 19.9
+    assert "do not bound the power law's exponent" in fit.note
+    assert fit.as_dict()["note"] == fit.note
 
 
 def test_ignoring_censoring_would_bias_the_mean_length_that_the_fit_recovers():
