@@ -49,6 +49,8 @@ def _set_laws(run: _Run) -> dict[str, tuple[str, str, str]]:
             size = s.get("size") or {}
             law = (_size_text(size.get("family", ""), size.get("params") or {}) if size.get("ok", True)
                    else f"none ({size.get('reason', '')})")
+            if size.get("ok", True) and size.get("note"):  # e.g. an exponent the traces do not bound
+                law += f" (note: {size['note']})"
             laws[s.get("name")] = ("fitted", _orientation_text(s.get("orientation") or {}), law)
     return laws
 

@@ -441,6 +441,14 @@ def test_fitted_dfn_sets_show_the_fitted_orientation_and_size_law(run_dir, tmp_p
         law = row[header.index("size law (radius)")]
         assert law.startswith(s["size"]["family"])
         assert f"alpha {s['size']['params']['alpha']:.4g}" in law
+        assert ("(note: " in law) == bool(s["size"].get("note"))
+    # a fit's note (an exponent the traces do not bound, dfn.size_fit) is shown beside its law
+    doc = _stage_json(out, "dfn", "fitted.json")
+    doc["sets"][0]["size"]["note"] = "alpha 20 is at the end of its search range"
+    (out / "dfn" / "fitted.json").write_text(json.dumps(doc), encoding="utf-8")
+    page_noted = _Page.parse(write_run_report(out))
+    noted = {r[1]: r for r in page_noted.tables["t-dfn"][1:]}[doc["sets"][0]["name"]]
+    assert noted[header.index("size law (radius)")].endswith("(note: alpha 20 is at the end of its search range)")
     rows = _stage_json(out, "dfn", "realization_0000/validation.json")["rows"]
     assert (f"realization 0: {sum(r['ok'] for r in rows)} of {len(rows)} field measures within "
             "tolerance") in page.sections["dfn"]
