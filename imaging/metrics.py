@@ -509,9 +509,8 @@ def trace_accuracy(extracted, truth, *, m_per_px: float, buffer_px: float = 3.0,
     Notes
     -----
     P21 = Σ length / window area and P20 = number of traces / window area, both maps over the
-    truth's window. Extracted
-    sets are matched to true ones by the assignment that minimises the summed axial angle
-    differences (Hungarian method).
+    truth's window. Extracted sets are matched to true ones by the assignment that minimises the
+    summed axial angle differences (Hungarian method).
     """
     from scipy.optimize import linear_sum_assignment
 

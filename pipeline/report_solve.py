@@ -121,7 +121,7 @@ def _section_histories(run: _Run) -> str:
         if failed is None:
             ax.plot(t, u, label=m)
             continue
-        end = _removal_row(h, m, failed["stage"])
+        end = _removal_row(h, failed)
         line, = ax.plot(t[:end + 1], u[:end + 1], label=f"{m} (failed: {failed['mechanism']}, taken out)")
         ax.plot([t[end]], [u[end]], "x", color=line.get_color())
     ax.set_ylabel("displacement (mm)")
@@ -161,13 +161,14 @@ def _section_histories(run: _Run) -> str:
     return "".join(parts)
 
 
-def _removal_row(history: dict, monitor: str, stage: str) -> int:
-    """The last history row of a failed monitor's block before it was taken out: the first row of
-    ``stage`` from which its recorded position no longer changes (a block taken out is frozen)."""
-    ux, uy, stages = history[f"{monitor}_ux_m"], history[f"{monitor}_uy_m"], history["stage"]
-    rows = [i for i, s in enumerate(stages) if s == stage]
-    if not rows:
-        return len(ux) - 1
-    last = (ux[rows[-1]], uy[rows[-1]])
-    return next((i for i in rows if (ux[i], uy[i]) == last), rows[-1])
-
+def _removal_row(history: dict, failed: dict) -> int:
+    """The last history row of a failed monitor's block before it was taken out: the last row at
+    or before ``failed["time_s"]`` (:class:`rockmass.solver.failure.FailedBlock`), or the last row
+    of its stage for a result written before that time was recorded."""
+    times, stages = history["time_s"], history["stage"]
+    rows = [i for i, s in enumerate(stages) if s == failed["stage"]] or [len(times) - 1]
+    removed = failed.get("time_s")
+    if removed is None:
+        return rows[-1]
+    before = [i for i in rows if times[i] <= removed]
+    return before[-1] if before else rows[0]

@@ -111,7 +111,8 @@ def _monitor_summary(result, model, settings) -> dict:
     A monitor whose block failed (kept moving in a static stage and was taken out,
     :class:`rockmass.solver.failure.FailedBlock`) has no displacement from that stage on: a fall
     is not a displacement of the rock mass. Its entry says so (``failed``: the stage, the
-    mechanism and how far the block had moved when it was taken out) and has no ``final_*``
+    mechanism, how far the block had moved and the simulated time when it was taken out) and has
+    no ``final_*``
     values; the stages before keep theirs."""
     import numpy as np
 
@@ -180,7 +181,8 @@ def _failure_of(result, block: int) -> dict | None:
         for failed in stage.failed_blocks:
             if original(int(failed["block"])) == original(block):
                 return {"stage": stage.name, "mechanism": failed["mechanism"],
-                        "displacement_at_removal_m": float(failed["displacement_m"])}
+                        "displacement_at_removal_m": float(failed["displacement_m"]),
+                        "time_s": float(failed["time_s"])}
     return None
 
 

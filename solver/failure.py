@@ -55,11 +55,12 @@ class FailedBlock:
     x_m: float
     y_m: float
     sliver: bool
+    time_s: float  # simulated time when it was taken out (the run's clock)
 
     def to_dict(self) -> dict:
         return {"block": self.block, "area_m2": self.area_m2, "mechanism": self.mechanism,
                 "displacement_m": self.displacement_m, "x_m": self.x_m, "y_m": self.y_m,
-                "sliver": self.sliver}
+                "sliver": self.sliver, "time_s": self.time_s}
 
 
 class FailureWatch:
@@ -129,7 +130,8 @@ class FailureWatch:
                 area = float(e.model.area_m2[e.zoned.parent == e.zoned.parent[b]].sum())
             out.append(FailedBlock(block=b, area_m2=area, mechanism=mechanism,
                                    displacement_m=float(disp[b]), x_m=float(e.pos[b, 0]),
-                                   y_m=float(e.pos[b, 1]), sliver=area < self.sliver_area_m2))
+                                   y_m=float(e.pos[b, 1]), sliver=area < self.sliver_area_m2,
+                                   time_s=float(e.time_s)))
         return out
 
 

@@ -678,14 +678,15 @@ def test_the_histories_section_reports_a_failed_monitor_as_failed(tmp_path):
         writer.writerow(["time_s", "stage", "crown_ux_m", "crown_uy_m", "wall_ux_m", "wall_uy_m"])
         for stage, t, ux, uy in rows:
             writer.writerow([t, stage, ux, uy, 0.0005 * t, 0.0])
-    monitors = {"crown": {"block": 7, "stages": [], "failed": {
-                    "stage": "arch", "mechanism": "fall", "displacement_at_removal_m": 0.02}},
+    failed = {"stage": "arch", "mechanism": "fall", "displacement_at_removal_m": 0.02, "time_s": 0.32}
+    monitors = {"crown": {"block": 7, "stages": [], "failed": failed},
                 "wall": {"block": 3, "stages": [], "final_ux_m": 0.00025, "final_uy_m": 0.0,
                          "final_displacement_m": 0.00025}}
     (solve / "result.json").write_text(json.dumps({"monitors": monitors}))
-    history = {"stage": [r[0] for r in rows], "crown_ux_m": [r[2] for r in rows],
-               "crown_uy_m": [r[3] for r in rows]}
-    assert _removal_row(history, "crown", "arch") == 3  # the first of the frozen rows
+    history = {"stage": [r[0] for r in rows], "time_s": [r[1] for r in rows]}
+    assert _removal_row(history, failed) == 3  # the last row at or before the removal (0.32 s)
+    legacy = {k: v for k, v in failed.items() if k != "time_s"}  # a result.json before session 24
+    assert _removal_row(history, legacy) == 5  # the stage's last row
     html = _section_histories(_Run(tmp_path))
     assert "failed in stage arch (fall): no displacement" in html
     assert "ends with a cross where the block was taken out" in html

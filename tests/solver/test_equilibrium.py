@@ -56,8 +56,8 @@ def test_a_monitor_on_a_failed_block_reports_the_failure_not_a_displacement():
     """``rockmass solve`` summarises each monitor (result.json, the CLI line, the report): a
     monitor whose block fell says so and gives no final displacement (before session 24 it gave
     the fallen block's drop as ``final_displacement_m``); a monitor on a block that stays keeps its
-    displacement. The report's history plot ends the fallen block's curve where it was taken out
-    (a removed block's recorded position no longer changes)."""
+    displacement. The report's history plot ends the fallen block's curve at the time it was taken
+    out, after which its recorded position no longer changes."""
     from rockmass.report_solve import _removal_row
     from rockmass.solve_cmd import _summary_line
     from rockmass.solve_stage import _monitor_summary
@@ -74,17 +74,20 @@ def test_a_monitor_on_a_failed_block_reports_the_failure_not_a_displacement():
     loose, top = summary["loose"], summary["top"]
     fell = result.stages[0].failed_blocks[0]
     assert loose["failed"] == {"stage": "settle", "mechanism": "fall",
-                               "displacement_at_removal_m": fell["displacement_m"]}
+                               "displacement_at_removal_m": fell["displacement_m"], "time_s": fell["time_s"]}
+    assert 0 < fell["time_s"] < result.history["time_s"][-1]
     assert "final_displacement_m" not in loose and loose["stages"] == []
     assert "failed" not in top and top["final_displacement_m"] < 1e-3
     line = _summary_line(result, {"monitors": summary})
     assert "monitor loose (block 5): failed in stage settle (fall" in line and "no displacement" in line
     history = {k: list(np.asarray(v)) for k, v in result.history.items()}
-    end = _removal_row(history, "loose", "settle")
+    end = _removal_row(history, loose["failed"])
     drop = np.hypot(history["loose_ux_m"][end], history["loose_uy_m"][end])
     assert 0 < end < len(history["stage"]) - 1           # taken out before the stage ended
     assert drop == pytest.approx(fell["displacement_m"], rel=0.05)
     assert np.hypot(history["loose_ux_m"][end - 1], history["loose_uy_m"][end - 1]) < drop
+    frozen = {(history["loose_ux_m"][i], history["loose_uy_m"][i]) for i in range(end + 1, len(history["stage"]))}
+    assert len(frozen) == 1                              # every row after the removal: one position
 
 
 def test_converged_means_every_block_and_its_moment():
