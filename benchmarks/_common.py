@@ -47,3 +47,22 @@ def save(name: str, payload: dict) -> Path:
     path = RESULTS / f"{name}.json"
     path.write_text(json.dumps(payload, indent=2))
     return path
+
+
+#: Detector names the benchmarks take: ExtractParams' detectors, "cnn", the learned chain with
+#: the shipped convolutional network, and "auto+cnn", "auto" with the network among its candidates
+#: at the ratio chosen for it (``auto_network_ratio`` = :data:`NETWORK_RATIO`; docs/imaging.md §3.6).
+DETECTOR_NAMES = ("auto", "learned", "ridge", "cnn", "auto+cnn")
+#: ``auto_network_ratio`` chosen on the real train/ photographs (bench_network_ratio.py).
+NETWORK_RATIO = 1.3
+
+
+def detector_params(name: str, **settings):
+    """The ExtractParams of a benchmark's detector name (:data:`DETECTOR_NAMES`) and settings."""
+    from rockmass.imaging.extract import ExtractParams
+
+    if name == "cnn":
+        return ExtractParams(detector="learned", pixel_model="cnn", **settings)
+    if name == "auto+cnn":
+        return ExtractParams(detector="auto", auto_network_ratio=NETWORK_RATIO, **settings)
+    return ExtractParams(detector=name, **settings)

@@ -1,7 +1,7 @@
 """Whole-process extraction: ``rockmass extract PHOTO --out DIR``, one face at 3-24 MP (issue 20).
 
     python benchmarks/bench_extract_process.py [--quick] [--sizes 3,6,12,16,24]
-                                               [--detectors ridge,learned,auto] [--no-full-resolution]
+                                               [--detectors ridge,learned,auto,auto+cnn] [--no-full-resolution]
 
 One synthetic face, 12 m x 8 m, with exact ground truth (:func:`rockmass.imaging.synthetic_face`,
 "moderate" spoiling, seed 1), is photographed at several resolutions: it is rendered once at the
@@ -57,7 +57,7 @@ from pathlib import Path
 
 import numpy as np
 
-from _common import header, save, table
+from _common import NETWORK_RATIO, header, save, table
 
 FACE_WIDTH_M, FACE_HEIGHT_M = 12.0, 8.0
 SEED = 1
@@ -166,12 +166,23 @@ def score(out: Path, truth) -> dict:
             "timings_s": ext["timings_s"], "processing": ext["scale"]["processing"]}
 
 
+def detector_args(detector: str, folder: Path) -> list[str]:
+    """The command's arguments for a detector name; "auto+cnn" is "auto" with the convolutional
+    network among its candidates, given by a config in ``folder`` (docs/imaging.md §3.6)."""
+    if detector != "auto+cnn":
+        return ["--detector", detector]
+    config = folder / "network.toml"
+    config.write_text(f"[imaging.params]\nauto_network_ratio = {NETWORK_RATIO}\n")
+    return ["--detector", "auto", "--config", str(config)]
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="the smallest two sizes (3 and 6 MP)")
     parser.add_argument("--sizes", default="3,6,12,16,24", help="photo sizes, MP (default 3,6,12,16,24)")
     parser.add_argument("--detectors", default="ridge,learned,auto",
-                        help="--detector values (default all three)")
+                        help="--detector values (default all three), or auto+cnn: auto with "
+                             "[imaging.params] auto_network_ratio = 1.3 (docs/imaging.md §3.6)")
     parser.add_argument("--no-full-resolution", action="store_true",
                         help="skip the max_megapixels = 1000 row at 12 MP")
     args = parser.parse_args(argv)
@@ -194,9 +205,9 @@ def main(argv=None) -> int:
         out = folder / "out"
         path, m_per_px, _ = photos[sizes[0]]
         if args.quick:  # no first-run rows: one untimed run fills the caches
-            run_command(path, out, m_per_px, ["--detector", detectors[0]])
+            run_command(path, out, m_per_px, detector_args(detectors[0], folder))
         for detector in detectors if not args.quick else ():  # first run per detector, apart
-            res = run_command(path, out, m_per_px, ["--detector", detector])
+            res = run_command(path, out, m_per_px, detector_args(detector, folder))
             first.append({"detector": detector, "setting": "first run", "MP": sizes[0], **res,
                           **score(out, truth)})
         config = folder / "full_resolution.toml"
@@ -214,7 +225,7 @@ def main(argv=None) -> int:
         for size, detector, setting, extra in cases:
             path, m_per_px, shape = photos[size]
             try:
-                res = run_command(path, out, m_per_px, ["--detector", detector, *extra])
+                res = run_command(path, out, m_per_px, [*detector_args(detector, folder), *extra])
             except RuntimeError as exc:  # keep the other rows; the failure is printed and saved
                 print(f"  {detector} {setting} {size:g} MP failed: {exc}", flush=True)
                 rows.append({"detector": detector, "setting": setting, "MP": size, "error": str(exc)})

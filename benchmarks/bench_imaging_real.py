@@ -95,7 +95,7 @@ from pathlib import Path
 
 import numpy as np
 
-from _common import header, save, table
+from _common import detector_params, header, save, table
 
 from rockmass.imaging.label_scores import TOLERANCE_PX, label_trace_count
 from rockmass.imaging.metrics import summarise_counts
@@ -271,7 +271,7 @@ def agreement_section(splits, quick: bool) -> tuple[list[dict], list[dict]]:
                 row = {"faces": name, "seed": seed, "agreement": values[-1]}
                 for detector in ("learned", "ridge"):
                     result = extract(face.image, m_per_px=face.m_per_px,
-                                     params=ExtractParams(detector=detector))
+                                     params=detector_params(detector))
                     acc = trace_accuracy(result.traces, face.truth,
                                          m_per_px=face.m_per_px / result.scale.work_factor)
                     row.update({f"F1_{detector}": acc.f1, f"dP21_{detector}_%": 100 * acc.p21_rel_error})
@@ -520,13 +520,13 @@ def main(argv=None) -> int:
         for detector in detectors:
             extra_settings = LEARNED_SETTINGS if detector == "learned" and not args.no_settings else ()
             for label, extra in (*settings, *extra_settings):
-                row = score_real(pairs, ExtractParams(detector=detector, **extra), 3.0)
+                row = score_real(pairs, detector_params(detector, **extra), 3.0)
                 rows.append({"split": split, "detector": detector, "setting": label, **row})
-            row = score_real(pairs, ExtractParams(detector=detector), 3.0, min_joint_score=LOW_SCORE)
+            row = score_real(pairs, detector_params(detector), 3.0, min_joint_score=LOW_SCORE)
             rows.append({"split": split, "detector": detector,
                          "setting": f"defaults, joint score >= {LOW_SCORE:g}", **row})
             order_rows.append({"split": split, "detector": detector,
-                               **trace_ordering(pairs, ExtractParams(detector=detector), 3.0)})
+                               **trace_ordering(pairs, detector_params(detector), 3.0)})
         role = ("only measured, never tuned on" if split == "val"
                 else "the learned detector's settings were chosen here")
         print(f"\n1. real faces: {DATA / split} ({len(pairs)} images, {role}; labels skeletonised, "
@@ -562,16 +562,16 @@ def main(argv=None) -> int:
                     label = detector if mode is None else f"{detector}, face_mask={mode}"
                     extra = {} if mode is None else {"face_mask": mode}
                     rows.append({"detector": label, "faces": f"{name}, seeds {seeds}",
-                                 **score_synthetic(make, seeds, ExtractParams(detector=detector, **extra))})
+                                 **score_synthetic(make, seeds, detector_params(detector, **extra))})
                 rows.append({"detector": f"{detector}, joint score >= {LOW_SCORE:g}",
                              "faces": f"{name}, seeds {seeds}",
-                             **score_synthetic(make, seeds, ExtractParams(detector=detector),
+                             **score_synthetic(make, seeds, detector_params(detector),
                                                min_joint_score=LOW_SCORE)})
                 if detector == "learned" and not args.no_settings:
                     for label, extra in SYNTHETIC_SETTINGS:
                         rows.append({"detector": f"learned, {label}", "faces": f"{name}, seeds {seeds}",
                                      **score_synthetic(make, seeds,
-                                                       ExtractParams(detector=detector, **extra))})
+                                                       detector_params(detector, **extra))})
         print("\n2. synthetic faces (1000 x 1500 px; buffered F1 at 3 px, means over seeds)")
         print(table(rows, SYNTH_COLUMNS))
         payload["synthetic"] = rows
@@ -581,7 +581,7 @@ def main(argv=None) -> int:
         rows = []
         for detector in detectors:
             t0 = time.perf_counter()
-            extract(face.image, m_per_px=face.m_per_px, params=ExtractParams(detector=detector))
+            extract(face.image, m_per_px=face.m_per_px, params=detector_params(detector))
             elapsed = time.perf_counter() - t0
             rows.append({"detector": detector, "MP": face.image.size / 1e6, "time_s": elapsed,
                          "MP_per_s": face.image.size / 1e6 / elapsed})
@@ -616,7 +616,7 @@ def main(argv=None) -> int:
                 for factor in [1.0, *enlargements]:
                     for width in ([None] if factor == 1.0 else [None, 3.0 * factor]):
                         for label, extra in variants:
-                            row = score_real(pairs, ExtractParams(detector=detector, **extra), width,
+                            row = score_real(pairs, detector_params(detector, **extra), width,
                                              upsample=factor)
                             rows.append({"split": split, "detector": f"{detector}, {label}"
                                          if label else detector, "enlarged": factor,

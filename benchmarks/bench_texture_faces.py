@@ -1,7 +1,7 @@
 """Joints of known position drawn on real rock: the detectors on a texture they were not made on.
 
     python benchmarks/bench_texture_faces.py [--sets val,train,tiles,gravel] [--difficulty moderate]
-                                             [--detectors auto,learned,ridge] [--limit N]
+                                             [--detectors auto,learned,ridge,cnn,auto+cnn] [--limit N]
 
 The plain synthetic faces (:func:`rockmass.imaging.synthetic_face`) draw their joints on a rock
 texture of the same module, and the ridge chain's defaults were tuned on them; the learned
@@ -23,14 +23,19 @@ rock-face labels mark only the major ones) stay in the scored part, as the clutt
 Scoring: the buffered F1 of the synthetic benchmark (3 px), the recall of the joints drawn 1-2, 3-4
 and 5-6 px wide apart (``R_w12`` ...; the mean over the photographs that have such joints), dP21
 over the scored part, the largest error of the three set mean angles, averaged over the
-photographs; "auto" also reports how often it
-kept the ridge traces, and "better of the two" is the mean over the photographs of the higher F1 of
-the learned and the ridge detector: the most a per-photo choice between them could reach. Sets: ``val`` and ``train`` of ``../shared/data/rock-face-fractures`` (AGPL;
+photographs; "auto" also reports on how many faces it kept the ridge filter's, the pixel model's
+and the convolutional network's traces (``auto_kept``, ridge/learned/cnn), and "better of the two"
+is the mean over the photographs of the higher F1 of the learned and the ridge detector: the most a
+per-photo choice between them could reach. ``cnn`` is the learned chain with the shipped network,
+``auto+cnn`` "auto" with the network among its candidates (``auto_network_ratio`` = 1.3;
+docs/imaging.md §3.6). Sets: ``val`` and ``train`` of ``../shared/data/rock-face-fractures`` (AGPL;
 read, never shipped; about 400 px square), ``tiles``, the 20 drone tiles of
 ``benchmarks/data/marques2022`` (MIT; 500 px), and ``gravel``, scikit-image's photograph of gravel
 (CC0; 512 px; no fractures of its own), under the networks of seeds 1-8. Every photo is drawn at :data:`M_PER_PX` (the
 synthetic benchmark's 8 mm per pixel, so the joints have the density in pixels of its faces) with
-seed = 1 + its index in the set, sorted by name. Nothing is tuned on these faces. Rows also go to
+seed = 1 + its index in the set, sorted by name. Nothing but ``auto_network_ratio`` (chosen on the
+``train`` faces with the ``train`` photographs' own labels, docs/imaging.md §3.6) is tuned on these
+faces; ``val``, the tiles and the gravel are only measured. Rows also go to
 benchmarks/results/bench_texture_faces.json.
 """
 
@@ -45,7 +50,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import header, save, table  # noqa: E402
+from _common import DETECTOR_NAMES, detector_params, header, save, table  # noqa: E402
 
 #: Scale of the drawn network (m per pixel): the synthetic benchmark's faces' (docs/imaging.md §8).
 M_PER_PX = 0.008
@@ -63,7 +68,7 @@ GRAVEL_FACES = 8
 WIDTH_CLASSES = ((1, 2), (3, 4), (5, 6))
 COLUMNS = [("set", "s"), ("texture", "s"), ("detector", "s"), ("faces", "d"), ("F1", ".3f"),
            ("P", ".3f"), ("R", ".3f"), *((f"R_w{lo}{hi}", ".3f") for lo, hi in WIDTH_CLASSES),
-           ("dP21_pct", "+.0f"), ("set_angle_deg", ".1f"), ("ridge_kept", "s"), ("ignored_pct", ".1f"),
+           ("dP21_pct", "+.0f"), ("set_angle_deg", ".1f"), ("auto_kept", "s"), ("ignored_pct", ".1f"),
            ("s_per_face", ".2f")]
 
 
@@ -108,7 +113,7 @@ def score_photo(job) -> list[dict]:
     import cv2
 
     from rockmass.imaging import joints_on_photo, synthetic_face
-    from rockmass.imaging.extract import ExtractParams, extract
+    from rockmass.imaging.extract import extract
     from rockmass.imaging.metrics import buffered_match, trace_accuracy
 
     photo_path, label, seed, difficulty, detectors = job
@@ -128,7 +133,7 @@ def score_photo(job) -> list[dict]:
     for texture, face in faces.items():
         for detector in detectors:
             t0 = time.perf_counter()
-            result = extract(face.image, m_per_px=face.m_per_px, params=ExtractParams(detector=detector))
+            result = extract(face.image, m_per_px=face.m_per_px, params=detector_params(detector))
             seconds = time.perf_counter() - t0
             if result.scale.work_factor != 1:  # the ignore mask is on the photo's own pixels
                 raise SystemExit(f"{photo_path}: processed down-sampled ({result.scale.work_factor:g}x); "
@@ -146,7 +151,7 @@ def score_photo(job) -> list[dict]:
                          "F1": accuracy.f1, "P": accuracy.precision, "R": accuracy.recall,
                          "dP21_pct": 100 * accuracy.p21_rel_error,
                          "set_angle_deg": max(accuracy.set_angle_errors_deg, default=float("nan")),
-                         "ridge_kept": kept == "ridge" if detector == "auto" else None,
+                         "auto_kept": kept if detector.startswith("auto") else None,
                          "ignored_pct": 100 * float(ignore.mean()), "seconds": seconds, **by_width})
     return rows
 
@@ -163,12 +168,13 @@ def summary(rows: list[dict], set_name: str) -> list[dict]:
             def mean(key):
                 return float(np.nanmean([r[key] for r in mine]))
 
-            kept = [r["ridge_kept"] for r in mine if r["ridge_kept"] is not None]
+            kept = [r["auto_kept"] for r in mine if r["auto_kept"] is not None]
             out.append({"set": set_name, "texture": texture, "detector": detector, "faces": len(mine),
                         "F1": mean("F1"), "P": mean("P"), "R": mean("R"), "dP21_pct": mean("dP21_pct"),
                         **{key: mean(key) for key in (f"R_w{lo}{hi}" for lo, hi in WIDTH_CLASSES)},
                         "set_angle_deg": mean("set_angle_deg"),
-                        "ridge_kept": f"{sum(kept)}/{len(kept)}" if kept else None,
+                        "auto_kept": "/".join(str(kept.count(d)) for d in ("ridge", "learned", "cnn"))
+                        if kept else None,
                         "ignored_pct": mean("ignored_pct"), "s_per_face": mean("seconds")})
         pairs = {}
         for r in rows:
@@ -186,13 +192,13 @@ def main(argv=None) -> int:
     parser.add_argument("--sets", default=",".join(SETS),
                         help=f"comma-separated, of {', '.join(SETS)} (default all)")
     parser.add_argument("--difficulty", default="moderate", choices=("easy", "moderate", "hard"))
-    parser.add_argument("--detectors", default="auto,learned,ridge")
+    parser.add_argument("--detectors", default="auto,learned,ridge,cnn,auto+cnn")
     parser.add_argument("--limit", type=int, default=0, help="first N photos of each set (0: all)")
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args(argv)
     sets = [s for s in args.sets.split(",") if s]
     detectors = [d for d in args.detectors.split(",") if d]
-    unknown = [s for s in sets if s not in SETS] + [d for d in detectors if d not in ("auto", "learned", "ridge")]
+    unknown = [s for s in sets if s not in SETS] + [d for d in detectors if d not in DETECTOR_NAMES]
     if unknown or not sets or not detectors or args.limit < 0 or args.workers < 1:
         parser.error(f"bad --sets / --detectors / --limit / --workers ({', '.join(unknown) or 'empty'})")
 

@@ -58,6 +58,12 @@ MIN_SIDE_PX = 16
 DETECTORS = ("ridge", "learned")
 #: ``ExtractParams.detector`` that runs both and keeps one per photo (:func:`detector_agreement`).
 AUTO = "auto"
+#: The shipped model (:data:`rockmass.imaging.learned.SHIPPED_MODELS`) that "auto" also runs the
+#: learned chain with, the convolutional network (:func:`network_length_ratio`, docs/imaging.md §3.6).
+AUTO_NETWORK = "cnn"
+#: ``Extraction.debug`` name of each chain's response.
+_RESPONSE_NAMES = {"ridge": "ridge_response", "learned": "joint_probability",
+                   AUTO_NETWORK: "network_probability"}
 #: Distance (pixels of a working grid of :data:`REFERENCE_MEGAPIXELS`) within which a ridge trace
 #: pixel counts as found by the learned detector too (:func:`detector_agreement`): the
 #: tolerance the real labelled photographs are scored at.
@@ -128,6 +134,17 @@ class ExtractParams:
         the ridge filter draws several times their labelled length there) and the smallest on
         plain synthetic faces (0.61), whose thin faint lines the learned detector misses
         (``benchmarks/bench_imaging_real.py``, section 6). 1 keeps the learned traces always.
+    auto_network_ratio : float, default inf
+        With ``detector = "auto"`` and no ``pixel_model``, and a finite value: "auto" also runs
+        the learned chain with the shipped convolutional network (``pixel_model = "cnn"``,
+        docs/imaging.md §3.6) and keeps its traces instead of the pixel model's when their total
+        length is at least this many times the pixel model's (:func:`network_length_ratio`);
+        never instead of the ridge filter's. 1.3 is the value chosen on the 99 real training
+        photographs of rock-face-fractures, as the smallest at which the network costs their
+        labels nothing, and measured on joints drawn over the same photographs
+        (``benchmarks/bench_network_ratio.py``): give it for textured faces whose thin joints
+        matter. ``inf`` (the default, for now: the network adds about 2.6 s to a 12 MP photo,
+        below the 2 MP/s the command is held to) does not run the network.
     line_polarity : {"dark", "bright"}, default "dark"
         Joints to look for: dark lines (open joints, shadowed traces) or bright ones (calcite- or
         clay-filled joints, veins, mortar). On ``skimage.data.brick()`` "dark" traces the brick
@@ -272,16 +289,19 @@ class ExtractParams:
         Chosen on the real ``train/`` photographs, as they are and enlarged 2 and 4 times
         (``benchmarks/bench_imaging_real.py --upsampled 2,4``).
     pixel_model : str or None, default None
-        The learned detector's model file (``.npz``); None: the one shipped in the package
-        (:data:`rockmass.imaging.learned.MODEL_FILE`). A model trained on the user's own labelled
+        The learned detector's model file: a pixel model (``.npz``) or a convolutional network
+        (``.onnx``, docs/imaging.md §3.6); None: the pixel model shipped in the package
+        (:data:`rockmass.imaging.learned.MODEL_FILE`); "mlp" or "cnn": the shipped pixel model or
+        network. A model trained on the user's own labelled
         photographs by ``python -m rockmass.imaging.train_pixel_model --photos DIR --labels DIR``
         (docs/imaging.md §3.2); a relative path is taken from the working directory. The
-        thresholds and trace filters above were chosen for the shipped model.
+        thresholds and trace filters above were chosen for the shipped pixel model.
     """
 
     max_megapixels: float = 4.0
     detector: str | None = None
     auto_agreement: float = 0.55
+    auto_network_ratio: float = float("inf")
     line_polarity: str = "dark"
     flatten_method: str = "divide"
     background_sigma_px: float = 40.0
@@ -332,6 +352,10 @@ class ExtractParams:
         value = self.auto_agreement
         if not (isinstance(value, (int, float)) and 0 <= value <= 1):
             raise ValueError(f"params.auto_agreement must be a share in 0-1, got {value!r}")
+        value = self.auto_network_ratio
+        if not (isinstance(value, (int, float)) and value > 0):
+            raise ValueError(f"params.auto_network_ratio must be a positive ratio (inf: never keep "
+                             f"the network's traces), got {value!r}")
         from .face_mask import FACE_MASK_MODES
 
         if self.face_mask not in FACE_MASK_MODES:
@@ -1172,6 +1196,41 @@ def detector_agreement(ridge_chains, learned_chains, shape_px, *,
     return confirmed / ridge if ridge else 0.0
 
 
+def network_length_ratio(network_traces, learned_traces) -> float:
+    r"""Total trace length of the convolutional network's chain over the pixel model's.
+
+    The two learned chains (§3.1, §3.6) both mark joint centre lines and both leave texture out,
+    but the pixel model, made for the major open joints real labels mark, loses thin and faint
+    joints on textured rock, where the network, trained on joints drawn over many textures, keeps
+    them. Where it finds clearly more joint length,
+
+    .. math:: \rho = \frac{\sum \ell_{\mathrm{network}}}{\sum \ell_{\mathrm{pixel\ model}}}
+              \ge \rho_{\min}
+
+    (``auto_network_ratio``, 1.3 when given), "auto" keeps the network's traces (docs/imaging.md
+    §3.6).
+
+    Returns
+    -------
+    float
+        The ratio; ``inf`` when the pixel model found nothing and the network something, 0 when
+        the network found nothing.
+
+    Examples
+    --------
+    >>> from rockmass.dfn import TraceMap
+    >>> short = TraceMap.from_polylines([np.array([[0.0, 0.0], [1.0, 0.0]])])
+    >>> long = TraceMap.from_polylines([np.array([[0.0, 0.0], [3.0, 0.0]])])
+    >>> network_length_ratio(long, short), network_length_ratio(short, long) < 1
+    (3.0, True)
+    """
+    network = float(network_traces.lengths_m().sum()) if network_traces.n_traces else 0.0
+    pixel_model = float(learned_traces.lengths_m().sum()) if learned_traces.n_traces else 0.0
+    if pixel_model > 0:
+        return network / pixel_model
+    return float("inf") if network > 0 else 0.0
+
+
 def extract(image_or_path, *, m_per_px: float | None = None, control_points=None,
             joint_width_px: float | None = None, joint_width_m: float | None = None, roi=None,
             face_dip_deg: float | None = None, face_dip_direction_deg: float | None = None,
@@ -1293,15 +1352,19 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         return min(width_work, learned_width) if level == 1 else learned_width
 
     uses_learned = params.detector in (AUTO, "learned")
+    uses_network = (params.detector == AUTO and params.pixel_model is None
+                    and np.isfinite(params.auto_network_ratio))
     levels = (grid_levels.usable_levels(params.learned_levels, work_shape)
               if uses_learned and trace_score.scoring() else ())
 
-    def detect(detector, image, detector_clock, level=1):  # (the run, its traces)
+    def detect(detector, image, detector_clock, level=1, model=None):  # (the run, its traces)
         width = learned_width_on(level) if detector == "learned" else width_work
         level_mask, shape = mask, work_shape
         if level > 1:  # a coarser grid (§3.4)
             image, level_mask, shape = grid_levels.coarsen(image, mask, level)
         grid_params = given_params.for_detector(detector).on_grid(scale_of_grid)
+        if model is not None:  # the learned chain with another model: "auto"'s network (§3.6)
+            grid_params = replace(grid_params, pixel_model=model)
         run = _detect(image, grid_params, width, level_mask, band_px / level, shape, detector_clock)
         # the traces in input pixels or metres
         grid_factor = float(np.sqrt(shape[0] / h * shape[1] / w))
@@ -1330,13 +1393,18 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     with ThreadPoolExecutor(max_workers=1) as pool:
         try:
             ridge = pool.submit(timed, detect, "ridge", grey) if params.detector == AUTO else None
-            pending = {level: pool.submit(timed, detect, "learned", grey, level=level)
+            # the coarser grids of the learned chain, and "auto"'s network on every grid
+            pending = {("learned", level): pool.submit(timed, detect, "learned", grey, level=level)
                        for level in levels}
+            if uses_network:
+                pending.update({(AUTO_NETWORK, level): pool.submit(
+                    timed, detect, "learned", grey, level=level, model=AUTO_NETWORK)
+                    for level in (1, *levels)})
             main_detector = "learned" if uses_learned else params.detector
             detected = {main_detector: detect(main_detector, grey, clock)}  # (run, traces)
             if ridge is not None:
                 detected["ridge"] = ridge.result()
-            coarser = {level: future.result() for level, future in pending.items()}
+            on_grids = {key: future.result() for key, future in pending.items()}
         except BaseException:  # an error or Ctrl-C: the side tasks not begun are dropped
             pool.shutdown(wait=True, cancel_futures=True)
             raise
@@ -1347,19 +1415,16 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     found = {detector: run for detector, (run, _) in detected.items()}
     maps = {detector: traces for detector, (_, traces) in detected.items()}
 
-    level_record, level = None, 1
-    if uses_learned:
-        runs = {1: found["learned"], **{f: run for f, (run, _) in coarser.items()}}
-        by_level = {1: maps["learned"], **{f: traces for f, (_, traces) in coarser.items()}}
-        if coarser:
-            scores = {f: grid_levels.mean_joint_score(m) for f, m in by_level.items()}
-            lengths = {f: float(m.lengths_m().sum()) for f, m in by_level.items()}
-            level = grid_levels.choose_level(scores, lengths)
-            level_record = {"levels": sorted(runs), "joint_score": [scores[f] for f in sorted(runs)],
-                            "traces": [by_level[f].n_traces for f in sorted(runs)],
-                            "length": [lengths[f] for f in sorted(runs)], "kept": level}
-        maps["learned"] = by_level[level]
-        found["learned"] = runs[level]
+    grid_of, level_records = {}, {}  # the grid each learned chain's traces come from (§3.4)
+    for chain in ("learned", AUTO_NETWORK) if uses_learned else ():
+        runs = {level: run_traces for (name, level), run_traces in on_grids.items() if name == chain}
+        if chain == "learned":
+            runs[1] = detected["learned"]
+        if not runs:
+            continue
+        grid_of[chain], level_records[chain] = grid_levels.kept_grid(
+            {level: traces for level, (_, traces) in runs.items()})
+        found[chain], maps[chain] = runs[grid_of[chain]]
     choice = None
     if params.detector == AUTO:
         learned_chains = grid_levels.to_grid(found["learned"].chains, found["learned"].flat.shape,
@@ -1368,10 +1433,18 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
                                        radius_px=AGREEMENT_RADIUS_PX * scale_of_grid)
         kept = "ridge" if agreement > params.auto_agreement else "learned"
         choice = {"kept": kept, "agreement": agreement, "auto_agreement": params.auto_agreement,
-                  "traces": {d: len(found[d].chains) for d in DETECTORS}}
+                  "traces": {d: len(found[d].chains) for d in found}}
+        if uses_network:
+            ratio = network_length_ratio(maps[AUTO_NETWORK], maps["learned"])
+            if kept == "learned" and ratio >= params.auto_network_ratio:
+                kept = AUTO_NETWORK
+            choice.update(kept=kept, network_length_ratio=ratio,
+                          auto_network_ratio=params.auto_network_ratio)
     else:
         kept = params.detector
-    if kept == "learned":
+    chain_of_kept = "learned" if kept == AUTO_NETWORK else kept  # the network's is the learned chain
+    level = grid_of.get(kept, 1)
+    if chain_of_kept == "learned":
         width_used = learned_width_on(level) * level
         if width_work > learned_width:
             notes.append(capped_note)
@@ -1382,13 +1455,14 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
                          f"pixels; learned_levels, docs/imaging.md §3.4)")
             width_source = f"{width_source}, grid coarsened {level}x"
         width_work = width_used
-    params = given_params.for_detector(kept).on_grid(scale_of_grid)
+    params = given_params.for_detector(chain_of_kept).on_grid(scale_of_grid)
     chains, contrast, band, _, flat, response, binary, skeleton, pruned, face_contrast = found[kept]
     notes += _low_contrast_notes(face_contrast, params)
-    if kept == "learned":
+    model_of_kept = AUTO_NETWORK if kept == AUTO_NETWORK else given_params.pixel_model
+    if chain_of_kept == "learned":
         from .site_back_end import unused_settings_note
 
-        note = unused_settings_note(learned.load_model(given_params.pixel_model).info,
+        note = unused_settings_note(learned.load_model(model_of_kept).info,
                                     given_params.for_detector("learned"))
         notes += [] if note is None else [note]
     traces = maps[kept]
@@ -1400,9 +1474,8 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
                         "pruned": _render(pruned, flat.shape)}
         debug_images = {key: grid_levels.resized(image, work_shape)  # a coarser grid's too
                         for key, image in debug_images.items()}
-        for detector, run in found.items():  # "auto": both responses, the rest of the kept one
-            debug_images["joint_probability" if detector == "learned" else "ridge_response"] = \
-                grid_levels.resized(run.response, work_shape)
+        for detector, run in found.items():  # "auto": every response, the rest of the kept one
+            debug_images[_RESPONSE_NAMES[detector]] = grid_levels.resized(run.response, work_shape)
         if face_info["source"] == "face mask":
             debug_images["face_mask"] = mask
     for note in notes:
@@ -1417,8 +1490,10 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         joint_width_source=width_source, face_orientation=orientation,
         timings_s=MappingProxyType(dict(clock.timings)), warnings=tuple(notes),
         debug=MappingProxyType(debug_images), face_mask=MappingProxyType(face_info),
-        detector_model=None if "learned" not in found
-        else MappingProxyType(learned.model_record(given_params.pixel_model)),
+        detector_model=None if chain_of_kept != "learned" and "learned" not in found
+        else MappingProxyType(learned.model_record(model_of_kept if chain_of_kept == "learned"
+                                                   else given_params.pixel_model)),
         detector_choice=None if choice is None else MappingProxyType(choice),
         face_contrast=face_contrast,
-        learned_levels=None if level_record is None else MappingProxyType(level_record))
+        learned_levels=None if level_records.get(kept, level_records.get("learned")) is None
+        else MappingProxyType(level_records.get(kept, level_records.get("learned"))))

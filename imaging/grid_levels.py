@@ -28,7 +28,7 @@ import numpy as np
 
 __all__ = ["MIN_LEVEL_SIDE_PX", "MIN_LENGTH_SHARE", "JOINT_LENGTH_RATIO",
            "usable_levels", "coarsen", "resized", "to_grid", "mean_joint_score",
-           "choose_level"]
+           "choose_level", "kept_grid"]
 
 #: A coarser grid is tried only when its shorter side keeps at least this many pixels.
 MIN_LEVEL_SIDE_PX = 64
@@ -137,3 +137,18 @@ def choose_level(scores: Mapping[int, float], lengths: Mapping[int, float], *,
         if better or (more and lengths[level] > 0):
             best = level
     return best
+
+
+def kept_grid(by_level: Mapping[int, object]) -> tuple[int, dict | None]:
+    """The level :func:`choose_level` keeps among a learned chain's trace maps by level (level 1,
+    the working grid, among them), and the record of the choice (``levels``, ``joint_score``,
+    ``traces``, ``length`` per level, ``kept``; None when level 1 was the only one run)."""
+    if set(by_level) == {1}:
+        return 1, None
+    levels = sorted(by_level)
+    scores = {f: mean_joint_score(by_level[f]) for f in levels}
+    lengths = {f: float(by_level[f].lengths_m().sum()) for f in levels}
+    level = choose_level(scores, lengths)
+    return level, {"levels": levels, "joint_score": [scores[f] for f in levels],
+                   "traces": [by_level[f].n_traces for f in levels],
+                   "length": [lengths[f] for f in levels], "kept": level}

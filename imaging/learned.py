@@ -27,8 +27,9 @@ from pathlib import Path
 import numpy as np
 
 from .features import CONTEXT_NAMES, FEATURE_NAMES, context_features, pixel_features
+from .joint_net import CNN_MODEL_FILE
 
-__all__ = ["MODEL_FILE", "MODEL_LINE_WIDTH_PX", "MIN_SPREAD", "MAX_STRETCH", "Stage", "PixelModel",
+__all__ = ["MODEL_FILE", "SHIPPED_MODELS", "MODEL_LINE_WIDTH_PX", "MIN_SPREAD", "MAX_STRETCH", "Stage", "PixelModel",
            "load_model", "model_record", "flattened", "model_input", "stretch_gain",
            "stretch_flat_face", "joint_probability"]
 
@@ -179,8 +180,10 @@ def _read_stage(data, i):
                  biases=tuple(data[f"s{i}_b{k}"].astype(np.float32) for k in range(n_layers)))
 
 
-def load_model(path=None) -> PixelModel:
-    """Read a model file (default: the shipped :data:`MODEL_FILE`); cached per path.
+def load_model(path=None):
+    """Read a model file (default: the shipped :data:`MODEL_FILE`); cached per path. A ``.npz``
+    file is a :class:`PixelModel`, an ``.onnx`` file a convolutional detector
+    (:class:`rockmass.imaging.joint_net.ConvModel`, docs/imaging.md §3.6).
 
     Raises
     ------
@@ -193,6 +196,14 @@ def load_model(path=None) -> PixelModel:
 
     key = _resolved(path)
     if key in _CACHE:
+        return _CACHE[key]
+    if Path(key).suffix.lower() == ".onnx":  # the convolutional detector (§3.6)
+        if not Path(key).is_file():
+            raise FileNotFoundError(f"{path or key}: no such network file (params.pixel_model; "
+                                    "train one with python -m rockmass.imaging.train_joint_net)")
+        from .joint_net import read_conv_model
+
+        _CACHE[key] = read_conv_model(key)
         return _CACHE[key]
     if not Path(key).is_file():
         if path is not None and Path(key) != MODEL_FILE.resolve():
@@ -220,8 +231,16 @@ def load_model(path=None) -> PixelModel:
     return model
 
 
+#: Names of the shipped models a ``pixel_model`` setting may give instead of a path.
+SHIPPED_MODELS = {"mlp": MODEL_FILE,
+                  "cnn": CNN_MODEL_FILE}
+
+
 def _resolved(path) -> str:
-    """The absolute path of a model file (None: the shipped one), the key of the caches."""
+    """The absolute path of a model file (None: the shipped pixel model; "mlp" or "cnn": a shipped
+    model, :data:`SHIPPED_MODELS`), the key of the caches."""
+    if isinstance(path, str) and path in SHIPPED_MODELS:
+        path = SHIPPED_MODELS[path]
     return str(Path(path or MODEL_FILE).resolve())
 
 
@@ -241,7 +260,7 @@ def model_record(path=None) -> dict:
     key = _resolved(path)
     if key not in _RECORDS:
         model = load_model(path)
-        _RECORDS[key] = {"file": key, "shipped": key == _resolved(None),
+        _RECORDS[key] = {"file": key, "shipped": key in {_resolved(name) for name in SHIPPED_MODELS},
                          "sha256": hashlib.sha256(Path(key).read_bytes()).hexdigest(),
                          "trained_on": model.info.get("data"),
                          "input_stretch": None if model.input_stretch is None
@@ -340,8 +359,10 @@ def stretch_flat_face(flat, *, min_spread: float = MIN_SPREAD, max_stretch: floa
     return np.maximum(stretched, 0.0, out=stretched), float(gain), spread
 
 
-def joint_probability(flat, model: PixelModel | None = None) -> np.ndarray:
-    """Probability map (H, W) float32 in [0, 1] of joint centre lines in a :func:`model_input` image.
+def joint_probability(flat, model=None) -> np.ndarray:
+    """Probability map (H, W) float32 in [0, 1] of joint centre lines in a :func:`model_input` image,
+    by a :class:`PixelModel` (default: the shipped one) or a convolutional detector
+    (:class:`rockmass.imaging.joint_net.ConvModel`).
 
     Examples
     --------
@@ -351,4 +372,6 @@ def joint_probability(flat, model: PixelModel | None = None) -> np.ndarray:
     True
     """
     model = model or load_model()
+    if hasattr(model, "probability_of"):  # a convolutional detector reads the image itself
+        return model.probability_of(flat)
     return model.probability(pixel_features(flat))

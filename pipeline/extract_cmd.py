@@ -74,12 +74,14 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "§3.1), 'ridge' (multi-scale ridge filter: bright joints, and clean images "
                         "whose faint hairlines count as joints; the default with --bright-lines) "
                         "or 'auto' (the default: runs both and keeps the ridge filter's traces "
-                        "when the learned detector confirms most of them, i.e. on a clean photo; "
-                        "summary.json says which, docs/imaging.md §3.3)")
-    p.add_argument("--pixel-model", dest="pixel_model", metavar="FILE.npz",
-                   help="the learned detector's model: one trained on your own labelled photos by "
-                        "python -m rockmass.imaging.train_pixel_model --photos DIR --labels DIR "
-                        "(default: the model shipped with rockmass)")
+                        "when the learned detector confirms most of them, i.e. on a clean photo, "
+                        "and the convolutional network's when it finds clearly more joint length "
+                        "than the pixel model; summary.json says which, docs/imaging.md §3.3, §3.6)")
+    p.add_argument("--pixel-model", dest="pixel_model", metavar="FILE",
+                   help="the learned detector's model: 'cnn' (the shipped convolutional network), "
+                        "'mlp' (the shipped pixel model, the default), or a file: one trained on "
+                        "your own labelled photos by python -m rockmass.imaging.train_pixel_model "
+                        "--photos DIR --labels DIR (.npz), or a network (.onnx)")
     p.add_argument("--sets", type=int, dest="n_sets", help="number of joint sets (default: by BIC)")
     p.add_argument("--config", help="TOML file; its [imaging] section sets scale, width and params")
     # its own destination: ``rockmass --debug`` (tracebacks) is the global flag of the same name
@@ -111,9 +113,7 @@ def run(args) -> int:
                   else "  no trace left")
         choice = summary["extraction"].get("detector_choice")
         if choice:  # "auto": which detector's traces these are, and why
-            print(f"detector: auto kept the {choice['kept']} detector's traces (agreement "
-                  f"{choice['agreement']:.2f} {'>' if choice['kept'] == 'ridge' else '<='} "
-                  f"{choice['auto_agreement']:g}; docs/imaging.md §3.3)")
+            print(auto_choice_text(choice))
         georeference = summary["input"].get("georeference")
         if georeference:  # the scale came from the photo's GeoTIFF tags
             print(f"scale: {georeference['m_per_px']:.6g} m/px from the GeoTIFF tags "
@@ -123,3 +123,25 @@ def run(args) -> int:
     return 0
 
 
+def auto_choice_text(choice) -> str:
+    """One line on what ``detector = "auto"`` kept and why (``detector_choice`` of summary.json).
+
+    Examples
+    --------
+    >>> auto_choice_text({"kept": "ridge", "agreement": 0.7, "auto_agreement": 0.55})
+    "detector: auto kept the ridge detector's traces (agreement 0.70 > 0.55; docs/imaging.md §3.3)"
+    >>> auto_choice_text({"kept": "cnn", "agreement": 0.2, "auto_agreement": 0.55,
+    ...                   "network_length_ratio": 1.5, "auto_network_ratio": 1.2})[:58]
+    "detector: auto kept the convolutional network's traces (it"
+    """
+    agreement = (f"agreement {choice['agreement']:.2f} {'>' if choice['kept'] == 'ridge' else '<='} "
+                 f"{choice['auto_agreement']:g}")
+    ratio = choice.get("network_length_ratio")
+    if choice["kept"] == "cnn":
+        return (f"detector: auto kept the convolutional network's traces (its trace length "
+                f"{ratio:.2f} times the pixel model's >= {choice['auto_network_ratio']:g}; "
+                f"{agreement}; docs/imaging.md §3.6)")
+    network = "" if ratio is None else (f"; the network's trace length {ratio:.2f} times the "
+                                        f"pixel model's")
+    return f"detector: auto kept the {choice['kept']} detector's traces ({agreement}{network}; " \
+           f"docs/imaging.md §3.3)"

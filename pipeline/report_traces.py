@@ -46,6 +46,7 @@ _CONFIDENT_READING = {
                "second column is the more conservative reading (fewer traces, less trace length), "
                "not a more accurate one.",
 }
+_CONFIDENT_READING["cnn"] = _CONFIDENT_READING["learned"]  # the learned chain with the network
 
 
 def _confident_table(run: _Run) -> str:

@@ -339,10 +339,15 @@ def test_confident_table_is_read_as_its_detector_allows(run_dir):
     out, _, path, _ = run_dir
     extraction = _stage_json(out, "extract", "summary.json")["extraction"]
     assert extraction["params"]["detector"] == "auto"
-    kept = extraction["detector_choice"]["kept"]
-    assert kept == ("ridge" if extraction["detector_choice"]["agreement"] > 0.55 else "learned")
+    choice = extraction["detector_choice"]
+    kept = choice["kept"]
+    ratio = choice.get("network_length_ratio")  # with the network among the candidates (§3.6)
+    assert kept == ("ridge" if choice["agreement"] > 0.55
+                    else "cnn" if ratio is not None and ratio >= choice["auto_network_ratio"]
+                    else "learned")
     text = " ".join(path.read_text(encoding="utf-8").split())
-    assert ("the more conservative reading" in text) == (kept == "learned")
+    # the network's traces come through the learned chain and its filters
+    assert ("the more conservative reading" in text) == (kept in ("learned", "cnn"))
     assert ("closer to a geologist" in text) == (kept == "ridge")
 
 

@@ -1,0 +1,188 @@
+"""When should "auto" keep the convolutional network's traces? ``auto_network_ratio`` on real labels
+and on joints drawn on real rock, side by side.
+
+    python benchmarks/bench_network_ratio.py [--splits train,val] [--limit N] [--workers 2]
+
+"auto" (docs/imaging.md §3.3, §3.6) keeps the ridge filter's traces on a clean photo; otherwise
+the pixel model's, unless the network's chain finds at least ``auto_network_ratio`` times their
+total length. Two judges disagree about what a detector should draw: the hand labels of the real
+photographs (rock-face-fractures, major open fractures only; F1 at 5 px, as
+``bench_imaging_real.py``) and the exact truth of the joints ``bench_texture_faces.py`` draws onto
+the same photographs (buffered F1 at 3 px, the photo's own fractures ignored). Per photograph
+and per face, "auto" is run with the network off (its choice between the ridge filter and the
+pixel model, and the pixel model's traces) and the network's chain alone; the choice for every
+ratio follows from their trace lengths (``network_length_ratio``), since "auto" keeps exactly the
+traces of the chain it picks run alone (tests/imaging/test_joint_net.py). The ratio was chosen on
+``train`` (:func:`chosen_ratio`: the smallest ratio whose mean real F1 is not below the pixel
+model's alone, i.e. the network costs the real labels nothing there): 1.3; ``val`` is only
+measured. Rows also go to
+benchmarks/results/bench_network_ratio.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import detector_params, header, save, table  # noqa: E402
+
+RATIOS = (1.0, 1.1, 1.2, 1.3, 1.5, 2.0, float("inf"))
+COLUMNS = [("split", "s"), ("ratio", "g"), ("real_F1", ".3f"), ("real_P", ".3f"), ("real_R", ".3f"),
+           ("real_dP21_pct", "+.0f"), ("real_cnn", "d"), ("drawn_F1", ".3f"), ("drawn_P", ".3f"),
+           ("drawn_R", ".3f"), ("drawn_dP21_pct", "+.0f"), ("drawn_cnn", "d"), ("photos", "d")]
+
+
+def _runs(image, **scale):
+    """(auto without the network, the network's chain alone) of one image."""
+    from rockmass.imaging.extract import extract
+
+    auto = extract(image, params=detector_params("auto", auto_network_ratio=float("inf")), **scale)
+    network = extract(image, params=detector_params("cnn"), **scale)
+    return auto, network
+
+
+def score_photo(job) -> dict:
+    """The three candidate trace sets' scores on one photo and on the joints drawn on it."""
+    import cv2
+
+    from bench_imaging_real import TOLERANCE_PX, label_skeleton
+    from bench_texture_faces import M_PER_PX, BUFFER_PX, ignore_mask
+    from rockmass.imaging import joints_on_photo
+    from rockmass.imaging.extract import extract, network_length_ratio
+    from rockmass.imaging.label_scores import score_traces
+    from rockmass.imaging.metrics import trace_accuracy
+
+    photo_path, label, seed = job
+    photo = np.ascontiguousarray(cv2.imread(str(photo_path), cv2.IMREAD_COLOR)[..., ::-1])
+    out = {"photo": photo_path.name}
+    auto, network = _runs(photo, m_per_px=1.0, joint_width_px=3.0)
+    truth = label_skeleton(label)
+    ridge = auto.traces if auto.detector_choice["kept"] == "ridge" else None
+    learned = extract(photo, m_per_px=1.0, joint_width_px=3.0,
+                      params=detector_params("learned")).traces if ridge is not None else auto.traces
+    out["real"] = {"ratio": network_length_ratio(network.traces, learned), "kept": auto.detector_choice["kept"],
+                   **{name: score_traces(traces, truth, tolerance_px=TOLERANCE_PX)[0]
+                      for name, traces in (("auto", auto.traces), ("learned", learned),
+                                           ("cnn", network.traces))}}
+    face = joints_on_photo(photo, "moderate", seed=seed, m_per_px=M_PER_PX)
+    ignore = ignore_mask(photo_path, label, photo.shape[:2])
+    auto, network = _runs(face.image, m_per_px=M_PER_PX)
+    learned = (auto.traces if auto.detector_choice["kept"] == "learned" else
+               extract(face.image, m_per_px=M_PER_PX, params=detector_params("learned")).traces)
+
+    def accuracy(traces):
+        a = trace_accuracy(traces, face.truth, buffer_px=BUFFER_PX, ignore=ignore, m_per_px=M_PER_PX)
+        return [a.f1, a.precision, a.recall, a.p21_rel_error]
+
+    out["drawn"] = {"ratio": network_length_ratio(network.traces, learned),
+                    "kept": auto.detector_choice["kept"],
+                    "auto": accuracy(auto.traces), "cnn": accuracy(network.traces)}
+    return out
+
+
+def _f1(counts):
+    matched_drawn, drawn, matched_true, true = counts
+    p, r = matched_drawn / max(drawn, 1), matched_true / max(true, 1)
+    return (2 * p * r / (p + r) if p + r else 0.0), p, r
+
+
+def keeps_network(scores: dict, ratio: float) -> bool:
+    """Whether "auto" with ``auto_network_ratio = ratio`` keeps the network's traces on a photo
+    (``inf``: the network is not run)."""
+    return scores["kept"] != "ridge" and np.isfinite(ratio) and scores["ratio"] >= ratio
+
+
+def rows_of(split: str, photos: list[dict]) -> list[dict]:
+    """One row per ratio: the mean scores over the photographs of what "auto" would keep."""
+    rows = []
+    for ratio in RATIOS:
+        real_scores, real_counts, drawn_scores, n_real, n_drawn = [], np.zeros(4), [], 0, 0
+        for photo in photos:
+            real = photo["real"]
+            use = "cnn" if keeps_network(real, ratio) else "auto"
+            n_real += use == "cnn"
+            counts = np.asarray(real[use], dtype=float)
+            real_scores.append(_f1(counts))
+            real_counts += counts
+            drawn = photo["drawn"]
+            use = "cnn" if keeps_network(drawn, ratio) else "auto"
+            n_drawn += use == "cnn"
+            drawn_scores.append(drawn[use])
+        real_scores, drawn_scores = np.array(real_scores), np.array(drawn_scores, dtype=float)
+        rows.append({"split": split, "ratio": ratio, "real_F1": real_scores[:, 0].mean(),
+                     "real_P": real_scores[:, 1].mean(), "real_R": real_scores[:, 2].mean(),
+                     "real_dP21_pct": 100 * (real_counts[1] / max(real_counts[3], 1) - 1),
+                     "real_cnn": n_real, "drawn_F1": float(np.nanmean(drawn_scores[:, 0])),
+                     "drawn_P": float(np.nanmean(drawn_scores[:, 1])),
+                     "drawn_R": float(np.nanmean(drawn_scores[:, 2])),
+                     "drawn_dP21_pct": 100 * float(np.nanmean(drawn_scores[:, 3])),
+                     "drawn_cnn": n_drawn, "photos": len(photos)})
+    return rows
+
+
+def chosen_ratio(rows: list[dict]) -> float:
+    """The smallest ratio whose mean real F1 is not below that of the pixel model alone (the
+    ``inf`` row): the rule ``auto_network_ratio`` was chosen by on ``train``."""
+    alone = next(r["real_F1"] for r in rows if not np.isfinite(r["ratio"]))
+    return min(r["ratio"] for r in rows if r["real_F1"] >= alone)
+
+
+def _print_rows(split: str, rows: list[dict]) -> None:
+    print(table(rows, COLUMNS))
+    print(f"{split}: smallest ratio whose real F1 is not below the pixel model's alone: "
+          f"{chosen_ratio(rows):g}" + (" (the rule auto_network_ratio was chosen by)"
+                                       if split == "train" else " (measured only)"))
+
+
+def main(argv=None) -> int:
+    from bench_imaging_real import real_pairs
+
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--splits", default="train,val")
+    parser.add_argument("--limit", type=int, default=0, help="first N photos of each split (0: all)")
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--from-json", action="store_true",
+                        help="recompute the rows from the saved per-photo scores")
+    args = parser.parse_args(argv)
+    splits = [s for s in args.splits.split(",") if s]
+    if not splits or set(splits) - {"train", "val"} or args.limit < 0 or args.workers < 1:
+        parser.error("--splits takes train and/or val; --limit >= 0, --workers >= 1")
+    print(header("auto_network_ratio: real labels and joints drawn on the same photographs"))
+    payload = {"ratios": list(RATIOS), "rows": [], "photos": {}}
+    if args.from_json:
+        import json
+
+        saved = json.loads((Path(__file__).resolve().parent / "results" / "bench_network_ratio.json")
+                           .read_text())
+        for split in splits:
+            print(f"\n{split}/ (rows recomputed from the saved per-photo scores)")
+            _print_rows(split, rows_of(split, saved["photos"][split]))
+        return 0
+    for split in splits:
+        pairs = real_pairs(split)
+        if not pairs:
+            print(f"\n{split}: no labelled photographs found, skipped")
+            continue
+        pairs = pairs[:args.limit] if args.limit else pairs
+        t0 = time.perf_counter()
+        with ProcessPoolExecutor(max_workers=args.workers) as pool:
+            photos = list(pool.map(score_photo, [(p, label, k + 1) for k, (p, label) in enumerate(pairs)]))
+        rows = rows_of(split, photos)
+        payload["rows"] += rows
+        payload["photos"][split] = photos
+        print(f"\n{split}/ ({len(pairs)} photographs, {time.perf_counter() - t0:.0f} s; real: hand "
+              "labels, F1 at 5 px, means over photos; drawn: joints drawn on the same photos, "
+              "buffered F1 at 3 px; *_cnn: photos where auto keeps the network's traces)")
+        _print_rows(split, rows)
+    print(f"\nrows: {save('bench_network_ratio', payload)}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
