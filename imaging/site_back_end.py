@@ -178,9 +178,14 @@ class BackEndChoice:
 
     def config_snippet(self, model_path) -> str:
         """The ``[imaging.params]`` table of a rockmass config that extracts with the model as it
-        was chosen: its absolute path (none for the shipped model: ``model_path`` None), the
-        other settings of the choice and the chosen ones (TOML)."""
-        model = {} if model_path is None else {"pixel_model": str(Path(model_path).resolve())}
+        was chosen: its absolute path (none for the shipped model: ``model_path`` None; a shipped
+        model's name, "mlp" or "cnn", as it is), the other settings of the choice and the chosen
+        ones (TOML)."""
+        from .learned import SHIPPED_MODELS
+
+        model = ({} if model_path is None else {"pixel_model": str(model_path)}
+                 if str(model_path) in SHIPPED_MODELS
+                 else {"pixel_model": str(Path(model_path).resolve())})
         values = {**model, **self.base, **self.settings}
         return "\n".join(["[imaging.params]",
                           *(f"{name} = {_toml_value(value)}" for name, value in values.items())])

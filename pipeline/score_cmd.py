@@ -58,8 +58,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--config", help="TOML file; its [imaging] section sets width and params")
     p.add_argument("--detector", choices=("auto", "learned", "ridge"), dest="detector",
                    help="joint detector (default auto; learned with --pixel-model)")
-    p.add_argument("--pixel-model", dest="pixel_model", metavar="FILE.npz",
-                   help="a pixel model of your own (train_pixel_model --photos)")
+    p.add_argument("--pixel-model", dest="pixel_model", metavar="FILE",
+                   help="a pixel model of your own (train_pixel_model --photos), a network "
+                        "(.onnx), or 'cnn', the shipped convolutional network")
     p.add_argument("--face-mask", choices=("border", "full", "off"), dest="face_mask",
                    help="limit candidates to the rock face (default border)")
     p.add_argument("--joint-width", type=float, dest="joint_width_px", metavar="PX",

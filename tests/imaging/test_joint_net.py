@@ -198,3 +198,16 @@ def test_a_trained_network_reads_back_through_opencv(tmp_path):
     p = model.probability_of(np.ones((40, 52), np.float32))
     assert p.shape == (40, 52) and np.isfinite(p).all()
     assert model.info["iterations"] == 2
+
+
+def test_a_back_end_config_names_a_shipped_model_by_name_and_a_file_by_its_path(tmp_path):
+    # rockmass score --choose-back-end --pixel-model cnn writes a config that must load anywhere
+    from types import SimpleNamespace
+
+    from rockmass.imaging.site_back_end import BackEndChoice
+
+    choice = SimpleNamespace(base={"detector": "learned"}, settings={"prob_low": 0.7})
+    assert 'pixel_model = "cnn"' in BackEndChoice.config_snippet(choice, "cnn")
+    own = tmp_path / "site.npz"
+    assert f'pixel_model = "{own.resolve()}"' in BackEndChoice.config_snippet(choice, own)
+    assert "pixel_model" not in BackEndChoice.config_snippet(choice, None)
