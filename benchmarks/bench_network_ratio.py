@@ -86,12 +86,6 @@ def score_photo(job) -> dict:
     return out
 
 
-def _f1(counts):
-    matched_drawn, drawn, matched_true, true = counts
-    p, r = matched_drawn / max(drawn, 1), matched_true / max(true, 1)
-    return (2 * p * r / (p + r) if p + r else 0.0), p, r
-
-
 def keeps_network(scores: dict, ratio: float) -> bool:
     """Whether "auto" with ``auto_network_ratio = ratio`` keeps the network's traces on a photo
     (``inf``: the network is not run)."""
@@ -99,30 +93,25 @@ def keeps_network(scores: dict, ratio: float) -> bool:
 
 
 def rows_of(split: str, photos: list[dict]) -> list[dict]:
-    """One row per ratio: the mean scores over the photographs of what "auto" would keep."""
+    """One row per ratio: the scores over the photographs of what "auto" would keep (real: the
+    pixel counts summarised as bench_imaging_real.py does; drawn: means over the faces)."""
+    from bench_imaging_real import summarise_counts
+
     rows = []
     for ratio in RATIOS:
-        real_scores, real_counts, drawn_scores, n_real, n_drawn = [], np.zeros(4), [], 0, 0
-        for photo in photos:
-            real = photo["real"]
-            use = "cnn" if keeps_network(real, ratio) else "auto"
-            n_real += use == "cnn"
-            counts = np.asarray(real[use], dtype=float)
-            real_scores.append(_f1(counts))
-            real_counts += counts
-            drawn = photo["drawn"]
-            use = "cnn" if keeps_network(drawn, ratio) else "auto"
-            n_drawn += use == "cnn"
-            drawn_scores.append(drawn[use])
-        real_scores, drawn_scores = np.array(real_scores), np.array(drawn_scores, dtype=float)
-        rows.append({"split": split, "ratio": ratio, "real_F1": real_scores[:, 0].mean(),
-                     "real_P": real_scores[:, 1].mean(), "real_R": real_scores[:, 2].mean(),
-                     "real_dP21_pct": 100 * (real_counts[1] / max(real_counts[3], 1) - 1),
-                     "real_cnn": n_real, "drawn_F1": float(np.nanmean(drawn_scores[:, 0])),
-                     "drawn_P": float(np.nanmean(drawn_scores[:, 1])),
-                     "drawn_R": float(np.nanmean(drawn_scores[:, 2])),
-                     "drawn_dP21_pct": 100 * float(np.nanmean(drawn_scores[:, 3])),
-                     "drawn_cnn": n_drawn, "photos": len(photos)})
+        real = [p["real"]["cnn" if keeps_network(p["real"], ratio) else "auto"] for p in photos]
+        drawn = np.array([p["drawn"]["cnn" if keeps_network(p["drawn"], ratio) else "auto"]
+                          for p in photos], dtype=float)
+        scores = summarise_counts(real)
+        rows.append({"split": split, "ratio": ratio, "real_F1": scores["F1"], "real_P": scores["P"],
+                     "real_R": scores["R"], "real_dP21_pct": scores["dP21_pct"],
+                     "real_cnn": sum(keeps_network(p["real"], ratio) for p in photos),
+                     "drawn_F1": float(np.nanmean(drawn[:, 0])),
+                     "drawn_P": float(np.nanmean(drawn[:, 1])),
+                     "drawn_R": float(np.nanmean(drawn[:, 2])),
+                     "drawn_dP21_pct": 100 * float(np.nanmean(drawn[:, 3])),
+                     "drawn_cnn": sum(keeps_network(p["drawn"], ratio) for p in photos),
+                     "photos": len(photos)})
     return rows
 
 

@@ -143,7 +143,7 @@ class ExtractParams:
         photographs of rock-face-fractures, as the smallest at which the network costs their
         labels nothing, and measured on joints drawn over the same photographs
         (``benchmarks/bench_network_ratio.py``): give it for textured faces whose thin joints
-        matter. ``inf`` (the default, for now: the network adds about 2.6 s to a 12 MP photo,
+        matter. ``inf`` (the default, for now: the network adds 2-3 s to a 12 MP photo,
         below the 2 MP/s the command is held to) does not run the network.
     line_polarity : {"dark", "bright"}, default "dark"
         Joints to look for: dark lines (open joints, shadowed traces) or bright ones (calcite- or

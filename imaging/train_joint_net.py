@@ -38,11 +38,10 @@ import numpy as np
 
 from .joint_net import CNN_MODEL_FILE, net_input
 from .learned import MAX_STRETCH, MIN_SPREAD, model_input
+from .train_pixel_model import NEGATIVE_PX, POSITIVE_PX  # the same label bands as the pixel model
 
 __all__ = ["tile_labels", "training_tiles", "build_network", "train", "main"]
 
-POSITIVE_PX = 1.0
-NEGATIVE_PX = 3.0
 #: Label of a pixel left out of the loss.
 UNSCORED = 255
 TILE_PX = 160
