@@ -89,7 +89,7 @@ def score_photo(job) -> dict:
 def keeps_network(scores: dict, ratio: float) -> bool:
     """Whether "auto" with ``auto_network_ratio = ratio`` keeps the network's traces on a photo
     (``inf``: the network is not run)."""
-    return scores["kept"] != "ridge" and np.isfinite(ratio) and scores["ratio"] >= ratio
+    return bool(scores["kept"] != "ridge" and np.isfinite(ratio) and scores["ratio"] >= ratio)
 
 
 def rows_of(split: str, photos: list[dict]) -> list[dict]:
