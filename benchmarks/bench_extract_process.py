@@ -21,6 +21,11 @@ with, per detector:
 - ``width 15 mm``: ``--joint-width-m 0.0147`` (3 px of the 4 MP working grid of this face);
 - ``width 3 input px``: ``--joint-width 3``, the default before issue 20 (1.2 working px at
   24 MP), kept to show the drift it had;
+- ``pixel model kept`` (``auto`` and ``auto+cnn``): ``[imaging.params] auto_agreement = 1``, so
+  that "auto" keeps the pixel model's traces over the ridge filter's, as on a textured face, and
+  ``auto+cnn`` runs the network (docs/imaging.md §3.6: only then). On this clean face "auto"
+  keeps the ridge filter's traces, and the network is not run: these rows give its cost where it
+  is;
 - ``full res``: ``[imaging.params] max_megapixels = 1000`` at 12 MP (ridge only; not with
   ``--quick`` or ``--no-full-resolution``), where the pixel settings are multiplied by
   sqrt(12 / 4) (areas by its square; ``ExtractParams.on_grid``) and the default width follows.
@@ -166,13 +171,20 @@ def score(out: Path, truth) -> dict:
             "timings_s": ext["timings_s"], "processing": ext["scale"]["processing"]}
 
 
-def detector_args(detector: str, folder: Path) -> list[str]:
+def detector_args(detector: str, folder: Path, *, pixel_model_kept: bool = False) -> list[str]:
     """The command's arguments for a detector name; "auto+cnn" is "auto" with the convolutional
-    network among its candidates, given by a config in ``folder`` (docs/imaging.md §3.6)."""
-    if detector != "auto+cnn":
+    network among its candidates, given by a config in ``folder`` (docs/imaging.md §3.6);
+    ``pixel_model_kept`` ("auto" and "auto+cnn" only) adds ``auto_agreement = 1`` to the config,
+    so that "auto" keeps the pixel model's traces over the ridge filter's (and runs the network),
+    as on a textured face."""
+    settings = ([f"auto_network_ratio = {NETWORK_RATIO}"] if detector == "auto+cnn" else []) \
+        + (["auto_agreement = 1.0"] if pixel_model_kept else [])
+    if not settings:
         return ["--detector", detector]
-    config = folder / "network.toml"
-    config.write_text(f"[imaging.params]\nauto_network_ratio = {NETWORK_RATIO}\n")
+    if detector not in ("auto", "auto+cnn"):
+        raise ValueError(f"{detector}: pixel_model_kept is a setting of auto and auto+cnn")
+    config = folder / f"{detector.replace('+', '_')}{'_pixel_model' * pixel_model_kept}.toml"
+    config.write_text("[imaging.params]\n" + "".join(f"{line}\n" for line in settings))
     return ["--detector", "auto", "--config", str(config)]
 
 
@@ -218,6 +230,8 @@ def main(argv=None) -> int:
                 cases.append((size, detector, "default", []))
                 cases.append((size, detector, "width 15 mm", ["--joint-width-m", f"{JOINT_WIDTH_M}"]))
                 cases.append((size, detector, "width 3 input px", ["--joint-width", "3"]))
+                if detector in ("auto", "auto+cnn"):  # the network runs only then (§3.6)
+                    cases.append((size, detector, "pixel model kept", None))
         if not args.quick and not args.no_full_resolution and 12.0 in sizes and "ridge" in detectors:
             cases.append((12.0, "ridge", "full res, default", ["--config", str(config)]))
             cases.append((12.0, "ridge", "full res, 15 mm",
@@ -225,7 +239,9 @@ def main(argv=None) -> int:
         for size, detector, setting, extra in cases:
             path, m_per_px, shape = photos[size]
             try:
-                res = run_command(path, out, m_per_px, [*detector_args(detector, folder), *extra])
+                command = (detector_args(detector, folder, pixel_model_kept=True)
+                           if extra is None else [*detector_args(detector, folder), *extra])
+                res = run_command(path, out, m_per_px, command)
             except RuntimeError as exc:  # keep the other rows; the failure is printed and saved
                 print(f"  {detector} {setting} {size:g} MP failed: {exc}", flush=True)
                 rows.append({"detector": detector, "setting": setting, "MP": size, "error": str(exc)})

@@ -143,8 +143,9 @@ class ExtractParams:
         photographs of rock-face-fractures, as the smallest at which the network costs their
         labels nothing, and measured on joints drawn over the same photographs
         (``benchmarks/bench_network_ratio.py``): give it for textured faces whose thin joints
-        matter. ``inf`` (the default, for now: the network adds 2-3 s to a 12 MP photo,
-        below the 2 MP/s the command is held to) does not run the network.
+        matter. The network runs only where "auto" keeps the pixel model's traces (there it adds
+        1-2 s to a 12 MP photo, below the 2 MP/s the command is held to, which is why ``inf``,
+        the default for now, does not run it).
     line_polarity : {"dark", "bright"}, default "dark"
         Joints to look for: dark lines (open joints, shadowed traces) or bright ones (calcite- or
         clay-filled joints, veins, mortar). On ``skimage.data.brick()`` "dark" traces the brick
@@ -935,15 +936,19 @@ def _candidate_area(raw, roi, face_mask: str, shape_px, work_shape, scale: float
     return mask, window, face_info, band_px
 
 
-def _joint_pixels(grey, params: ExtractParams, width_work: float, mask, clock: _Clock) -> tuple:
+def _joint_pixels(grey, params: ExtractParams, width_work: float, mask, clock: _Clock,
+                  flat=None) -> tuple:
     """Flatten the working grey image, find the joint response (ridge filter or learned
     probability) and threshold it (hysteresis, inside ``mask``; holes filled). Returns (flattened
     image, response, binary mask of joint pixels, and for the learned detector the relative
     spread and contrast of the flattened face and the factor its input was stretched by, else
     None). Within :func:`rockmass.imaging.reuse.shared_work` the learned detector's flattened face
     and probability map are computed once per model, image and mask (no back-end setting changes
-    them)."""
+    them). ``flat``: the learned detector's flattened face when another model's run on the same
+    grid made it already (:func:`rockmass.imaging.learned.flattened` of ``grey``)."""
     from . import enhance, learned, ridges, segment
+
+    given_flat = flat
     from .reuse import array_digest, reused
 
     stretch = None
@@ -953,7 +958,7 @@ def _joint_pixels(grey, params: ExtractParams, width_work: float, mask, clock: _
 
         def probability_map():
             computed.append(True)
-            flat, levels, model_image, gain = _learned_input(grey, params, mask)
+            flat, levels, model_image, gain = _learned_input(grey, params, mask, given_flat)
             clock.lap("flatten")
             probability = learned.joint_probability(model_image, model)
             clock.lap("ridges")
@@ -990,13 +995,15 @@ def _joint_pixels(grey, params: ExtractParams, width_work: float, mask, clock: _
     return flat, response, binary, stretch
 
 
-def _learned_input(grey, params: ExtractParams, mask) -> tuple:
+def _learned_input(grey, params: ExtractParams, mask, flat=None) -> tuple:
     """(flattened face, its levels, the pixel model's input, the factor it was stretched by) of
     the learned detector (docs/imaging.md §3.1): the face stretched when flatter than
-    ``min_face_spread``, the unstretched one kept for the traces' contrasts."""
+    ``min_face_spread``, the unstretched one kept for the traces' contrasts; ``flat``, when given,
+    is the flattened face already made."""
     from . import learned, vectorize
 
-    flat = learned.flattened(grey, background_sigma_px=params.background_sigma_px)
+    if flat is None:
+        flat = learned.flattened(grey, background_sigma_px=params.background_sigma_px)
     levels = vectorize.face_levels(flat, mask=mask)  # one sample: the stretch and the floor
     model_image, gain, _ = learned.stretch_flat_face(flat, min_spread=params.min_face_spread,
                                                      levels=levels)
@@ -1106,20 +1113,24 @@ def _low_contrast_notes(record, params: ExtractParams) -> list[str]:
 
 
 def _detect(grey, params: ExtractParams, width_work: float, mask, band_px: float, work_shape,
-            clock: _Clock) -> _Found:
+            clock: _Clock, flat=None) -> _Found:
     """The chain of one detector (``params`` on the grid, not "auto"), from the working grey image
     to filtered traces: joint pixels, traces (:func:`_chains_before_floor`), then the length floor
     and the contrast and width filters. Within :func:`rockmass.imaging.reuse.shared_work`
     everything before the length floor is computed once per image, mask and other settings (the
-    floor changes nothing before it; the traces' attributes are those of each trace alone)."""
+    floor changes nothing before it; the traces' attributes are those of each trace alone).
+    ``flat``: the learned detector's flattened face of ``grey``, when made already."""
     from . import link, vectorize
+
+    given_flat = flat
     from .reuse import array_digest, reused
 
     computed = []
 
     def before_floor():
         computed.append(True)
-        flat, response, binary, stretch = _joint_pixels(grey, params, width_work, mask, clock)
+        flat, response, binary, stretch = _joint_pixels(grey, params, width_work, mask, clock,
+                                                        given_flat)
         chains, skeleton, pruned = _chains_before_floor(binary, params, work_shape, width_work,
                                                         band_px, clock)
         attributes = (vectorize.trace_contrast(chains, flat, mask=mask),
@@ -1194,6 +1205,21 @@ def detector_agreement(ridge_chains, learned_chains, shape_px, *,
     confirmed, ridge = pixels_within(render_chains(ridge_chains, shape_px),
                                      render_chains(learned_chains, shape_px), radius_px)
     return confirmed / ridge if ridge else 0.0
+
+
+def _ridge_or_learned(detected, work_shape, scale_of_grid: float, params: ExtractParams) -> dict:
+    """"auto"'s choice between the ridge filter's traces and the pixel model's, by their
+    agreement (:func:`detector_agreement`, docs/imaging.md §3.3): the record of
+    ``Extraction.detector_choice`` before the network (``kept``, ``agreement``, ``auto_agreement``).
+    ``detected`` maps "ridge" and "learned" to (run, traces), the learned run on its kept grid."""
+    from . import grid_levels
+
+    learned_run, ridge_run = detected["learned"][0], detected["ridge"][0]
+    learned_chains = grid_levels.to_grid(learned_run.chains, learned_run.flat.shape, work_shape)
+    agreement = detector_agreement(ridge_run.chains, learned_chains, work_shape,
+                                   radius_px=AGREEMENT_RADIUS_PX * scale_of_grid)
+    return {"kept": "ridge" if agreement > params.auto_agreement else "learned",
+            "agreement": agreement, "auto_agreement": params.auto_agreement}
 
 
 def network_length_ratio(network_traces, learned_traces) -> float:
@@ -1357,7 +1383,7 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     levels = (grid_levels.usable_levels(params.learned_levels, work_shape)
               if uses_learned and trace_score.scoring() else ())
 
-    def detect(detector, image, detector_clock, level=1, model=None):  # (the run, its traces)
+    def detect(detector, image, detector_clock, level=1, model=None, flat=None):  # (run, traces)
         width = learned_width_on(level) if detector == "learned" else width_work
         level_mask, shape = mask, work_shape
         if level > 1:  # a coarser grid (§3.4)
@@ -1365,7 +1391,8 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         grid_params = given_params.for_detector(detector).on_grid(scale_of_grid)
         if model is not None:  # the learned chain with another model: "auto"'s network (§3.6)
             grid_params = replace(grid_params, pixel_model=model)
-        run = _detect(image, grid_params, width, level_mask, band_px / level, shape, detector_clock)
+        run = _detect(image, grid_params, width, level_mask, band_px / level, shape, detector_clock,
+                      flat)
         # the traces in input pixels or metres
         grid_factor = float(np.sqrt(shape[0] / h * shape[1] / w))
         traces = vectorize.to_trace_map(
@@ -1390,21 +1417,39 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         side_clocks.append(_Clock())
         return task(*args, side_clocks[-1], **kwargs)  # one worker: one task after another
 
+    def keep_grid(chain, runs):  # the (run, traces) of the grid a learned chain keeps (§3.4)
+        grid_of[chain], level_records[chain] = grid_levels.kept_grid(
+            {level: traces for level, (_, traces) in runs.items()})
+        return runs[grid_of[chain]]
+
+    grid_of, level_records = {}, {}  # the grid each learned chain's traces come from (§3.4)
+    choice = None
     with ThreadPoolExecutor(max_workers=1) as pool:
         try:
             ridge = pool.submit(timed, detect, "ridge", grey) if params.detector == AUTO else None
-            # the coarser grids of the learned chain, and "auto"'s network on every grid
-            pending = {("learned", level): pool.submit(timed, detect, "learned", grey, level=level)
+            # the coarser grids of the learned chain
+            pending = {level: pool.submit(timed, detect, "learned", grey, level=level)
                        for level in levels}
-            if uses_network:
-                pending.update({(AUTO_NETWORK, level): pool.submit(
-                    timed, detect, "learned", grey, level=level, model=AUTO_NETWORK)
-                    for level in (1, *levels)})
             main_detector = "learned" if uses_learned else params.detector
             detected = {main_detector: detect(main_detector, grey, clock)}  # (run, traces)
             if ridge is not None:
                 detected["ridge"] = ridge.result()
-            on_grids = {key: future.result() for key, future in pending.items()}
+            if uses_learned:
+                runs = {1: detected["learned"], **{f: job.result() for f, job in pending.items()}}
+                detected["learned"] = keep_grid("learned", runs)
+            if params.detector == AUTO:
+                choice = _ridge_or_learned(detected, work_shape, scale_of_grid, params)
+            if uses_network and choice["kept"] == "learned":
+                # the network's traces can replace only the pixel model's (§3.6): run when kept,
+                # on every grid, the coarser ones on the other core, each reading the face the
+                # pixel model's run on that grid flattened
+                flat_of = {level: run.flat for level, (run, _) in runs.items()}
+                pending = {level: pool.submit(timed, detect, "learned", grey, level=level,
+                                              model=AUTO_NETWORK, flat=flat_of[level])
+                           for level in levels}
+                runs = {1: detect("learned", grey, clock, model=AUTO_NETWORK, flat=flat_of[1]),
+                        **{f: job.result() for f, job in pending.items()}}
+                detected[AUTO_NETWORK] = keep_grid(AUTO_NETWORK, runs)
         except BaseException:  # an error or Ctrl-C: the side tasks not begun are dropped
             pool.shutdown(wait=True, cancel_futures=True)
             raise
@@ -1414,34 +1459,16 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     del grey
     found = {detector: run for detector, (run, _) in detected.items()}
     maps = {detector: traces for detector, (_, traces) in detected.items()}
-
-    grid_of, level_records = {}, {}  # the grid each learned chain's traces come from (§3.4)
-    for chain in ("learned", AUTO_NETWORK) if uses_learned else ():
-        runs = {level: run_traces for (name, level), run_traces in on_grids.items() if name == chain}
-        if chain == "learned":
-            runs[1] = detected["learned"]
-        if not runs:
-            continue
-        grid_of[chain], level_records[chain] = grid_levels.kept_grid(
-            {level: traces for level, (_, traces) in runs.items()})
-        found[chain], maps[chain] = runs[grid_of[chain]]
-    choice = None
-    if params.detector == AUTO:
-        learned_chains = grid_levels.to_grid(found["learned"].chains, found["learned"].flat.shape,
-                                             work_shape)
-        agreement = detector_agreement(found["ridge"].chains, learned_chains, work_shape,
-                                       radius_px=AGREEMENT_RADIUS_PX * scale_of_grid)
-        kept = "ridge" if agreement > params.auto_agreement else "learned"
-        choice = {"kept": kept, "agreement": agreement, "auto_agreement": params.auto_agreement,
-                  "traces": {d: len(found[d].chains) for d in found}}
+    if choice is not None:
+        choice["traces"] = {d: len(found[d].chains) for d in found}
         if uses_network:
+            choice["auto_network_ratio"] = params.auto_network_ratio
+        if AUTO_NETWORK in maps:
             ratio = network_length_ratio(maps[AUTO_NETWORK], maps["learned"])
-            if kept == "learned" and ratio >= params.auto_network_ratio:
-                kept = AUTO_NETWORK
-            choice.update(kept=kept, network_length_ratio=ratio,
-                          auto_network_ratio=params.auto_network_ratio)
-    else:
-        kept = params.detector
+            choice["network_length_ratio"] = ratio
+            if ratio >= params.auto_network_ratio:
+                choice["kept"] = AUTO_NETWORK
+    kept = params.detector if choice is None else choice["kept"]
     chain_of_kept = "learned" if kept == AUTO_NETWORK else kept  # the network's is the learned chain
     level = grid_of.get(kept, 1)
     if chain_of_kept == "learned":

@@ -27,12 +27,22 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["CNN_MODEL_FILE", "SIZE_MULTIPLE", "ConvModel", "net_input", "read_conv_model"]
+__all__ = ["CNN_MODEL_FILE", "SIZE_MULTIPLE", "HALO_PX", "MAX_PASS_PIXELS", "ConvModel", "net_input", "read_conv_model"]
 
 #: The shipped network, inside the installed package (``pixel_model = "cnn"``).
 CNN_MODEL_FILE = Path(__file__).resolve().parent / "models" / "joint_cnn.onnx"
 #: The network halves its grid three times: its input's sides must be multiples of 8.
 SIZE_MULTIPLE = 8
+#: An image of more pixels goes through the network in strips of rows. One pass holds the
+#: network's intermediate maps for the whole image, about 0.15 kB a pixel (the peak memory of
+#: ``rockmass extract`` on a 4 MP working grid rises by about 0.6 GB with the network); strips
+#: bound that on larger grids, at the cost of their overlap, so the default 4 MP grid goes
+#: through in one pass.
+MAX_PASS_PIXELS = 6e6
+#: Rows of context above and below a strip: at least the network's reach (its field of view is
+#: 2 x 84 + 1 px: 2 + 4 + 8 + 8 + 16 + 32 + 4 + 2 + 1 px from the convolutions of its levels, 7
+#: from the pooling), a multiple of :data:`SIZE_MULTIPLE`.
+HALO_PX = 96
 #: Gain of the log input: log(I) of a flattened face (I about 1) times this, clipped to ±LOG_CLIP.
 LOG_GAIN = 4.0
 LOG_CLIP = 8.0
@@ -93,19 +103,34 @@ class ConvModel:
             net = self._local.net = cv2.dnn.readNetFromONNX(str(self.path))
         return net
 
-    def probability_of(self, flat) -> np.ndarray:
+    def probability_of(self, flat, *, max_pass_pixels: float = MAX_PASS_PIXELS) -> np.ndarray:
         """Probability map (H, W) float32 in [0, 1] of a :func:`rockmass.imaging.learned.model_input`
         image: the image is padded by reflection to multiples of :data:`SIZE_MULTIPLE`, passed
-        through the network, cropped back and put through the logistic function."""
+        through the network (in strips of rows when it has more than ``max_pass_pixels`` pixels,
+        each with :data:`HALO_PX` rows of context above and below, so that every output pixel sees
+        what it would see in one pass: the same map), cropped back and put through the logistic
+        function."""
         import cv2
 
         x = net_input(flat)
         h, w = x.shape
         padded = cv2.copyMakeBorder(x, 0, -h % SIZE_MULTIPLE, 0, -w % SIZE_MULTIPLE,
                                     cv2.BORDER_REFLECT)
+        rows = padded.shape[0]
+        window = int(max_pass_pixels // padded.shape[1]) // SIZE_MULTIPLE * SIZE_MULTIPLE
+        window = min(max(window, 2 * HALO_PX + 8 * SIZE_MULTIPLE), rows)
+        strip = rows if window == rows else window - 2 * HALO_PX  # output rows of one pass
         net = self._net()
-        net.setInput(padded[None, None])
-        logit = np.asarray(net.forward(), dtype=np.float32)[0, 0, :h, :w]
+        logit = np.empty(padded.shape, dtype=np.float32)
+        for top in range(0, rows, strip):
+            # the strip with its context, shifted inside the image at its ends, so that every
+            # pass has one shape (OpenCV plans it once); every start is on the network's
+            # coarsest grid (a multiple of 8)
+            first = min(max(top - HALO_PX, 0), rows - window)
+            net.setInput(np.ascontiguousarray(padded[first:first + window])[None, None])
+            out = np.asarray(net.forward(), dtype=np.float32)[0, 0]
+            logit[top:top + strip] = out[top - first:top - first + strip]
+        logit = logit[:h, :w]
         # 1 / (1 + e^-t), written so that no exp overflows
         return np.where(logit >= 0, 1.0 / (1.0 + np.exp(-np.abs(logit))),
                         np.exp(-np.abs(logit)) / (1.0 + np.exp(-np.abs(logit)))).astype(np.float32)

@@ -46,6 +46,8 @@ __all__ = ["tile_labels", "training_tiles", "build_network", "train", "main"]
 UNSCORED = 255
 TILE_PX = 160
 BATCH = 12
+#: Channels of the U-Net's four levels, finest first (``--channels``).
+CHANNELS = (8, 16, 24, 32)
 
 
 def tile_labels(centre_lines, ignore=None) -> np.ndarray:
@@ -114,7 +116,7 @@ def training_tiles(first_seed: int = 60_000, n_field: int = 120, n_tunnel: int =
                tile_labels(render_traces(face.truth, face.image.shape, face.m_per_px) > 0))
 
 
-def build_network(channels=(8, 16, 24, 32)):
+def build_network(channels=CHANNELS):
     """The U-Net of the module notes (a ``torch.nn.Module``; needs PyTorch)."""
     import torch
     from torch import nn
@@ -168,15 +170,15 @@ def _batch(faces, rng):
     return np.stack(inputs)[:, None], np.stack(labels)[:, None]
 
 
-def train(faces, *, iterations: int = 3000, seed: int = 0, report=print):
-    """Fit :func:`build_network` to ``faces`` (a list of (input, labels)); returns the network in
-    evaluation mode."""
+def train(faces, *, iterations: int = 3000, seed: int = 0, channels=CHANNELS, report=print):
+    """Fit :func:`build_network` (``channels`` per level) to ``faces`` (a list of (input,
+    labels)); returns the network in evaluation mode."""
     import torch
     from torch.nn import functional
 
     torch.manual_seed(seed)
     rng = np.random.default_rng(seed)
-    net = build_network()
+    net = build_network(channels)
     optimiser = torch.optim.Adam(net.parameters(), lr=3e-3)
     schedule = torch.optim.lr_scheduler.OneCycleLR(optimiser, max_lr=3e-3, total_steps=iterations)
     running, t0 = 0.0, time.perf_counter()
@@ -207,10 +209,18 @@ def main(argv=None) -> int:
                         help=f"ONNX file (default {CNN_MODEL_FILE}); its record goes beside it (.json)")
     parser.add_argument("--iterations", type=int, default=3000)
     parser.add_argument("--seed", type=int, default=60_000, help="first face seed (default 60000)")
+    parser.add_argument("--channels", default=",".join(map(str, CHANNELS)),
+                        help="channels of the four levels, finest first (default %(default)s)")
     parser.add_argument("--faces-for-test", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.iterations < 1:
         parser.error("--iterations must be at least 1")
+    try:
+        channels = tuple(int(c) for c in args.channels.split(","))
+    except ValueError:
+        channels = ()
+    if len(channels) != 4 or min(channels) < 1:
+        parser.error(f"--channels takes four positive integers, e.g. 8,16,24,32; got {args.channels!r}")
     try:
         import torch
     except ImportError:
@@ -221,7 +231,7 @@ def main(argv=None) -> int:
               else {})  # a few faces, for the test that the command runs through
     faces = list(training_tiles(args.seed, **counts))
     t_faces = time.perf_counter() - t0
-    net = train(faces, iterations=args.iterations, seed=0,
+    net = train(faces, iterations=args.iterations, seed=0, channels=channels,
                 report=lambda line: print(line, file=sys.stderr, flush=True))
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -230,7 +240,7 @@ def main(argv=None) -> int:
                       dynamic_axes={"x": {2: "h", 3: "w"}, "logit": {2: "h", 3: "w"}})
     info = {"command": "python -m rockmass.imaging.train_joint_net " + " ".join(argv or sys.argv[1:]),
             "seed": args.seed, "iterations": args.iterations, "faces": len(faces),
-            "parameters": int(sum(p.numel() for p in net.parameters())),
+            "channels": list(channels), "parameters": int(sum(p.numel() for p in net.parameters())),
             "faces_s": round(t_faces, 1), "total_s": round(time.perf_counter() - t0, 1),
             "python": platform.python_version(), "torch": torch.__version__,
             "data": "synthetic faces and joints drawn on random textures (procedural, and "

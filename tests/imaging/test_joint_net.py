@@ -12,7 +12,8 @@ import pytest
 from rockmass.dfn import TraceMap
 from rockmass.imaging import joints_on_photo, synthetic_face
 from rockmass.imaging.extract import ExtractParams, extract, network_length_ratio
-from rockmass.imaging.joint_net import CNN_MODEL_FILE, ConvModel, net_input, read_conv_model
+from rockmass.imaging.joint_net import (CNN_MODEL_FILE, HALO_PX, MAX_PASS_PIXELS, SIZE_MULTIPLE,
+                                        ConvModel, net_input, read_conv_model)
 from rockmass.imaging.learned import load_model, model_input, model_record
 from rockmass.imaging.metrics import trace_accuracy
 from rockmass.imaging.rock_textures import (crack_clutter, photo_rock, power_law_noise,
@@ -55,6 +56,19 @@ def test_probability_map_keeps_the_image_shape_for_any_size_and_is_bounded():
     assert p.shape == (101, 157) and p.dtype == np.float32
     assert np.isfinite(p).all() and p.min() >= 0.0 and p.max() <= 1.0
     assert p.max() > 0.9  # it sees the joints
+
+
+def test_strips_of_rows_give_the_map_of_one_pass():
+    # each strip carries HALO_PX rows of context: the network's reach, so nothing changes; a halo
+    # shorter than the reach would change the map near the strips' edges
+    rng = np.random.default_rng(3)
+    flat = (1.0 + 0.2 * rng.standard_normal((403, 157))).astype(np.float32)
+    flat[:, 60:63] = 0.5  # a joint across every strip
+    model = load_model("cnn")
+    whole = model.probability_of(flat)
+    for budget in (1.0, 160 * 230, 160 * 300):  # the smallest strips, and ones ending anywhere
+        np.testing.assert_array_equal(model.probability_of(flat, max_pass_pixels=budget), whole)
+    assert HALO_PX % SIZE_MULTIPLE == 0 and MAX_PASS_PIXELS >= 4e6  # a 4 MP grid: one pass
 
 
 def test_two_threads_get_what_one_thread_gets():
@@ -103,10 +117,10 @@ def test_auto_keeps_the_network_exactly_when_it_finds_enough_more_length():
     network = extract(face.image, m_per_px=face.m_per_px, params=CNN)
     learned = extract(face.image, m_per_px=face.m_per_px, params=ExtractParams(detector="learned"))
     ratio = network_length_ratio(network.traces, learned.traces)
+    assert choice["agreement"] <= 0.55  # textured rock: the pixel model's over the ridge filter's
     assert choice["network_length_ratio"] == pytest.approx(ratio, rel=1e-12)
     assert choice["auto_network_ratio"] == 1.3
-    expected = ("ridge" if choice["agreement"] > 0.55
-                else "cnn" if ratio >= choice["auto_network_ratio"] else "learned")
+    expected = "cnn" if ratio >= choice["auto_network_ratio"] else "learned"
     assert choice["kept"] == expected
     kept = {"cnn": network, "learned": learned}.get(expected)
     if kept is not None:  # the traces are those of the chain run alone
@@ -124,6 +138,18 @@ def test_auto_keeps_the_network_exactly_when_it_finds_enough_more_length():
                                                 debug=True).debug
     with_debug = extract(face.image, m_per_px=face.m_per_px, params=WITH_NETWORK, debug=True)
     assert with_debug.debug["network_probability"].shape == face.image.shape
+
+
+def test_auto_runs_the_network_only_where_it_keeps_the_pixel_models_traces():
+    # a clean face: "auto" keeps the ridge filter's traces, which the network cannot replace
+    face = synthetic_face("easy", seed=2, shape_px=(300, 450), m_per_px=0.01)
+    auto = extract(face.image, m_per_px=face.m_per_px, params=WITH_NETWORK, debug=True)
+    choice = auto.detector_choice
+    assert choice["kept"] == "ridge" and choice["agreement"] > 0.55
+    assert "network_length_ratio" not in choice and set(choice["traces"]) == {"learned", "ridge"}
+    assert choice["auto_network_ratio"] == 1.3 and "network_probability" not in auto.debug
+    alone = extract(face.image, m_per_px=face.m_per_px, params=ExtractParams(detector="ridge"))
+    assert auto.traces.n_traces == alone.traces.n_traces
 
 
 def test_network_length_ratio_edges():
