@@ -8,15 +8,20 @@ each the best of ``--repeat`` runs in this process:
 
 - ``features``: :func:`rockmass.imaging.features.pixel_features` (27 maps);
 - ``classifier, block B``: the shipped model's forward pass (eq. (3.2), the standardisation's
-  division folded into the first layer) over the 4 M columns in blocks of B, the default 8192
-  and 262 144, and the largest difference of its probabilities from the default's (float32
-  rounding: the block size must not change the answer);
+  division folded into the first layer; a numba kernel since session 26) over the 4 M columns in
+  blocks of B, the default 512 and 8192, and the largest difference of its probabilities
+  from the default's (the block size must not change the answer);
+- ``NumPy, block B``: the same forward pass with NumPy's matrix product (its BLAS library's
+  threads), as it was from session 15 to 25 (blocks of 8192), written out here;
 - ``unfolded, block 262 144``: the forward pass as it was before session 15 (standardise, clip,
   then the layers, in blocks of 262 144), written out here, with its largest difference from
   the default;
-- ``classifier, block B, ridge chain beside it``: the forward pass at each block size while a
-  second thread runs the ridge detector's whole chain on the same face, as
-  ``detector = "auto"`` does (wall time of the forward pass alone).
+- ``... , ridge chain beside it``: the kernel and the NumPy forward pass while a second thread
+  runs the ridge detector's whole chain on the same face, as ``detector = "auto"`` does: wall
+  time of the forward pass, and the process's CPU time over the pair (the ridge chain's own
+  and what the forward pass's threads take from it).
+
+Times are the best of ``--repeat`` runs; ``cpu_s`` is the process's CPU time in that run.
 
 Also the model file's size. Rows go to benchmarks/results/bench_pixel_inference.json.
 """
@@ -32,15 +37,36 @@ import numpy as np
 from _common import header, save, table
 
 SHAPE_PX = (1633, 2449)
+#: Block sizes timed per forward pass: the kernel's default and NumPy's two.
+BLOCKS = {"classifier": (512, 8192), "NumPy": (8192, 262144)}
 
 
-def best_of(fn, repeat: int) -> float:
-    times = []
+def best_of(fn, repeat: int) -> dict:
+    """Wall time of the fastest of ``repeat`` calls and the process's CPU time in it."""
+    runs = []
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
+        runs.append((time.perf_counter() - t0, time.process_time() - c0))
+    wall, cpu = min(runs)
+    return {"time_s": wall, "cpu_s": cpu}
+
+
+def numpy_predict(stage, columns, block: int = 8192) -> np.ndarray:
+    """Eq. (3.2) as :meth:`~rockmass.imaging.learned.Stage.predict` computed it from session 15 to
+    25: the folded layers with NumPy's matrix product, in blocks of ``block`` columns."""
+    low, high, mean, weights, biases = stage._folded
+    out = np.empty(columns.shape[1], dtype=np.float32)
+    for start in range(0, columns.shape[1], block):
+        z = np.clip(columns[:, start:start + block], low, high)
+        z -= mean
+        for k, (w, b) in enumerate(zip(weights, biases)):
+            z = w @ z
+            z += b
+            if k < len(weights) - 1:
+                np.maximum(z, 0.0, out=z)
+        out[start:start + block] = 1.0 / (1.0 + np.exp(-np.clip(z[0], -30, 30)))
+    return out
 
 
 def unfolded_predict(stage, columns, block: int = 262144) -> np.ndarray:
@@ -76,32 +102,39 @@ def main(argv=None) -> int:
     features = pixel_features(flat)
     columns = features.reshape(features.shape[0], -1)
     reference = stage.predict(columns)
-    rows = [{"step": "features", "time_s": best_of(lambda: pixel_features(flat), args.repeat)}]
-    for block in (8192, 262144):
-        rows.append({"step": f"classifier, block {block}",
-                     "time_s": best_of(lambda: stage.predict(columns, block=block), args.repeat),
-                     "max_diff": float(np.abs(stage.predict(columns, block=block) - reference).max())})
+    rows = [{"step": "features", **best_of(lambda: pixel_features(flat), args.repeat)}]
+    forward = {"classifier": lambda block: stage.predict(columns, block=block),
+               "NumPy": lambda block: numpy_predict(stage, columns, block)}
+    for name, predict in forward.items():
+        for block in BLOCKS[name]:
+            rows.append({"step": f"{name}, block {block}",
+                         **best_of(lambda: predict(block), args.repeat),
+                         "max_diff": float(np.abs(predict(block) - reference).max())})
     rows.append({"step": "unfolded, block 262144",
-                 "time_s": best_of(lambda: unfolded_predict(stage, columns), args.repeat),
+                 **best_of(lambda: unfolded_predict(stage, columns), args.repeat),
                  "max_diff": float(np.abs(unfolded_predict(stage, columns) - reference).max())})
-    for block in (8192, 262144):
-        times = []
-        for _ in range(args.repeat):
-            side = threading.Thread(target=extract, args=(face.image,),
-                                    kwargs=dict(m_per_px=face.m_per_px,
-                                                params=ExtractParams(detector="ridge")))
-            side.start()
-            t0 = time.perf_counter()
-            stage.predict(columns, block=block)
-            times.append(time.perf_counter() - t0)
-            side.join()
-        rows.append({"step": f"classifier, block {block}, ridge chain beside it",
-                     "time_s": min(times)})
+    for name, predict in forward.items():
+        for block in BLOCKS[name]:
+            runs = []
+            for _ in range(args.repeat):
+                side = threading.Thread(target=extract, args=(face.image,),
+                                        kwargs=dict(m_per_px=face.m_per_px,
+                                                    params=ExtractParams(detector="ridge")))
+                c0 = time.process_time()
+                side.start()
+                t0 = time.perf_counter()
+                predict(block)
+                wall = time.perf_counter() - t0
+                side.join()
+                runs.append((wall, time.process_time() - c0))
+            wall, cpu = min(runs)
+            rows.append({"step": f"{name}, block {block}, ridge chain beside it",
+                         "time_s": wall, "cpu_s": cpu})
     for row in rows:
         row["MP_per_s"] = columns.shape[1] / 1e6 / row["time_s"]
     print(f"\nmodel {MODEL_FILE.name}: {MODEL_FILE.stat().st_size} bytes; map {SHAPE_PX[0]} x "
           f"{SHAPE_PX[1]} px ({columns.shape[1] / 1e6:.1f} MP), best of {args.repeat}")
-    print(table(rows, [("step", "s"), ("time_s", ".3f"), ("MP_per_s", ".1f"),
+    print(table(rows, [("step", "s"), ("time_s", ".3f"), ("cpu_s", ".3f"), ("MP_per_s", ".1f"),
                        ("max_diff", ".1e")]))
     path = save("bench_pixel_inference", {"model_bytes": MODEL_FILE.stat().st_size,
                                           "shape_px": SHAPE_PX, "rows": rows})

@@ -71,30 +71,31 @@ class Stage:
         if not np.all(np.asarray(self.std) > 0):  # also refuses NaN
             raise ValueError("a stage's input standard deviations must all be > 0")
 
-    def predict(self, columns: np.ndarray, *, block: int = 8192) -> np.ndarray:
+    def predict(self, columns: np.ndarray, *, block: int = 512) -> np.ndarray:
         """Probability (float32, shape (N,)) for each column of (F, N) inputs.
 
         Columns, not rows: the features of an image come as (F, H, W) maps, and
         ``features.reshape(F, -1)`` is then a view; a (N, F) row array is passed as ``x.T``.
-        The columns go through in blocks of ``block``: 8192 keeps a block's hidden layers (32 x
-        8192 float32, 1 MB) in the processor's cache (``benchmarks/bench_pixel_inference.py``
-        times block sizes, alone and beside the ridge chain that "auto" runs, and the forward
-        pass as it was before the standardisation was folded in).
+        The columns go through in blocks of ``block``: 512 keeps a block's layers (2 x 32 x 512
+        float32, 128 kB) in the processor's cache. The layers are a numba kernel's
+        (:func:`rockmass.imaging._mlp_kernel.mlp_forward`), not NumPy's matrix product, whose
+        BLAS threads spin on the core "auto"'s ridge chain runs on
+        (``benchmarks/bench_pixel_inference.py`` times both, alone and beside that chain).
         """
-        x = np.asarray(columns, dtype=np.float32)
+        from ._mlp_kernel import mlp_forward
+
+        x = np.ascontiguousarray(columns, dtype=np.float32)
         if x.ndim != 2 or x.shape[0] != self.mean.size:
             raise ValueError(f"inputs must be ({self.mean.size}, N) columns, got shape {x.shape}")
+        if block < 1:
+            raise ValueError(f"block must be at least 1 column, got {block}")
         low, high, mean, weights, biases = self._folded
         out = np.empty(x.shape[1], dtype=np.float32)
-        for start in range(0, x.shape[1], block):
-            z = np.clip(x[:, start:start + block], low, high)
-            z -= mean
-            for k, (w, b) in enumerate(zip(weights, biases)):
-                z = w @ z
-                z += b
-                if k < len(weights) - 1:
-                    np.maximum(z, 0.0, out=z)
-            out[start:start + block] = 1.0 / (1.0 + np.exp(-np.clip(z[0], -30, 30)))
+        mlp_forward(x, low[:, 0], high[:, 0], mean[:, 0],
+                    np.concatenate([w.ravel() for w in weights]),
+                    np.concatenate([c.ravel() for c in biases]),
+                    np.array([self.mean.size, *(w.shape[0] for w in weights)], dtype=np.int64),
+                    int(block), out)
         return out
 
     @cached_property

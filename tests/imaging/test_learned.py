@@ -63,6 +63,18 @@ def test_stage_forward_pass_matches_a_naive_loop():
     assert np.allclose(stage.predict(x.T, block=16), expected, atol=1e-5)  # blocks of 16, 16, 8
 
 
+def test_forward_pass_of_any_depth_and_widths_matches_the_naive_loop():
+    # the kernel takes outputs four at a time: widths of 9, 4 and 6 take both of its paths
+    rng = np.random.default_rng(6)
+    stage = _random_stage(rng, 7, hidden=(9, 4, 6))
+    x = rng.normal(size=(1037, 7)).astype(np.float32)
+    expected = _naive_forward(stage, x)
+    for block in (1, 5, 512, 4096):
+        assert np.allclose(stage.predict(x.T, block=block), expected, atol=1e-5)
+    with pytest.raises(ValueError, match="block"):
+        stage.predict(x.T, block=0)
+
+
 def test_forward_pass_keeps_its_digits_for_inputs_far_from_zero():
     """Features whose mean is 10⁴ standard deviations from zero (a grey level in raw units, say):
     the folded first layer must not cancel the digits that distinguish one input from another."""
