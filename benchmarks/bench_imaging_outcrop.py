@@ -52,7 +52,7 @@ from pathlib import Path
 
 import numpy as np
 
-from _common import header, save, table
+from _common import detector_params, header, save, table
 from bench_imaging_real import REAL_COLUMNS, TOLERANCE_PX, _extraction_real, score_real
 
 from rockmass.imaging.metrics import summarise_counts
@@ -191,7 +191,9 @@ def main(argv=None) -> int:
     cv2.setNumThreads(1)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--detectors", default="ridge,learned,auto",
-                        help="comma-separated ExtractParams.detector values (default all three)")
+                        help="comma-separated ExtractParams.detector values (default all three), "
+                             "cnn (the convolutional network alone) or auto+cnn (auto with it, "
+                             "auto_network_ratio = 1.3; docs/imaging.md §3.6)")
     parser.add_argument("--site-models", action="store_true",
                         help="only the two-fold site models (pixel models trained on ten tiles, "
                              "scored on the other ten)")
@@ -209,7 +211,7 @@ def main(argv=None) -> int:
         references = [("consolidated", lambda t: DATA / "labels" / "consolidated" / t.name),
                       ("two of three", lambda t: majority / t.name)]
         for detector in detectors:
-            params = ExtractParams(detector=detector)
+            params = detector_params(detector)
             for name, label_of in references:
                 pairs = [(t, label_of(t)) for t in tiles()]
                 rows.append({"split": name, "detector": detector, "setting": "defaults",

@@ -144,8 +144,8 @@ class ExtractParams:
         labels nothing, and measured on joints drawn over the same photographs
         (``benchmarks/bench_network_ratio.py``): give it for textured faces whose thin joints
         matter. The network runs only where "auto" keeps the pixel model's traces (there it adds
-        1-2 s to a 12 MP photo, below the 2 MP/s the command is held to, which is why ``inf``,
-        the default for now, does not run it).
+        1-3 s to a 12-24 MP photo, bringing a 12 MP one to the 2 MP/s the command is held to);
+        ``inf``, the default for now, does not run it.
     line_polarity : {"dark", "bright"}, default "dark"
         Joints to look for: dark lines (open joints, shadowed traces) or bright ones (calcite- or
         clay-filled joints, veins, mortar). On ``skimage.data.brick()`` "dark" traces the brick

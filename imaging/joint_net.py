@@ -27,18 +27,19 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["CNN_MODEL_FILE", "SIZE_MULTIPLE", "HALO_PX", "MAX_PASS_PIXELS", "ConvModel", "net_input", "read_conv_model"]
+__all__ = ["CNN_MODEL_FILE", "SIZE_MULTIPLE", "HALO_PX", "MAX_PASS_PIXELS", "ConvModel", "net_input",
+           "read_conv_model"]
 
 #: The shipped network, inside the installed package (``pixel_model = "cnn"``).
 CNN_MODEL_FILE = Path(__file__).resolve().parent / "models" / "joint_cnn.onnx"
 #: The network halves its grid three times: its input's sides must be multiples of 8.
 SIZE_MULTIPLE = 8
 #: An image of more pixels goes through the network in strips of rows. One pass holds the
-#: network's intermediate maps for the whole image, about 0.15 kB a pixel (the peak memory of
-#: ``rockmass extract`` on a 4 MP working grid rises by about 0.6 GB with the network); strips
-#: bound that on larger grids, at the cost of their overlap, so the default 4 MP grid goes
-#: through in one pass.
-MAX_PASS_PIXELS = 6e6
+#: network's intermediate maps for the whole image: a 4 MP working grid raised a fresh process's
+#: peak memory by 1.16 GB, strips of 1.5 MP by 0.49 GB, and the strips took about the same time
+#: (0.9-1.3 s of two cores for either: a first pass's memory costs as much to allocate as the
+#: strips' overlap costs to compute; session 26, a scratch look, three fresh processes each).
+MAX_PASS_PIXELS = 1.5e6
 #: Rows of context above and below a strip: at least the network's reach (its field of view is
 #: 2 x 84 + 1 px: 2 + 4 + 8 + 8 + 16 + 32 + 4 + 2 + 1 px from the convolutions of its levels, 7
 #: from the pooling), a multiple of :data:`SIZE_MULTIPLE`.

@@ -68,7 +68,7 @@ def test_strips_of_rows_give_the_map_of_one_pass():
     whole = model.probability_of(flat)
     for budget in (1.0, 160 * 230, 160 * 300):  # the smallest strips, and ones ending anywhere
         np.testing.assert_array_equal(model.probability_of(flat, max_pass_pixels=budget), whole)
-    assert HALO_PX % SIZE_MULTIPLE == 0 and MAX_PASS_PIXELS >= 4e6  # a 4 MP grid: one pass
+    assert HALO_PX % SIZE_MULTIPLE == 0 and MAX_PASS_PIXELS > 0
 
 
 def test_two_threads_get_what_one_thread_gets():
