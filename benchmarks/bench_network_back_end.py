@@ -25,8 +25,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -102,12 +100,10 @@ def rows_of(split: str, photos: list[dict], names) -> list[dict]:
 
 
 def main(argv=None) -> int:
-    from bench_imaging_real import real_pairs
+    from bench_network_ratio import add_photo_arguments, checked_splits, scored_photos
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--splits", default="train,val")
-    parser.add_argument("--limit", type=int, default=0, help="first N photos of each split (0: all)")
-    parser.add_argument("--workers", type=int, default=2)
+    add_photo_arguments(parser)
     parser.add_argument("--network", default="cnn",
                         help="the network: cnn (the shipped one) or an .onnx file")
     parser.add_argument("--settings", default=",".join(VARIANTS),
@@ -117,27 +113,20 @@ def main(argv=None) -> int:
     if not names or set(names) - set(VARIANTS):
         parser.error(f"--settings takes names of: {', '.join(VARIANTS)}")
     settings_of = {n: VARIANTS[n] for n in names}
-    splits = [s for s in args.splits.split(",") if s]
-    if not splits or set(splits) - {"train", "val"} or args.limit < 0 or args.workers < 1:
-        parser.error("--splits takes train and/or val; --limit >= 0, --workers >= 1")
+    splits = checked_splits(args, parser)
     print(header("the network's chain with other back-end settings: real labels and drawn joints"))
     print(f"network: {args.network}")
     payload = {"network": args.network, "rows": [], "photos": {},
                "variants": {k: {f: str(v) for f, v in s.items()} for k, s in settings_of.items()}}
     for split in splits:
-        pairs = real_pairs(split)
-        if not pairs:
-            print(f"\n{split}: no labelled photographs found, skipped")
+        scored = scored_photos(split, args, score_photo, args.network, settings_of)
+        if scored is None:
             continue
-        pairs = pairs[:args.limit] if args.limit else pairs
-        t0 = time.perf_counter()
-        with ProcessPoolExecutor(max_workers=args.workers) as pool:
-            photos = list(pool.map(score_photo, [(p, label, k + 1, args.network, settings_of)
-                                                 for k, (p, label) in enumerate(pairs)]))
+        photos, seconds = scored
         rows = rows_of(split, photos, names)
         payload["rows"] += rows
         payload["photos"][split] = photos
-        print(f"\n{split}/ ({len(pairs)} photographs, {time.perf_counter() - t0:.0f} s; real: hand "
+        print(f"\n{split}/ ({len(photos)} photographs, {seconds:.0f} s; real: hand "
               "labels, F1 at 5 px; drawn: joints drawn on the same photos, buffered F1 at 3 px)")
         print(table(rows, COLUMNS))
     name = ("bench_network_back_end" if args.network == "cnn"

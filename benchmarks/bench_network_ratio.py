@@ -129,19 +129,47 @@ def _print_rows(split: str, rows: list[dict]) -> None:
                                        if split == "train" else " (measured only)"))
 
 
-def main(argv=None) -> int:
-    from bench_imaging_real import real_pairs
-
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def add_photo_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--splits``, ``--limit`` and ``--workers`` of a script that scores the rock-face-fractures
+    photographs one by one (this one and ``bench_network_back_end.py``)."""
     parser.add_argument("--splits", default="train,val")
     parser.add_argument("--limit", type=int, default=0, help="first N photos of each split (0: all)")
     parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--from-json", action="store_true",
-                        help="recompute the rows from the saved per-photo scores")
-    args = parser.parse_args(argv)
+
+
+def checked_splits(args, parser: argparse.ArgumentParser) -> list[str]:
+    """The splits of :func:`add_photo_arguments`' arguments, or a usage error."""
     splits = [s for s in args.splits.split(",") if s]
     if not splits or set(splits) - {"train", "val"} or args.limit < 0 or args.workers < 1:
         parser.error("--splits takes train and/or val; --limit >= 0, --workers >= 1")
+    return splits
+
+
+def scored_photos(split: str, args, score, *extra):
+    """``score((photo, label, seed, *extra))`` of every photograph of a split (the first
+    ``args.limit``), in ``args.workers`` processes, and the seconds taken; None when the split has
+    no labelled photographs. The seed of the joints drawn on a photo is 1 + its index."""
+    from bench_imaging_real import real_pairs
+
+    pairs = real_pairs(split)
+    if not pairs:
+        print(f"\n{split}: no labelled photographs found, skipped")
+        return None
+    pairs = pairs[:args.limit] if args.limit else pairs
+    t0 = time.perf_counter()
+    with ProcessPoolExecutor(max_workers=args.workers) as pool:
+        photos = list(pool.map(score, [(p, label, k + 1, *extra)
+                                       for k, (p, label) in enumerate(pairs)]))
+    return photos, time.perf_counter() - t0
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    add_photo_arguments(parser)
+    parser.add_argument("--from-json", action="store_true",
+                        help="recompute the rows from the saved per-photo scores")
+    args = parser.parse_args(argv)
+    splits = checked_splits(args, parser)
     print(header("auto_network_ratio: real labels and joints drawn on the same photographs"))
     payload = {"ratios": list(RATIOS), "rows": [], "photos": {}}
     if args.from_json:
@@ -154,18 +182,14 @@ def main(argv=None) -> int:
             _print_rows(split, rows_of(split, saved["photos"][split]))
         return 0
     for split in splits:
-        pairs = real_pairs(split)
-        if not pairs:
-            print(f"\n{split}: no labelled photographs found, skipped")
+        scored = scored_photos(split, args, score_photo)
+        if scored is None:
             continue
-        pairs = pairs[:args.limit] if args.limit else pairs
-        t0 = time.perf_counter()
-        with ProcessPoolExecutor(max_workers=args.workers) as pool:
-            photos = list(pool.map(score_photo, [(p, label, k + 1) for k, (p, label) in enumerate(pairs)]))
+        photos, seconds = scored
         rows = rows_of(split, photos)
         payload["rows"] += rows
         payload["photos"][split] = photos
-        print(f"\n{split}/ ({len(pairs)} photographs, {time.perf_counter() - t0:.0f} s; real: hand "
+        print(f"\n{split}/ ({len(photos)} photographs, {seconds:.0f} s; real: hand "
               "labels, F1 at 5 px, means over photos; drawn: joints drawn on the same photos, "
               "buffered F1 at 3 px; *_cnn: photos where auto keeps the network's traces)")
         _print_rows(split, rows)
