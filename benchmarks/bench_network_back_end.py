@@ -45,7 +45,8 @@ VARIANTS = {
     "width off": {"min_trace_width": 0.0},
     "contrast 0.15, length 40 px": {"min_trace_contrast": 0.15, "min_trace_length_px": 40.0},
 }
-COLUMNS = [("split", "s"), ("setting", "s"), ("real_F1", ".3f"), ("real_P", ".3f"), ("real_R", ".3f"),
+COLUMNS = [("split", "s"), ("setting", "s"), ("real_F1", ".3f"), ("real_P", ".3f"),
+           ("real_R", ".3f"),
            ("real_dP21_pct", "+.0f"), ("drawn_F1", ".3f"), ("drawn_P", ".3f"), ("drawn_R", ".3f"),
            ("drawn_R_w12", ".3f"), ("drawn_dP21_pct", "+.0f"), ("photos", "d")]
 

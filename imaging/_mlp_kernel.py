@@ -2,12 +2,12 @@
 docs/imaging.md §3.1, eq. (3.2)).
 
 Written out rather than left to NumPy's matrix product: the product goes to the BLAS library,
-which splits these small products (32 x 27 weights times a few thousand pixels) over threads that
-wait for work by spinning; "auto" runs the classifier in one thread while its ridge chain runs in
-another, and the spinning threads take the other core's time (``benchmarks/bench_pixel_inference.py``
-measures both, alone and beside the ridge chain). The kernel runs in its caller's thread, without
-the interpreter lock, and sums in one fixed order, so its probabilities do not depend on the
-number of threads either.
+which splits these small products (32 x 27 weights times a few thousand pixels) over threads
+that wait for work by spinning; "auto" runs the classifier in one thread while its ridge chain
+runs in another, and the spinning threads take the other core's time
+(``benchmarks/bench_pixel_inference.py`` measures both, alone and beside the ridge chain). The
+kernel runs in its caller's thread, without the interpreter lock, and sums in one fixed order, so
+its probabilities do not depend on the number of threads either.
 
 Kept apart from its wrapper (the project's kernel rule: kernels take plain arrays and write into
 caller-allocated outputs; the wrapper validates).

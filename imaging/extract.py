@@ -937,18 +937,16 @@ def _candidate_area(raw, roi, face_mask: str, shape_px, work_shape, scale: float
 
 
 def _joint_pixels(grey, params: ExtractParams, width_work: float, mask, clock: _Clock,
-                  flat=None) -> tuple:
+                  flat_face=None) -> tuple:
     """Flatten the working grey image, find the joint response (ridge filter or learned
     probability) and threshold it (hysteresis, inside ``mask``; holes filled). Returns (flattened
     image, response, binary mask of joint pixels, and for the learned detector the relative
     spread and contrast of the flattened face and the factor its input was stretched by, else
     None). Within :func:`rockmass.imaging.reuse.shared_work` the learned detector's flattened face
     and probability map are computed once per model, image and mask (no back-end setting changes
-    them). ``flat``: the learned detector's flattened face when another model's run on the same
-    grid made it already (:func:`rockmass.imaging.learned.flattened` of ``grey``)."""
+    them). ``flat_face``: the learned detector's flattened face when another model's run on the
+    same grid made it already (:func:`rockmass.imaging.learned.flattened` of ``grey``)."""
     from . import enhance, learned, ridges, segment
-
-    given_flat = flat
     from .reuse import array_digest, reused
 
     stretch = None
@@ -958,7 +956,7 @@ def _joint_pixels(grey, params: ExtractParams, width_work: float, mask, clock: _
 
         def probability_map():
             computed.append(True)
-            flat, levels, model_image, gain = _learned_input(grey, params, mask, given_flat)
+            flat, levels, model_image, gain = _learned_input(grey, params, mask, flat_face)
             clock.lap("flatten")
             probability = learned.joint_probability(model_image, model)
             clock.lap("ridges")
@@ -1113,16 +1111,14 @@ def _low_contrast_notes(record, params: ExtractParams) -> list[str]:
 
 
 def _detect(grey, params: ExtractParams, width_work: float, mask, band_px: float, work_shape,
-            clock: _Clock, flat=None) -> _Found:
+            clock: _Clock, flat_face=None) -> _Found:
     """The chain of one detector (``params`` on the grid, not "auto"), from the working grey image
     to filtered traces: joint pixels, traces (:func:`_chains_before_floor`), then the length floor
     and the contrast and width filters. Within :func:`rockmass.imaging.reuse.shared_work`
     everything before the length floor is computed once per image, mask and other settings (the
     floor changes nothing before it; the traces' attributes are those of each trace alone).
-    ``flat``: the learned detector's flattened face of ``grey``, when made already."""
+    ``flat_face``: the learned detector's flattened face of ``grey``, when made already."""
     from . import link, vectorize
-
-    given_flat = flat
     from .reuse import array_digest, reused
 
     computed = []
@@ -1130,7 +1126,7 @@ def _detect(grey, params: ExtractParams, width_work: float, mask, band_px: float
     def before_floor():
         computed.append(True)
         flat, response, binary, stretch = _joint_pixels(grey, params, width_work, mask, clock,
-                                                        given_flat)
+                                                        flat_face)
         chains, skeleton, pruned = _chains_before_floor(binary, params, work_shape, width_work,
                                                         band_px, clock)
         attributes = (vectorize.trace_contrast(chains, flat, mask=mask),
@@ -1383,7 +1379,7 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
     levels = (grid_levels.usable_levels(params.learned_levels, work_shape)
               if uses_learned and trace_score.scoring() else ())
 
-    def detect(detector, image, detector_clock, level=1, model=None, flat=None):  # (run, traces)
+    def detect(detector, image, detector_clock, level=1, model=None, flat_face=None):  # run, traces
         width = learned_width_on(level) if detector == "learned" else width_work
         level_mask, shape = mask, work_shape
         if level > 1:  # a coarser grid (§3.4)
@@ -1392,7 +1388,7 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         if model is not None:  # the learned chain with another model: "auto"'s network (§3.6)
             grid_params = replace(grid_params, pixel_model=model)
         run = _detect(image, grid_params, width, level_mask, band_px / level, shape, detector_clock,
-                      flat)
+                      flat_face)
         # the traces in input pixels or metres
         grid_factor = float(np.sqrt(shape[0] / h * shape[1] / w))
         traces = vectorize.to_trace_map(
@@ -1445,9 +1441,9 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
                 # pixel model's run on that grid flattened
                 flat_of = {level: run.flat for level, (run, _) in runs.items()}
                 pending = {level: pool.submit(timed, detect, "learned", grey, level=level,
-                                              model=AUTO_NETWORK, flat=flat_of[level])
+                                              model=AUTO_NETWORK, flat_face=flat_of[level])
                            for level in levels}
-                runs = {1: detect("learned", grey, clock, model=AUTO_NETWORK, flat=flat_of[1]),
+                runs = {1: detect("learned", grey, clock, model=AUTO_NETWORK, flat_face=flat_of[1]),
                         **{f: job.result() for f, job in pending.items()}}
                 detected[AUTO_NETWORK] = keep_grid(AUTO_NETWORK, runs)
         except BaseException:  # an error or Ctrl-C: the side tasks not begun are dropped

@@ -27,8 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["CNN_MODEL_FILE", "SIZE_MULTIPLE", "HALO_PX", "MAX_PASS_PIXELS", "ConvModel", "net_input",
-           "read_conv_model"]
+__all__ = ["CNN_MODEL_FILE", "SIZE_MULTIPLE", "HALO_PX", "MAX_PASS_PIXELS", "ConvModel",
+           "net_input", "read_conv_model"]
 
 #: The shipped network, inside the installed package (``pixel_model = "cnn"``).
 CNN_MODEL_FILE = Path(__file__).resolve().parent / "models" / "joint_cnn.onnx"

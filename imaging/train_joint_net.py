@@ -220,7 +220,8 @@ def main(argv=None) -> int:
     except ValueError:
         channels = ()
     if len(channels) != 4 or min(channels) < 1:
-        parser.error(f"--channels takes four positive integers, e.g. 8,16,24,32; got {args.channels!r}")
+        parser.error(f"--channels takes four positive integers, e.g. 8,16,24,32; "
+                     f"got {args.channels!r}")
     try:
         import torch
     except ImportError:
