@@ -1413,12 +1413,13 @@ def extract(image_or_path, *, m_per_px: float | None = None, control_points=None
         side_clocks.append(_Clock())
         return task(*args, side_clocks[-1], **kwargs)  # one worker: one task after another
 
+    grid_of, level_records = {}, {}  # the grid each learned chain's traces come from (§3.4)
+
     def keep_grid(chain, runs):  # the (run, traces) of the grid a learned chain keeps (§3.4)
         grid_of[chain], level_records[chain] = grid_levels.kept_grid(
             {level: traces for level, (_, traces) in runs.items()})
         return runs[grid_of[chain]]
 
-    grid_of, level_records = {}, {}  # the grid each learned chain's traces come from (§3.4)
     choice = None
     with ThreadPoolExecutor(max_workers=1) as pool:
         try:

@@ -131,10 +131,9 @@ class ConvModel:
             net.setInput(np.ascontiguousarray(padded[first:first + window])[None, None])
             out = np.asarray(net.forward(), dtype=np.float32)[0, 0]
             logit[top:top + strip] = out[top - first:top - first + strip]
-        logit = logit[:h, :w]
-        # 1 / (1 + e^-t), written so that no exp overflows
-        return np.where(logit >= 0, 1.0 / (1.0 + np.exp(-np.abs(logit))),
-                        np.exp(-np.abs(logit)) / (1.0 + np.exp(-np.abs(logit)))).astype(np.float32)
+        from scipy.special import expit  # 1 / (1 + e^-t), without overflow
+
+        return expit(logit[:h, :w]).astype(np.float32, copy=False)
 
 
 def read_conv_model(path) -> ConvModel:
