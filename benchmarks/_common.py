@@ -50,11 +50,10 @@ def save(name: str, payload: dict) -> Path:
 
 
 #: Detector names the benchmarks take: ExtractParams' detectors, "cnn", the learned chain with
-#: the shipped convolutional network, and "auto+cnn", "auto" with the network among its candidates
-#: at the ratio chosen for it (``auto_network_ratio`` = :data:`NETWORK_RATIO`; docs/imaging.md §3.6).
-DETECTOR_NAMES = ("auto", "learned", "ridge", "cnn", "auto+cnn")
-#: ``auto_network_ratio`` chosen on the real train/ photographs (bench_network_ratio.py).
-NETWORK_RATIO = 1.3
+#: the shipped convolutional network, and "auto-cnn", "auto" without the network among its
+#: candidates (``auto_network_ratio = inf``: the two-detector "auto" of docs/imaging.md §3.3, the
+#: default up to session 26; "auto" runs the network where it keeps the pixel model, §3.6).
+DETECTOR_NAMES = ("auto", "learned", "ridge", "cnn", "auto-cnn")
 
 
 def detector_params(name: str, **settings):
@@ -63,6 +62,6 @@ def detector_params(name: str, **settings):
 
     if name == "cnn":
         return ExtractParams(detector="learned", pixel_model="cnn", **settings)
-    if name == "auto+cnn":
-        return ExtractParams(detector="auto", auto_network_ratio=NETWORK_RATIO, **settings)
+    if name == "auto-cnn":
+        return ExtractParams(detector="auto", **{"auto_network_ratio": float("inf"), **settings})
     return ExtractParams(detector=name, **settings)

@@ -1,7 +1,7 @@
 """Whole-process extraction: ``rockmass extract PHOTO --out DIR``, one face at 3-24 MP (issue 20).
 
     python benchmarks/bench_extract_process.py [--quick] [--sizes 3,6,12,16,24]
-                                               [--detectors ridge,learned,auto,auto+cnn] [--no-full-resolution]
+                                               [--detectors ridge,learned,auto,auto-cnn] [--no-full-resolution]
 
 One synthetic face, 12 m x 8 m, with exact ground truth (:func:`rockmass.imaging.synthetic_face`,
 "moderate" spoiling, seed 1), is photographed at several resolutions: it is rendered once at the
@@ -21,11 +21,11 @@ with, per detector:
 - ``width 15 mm``: ``--joint-width-m 0.0147`` (3 px of the 4 MP working grid of this face);
 - ``width 3 input px``: ``--joint-width 3``, the default before issue 20 (1.2 working px at
   24 MP), kept to show the drift it had;
-- ``pixel model kept`` (``auto`` and ``auto+cnn``): ``[imaging.params] auto_agreement = 1``, so
+- ``pixel model kept`` (``auto`` and ``auto-cnn``): ``[imaging.params] auto_agreement = 1``, so
   that "auto" keeps the pixel model's traces over the ridge filter's, as on a textured face, and
-  ``auto+cnn`` runs the network (docs/imaging.md §3.6: only then). On this clean face "auto"
-  keeps the ridge filter's traces, and the network is not run: these rows give its cost where it
-  is;
+  runs the network (docs/imaging.md §3.6: only then; ``auto-cnn`` is "auto" without the network,
+  ``auto_network_ratio = inf``). On this clean face "auto" keeps the ridge filter's traces, and
+  the network is not run: these rows give its cost where it is;
 - ``full res``: ``[imaging.params] max_megapixels = 1000`` at 12 MP (ridge only; not with
   ``--quick`` or ``--no-full-resolution``), where the pixel settings are multiplied by
   sqrt(12 / 4) (areas by its square; ``ExtractParams.on_grid``) and the default width follows.
@@ -62,7 +62,7 @@ from pathlib import Path
 
 import numpy as np
 
-from _common import NETWORK_RATIO, header, save, table
+from _common import header, save, table
 
 FACE_WIDTH_M, FACE_HEIGHT_M = 12.0, 8.0
 SEED = 1
@@ -172,18 +172,18 @@ def score(out: Path, truth) -> dict:
 
 
 def detector_args(detector: str, folder: Path, *, pixel_model_kept: bool = False) -> list[str]:
-    """The command's arguments for a detector name; "auto+cnn" is "auto" with the convolutional
-    network among its candidates, given by a config in ``folder`` (docs/imaging.md §3.6);
-    ``pixel_model_kept`` ("auto" and "auto+cnn" only) adds ``auto_agreement = 1`` to the config,
-    so that "auto" keeps the pixel model's traces over the ridge filter's (and runs the network),
-    as on a textured face."""
-    settings = ([f"auto_network_ratio = {NETWORK_RATIO}"] if detector == "auto+cnn" else []) \
+    """The command's arguments for a detector name; "auto-cnn" is "auto" without the
+    convolutional network among its candidates, given by a config in ``folder`` (docs/imaging.md
+    §3.6); ``pixel_model_kept`` ("auto" and "auto-cnn" only) adds ``auto_agreement = 1`` to the
+    config, so that "auto" keeps the pixel model's traces over the ridge filter's (and runs the
+    network), as on a textured face."""
+    settings = (["auto_network_ratio = inf"] if detector == "auto-cnn" else []) \
         + (["auto_agreement = 1.0"] if pixel_model_kept else [])
     if not settings:
         return ["--detector", detector]
-    if detector not in ("auto", "auto+cnn"):
-        raise ValueError(f"{detector}: pixel_model_kept is a setting of auto and auto+cnn")
-    config = folder / f"{detector.replace('+', '_')}{'_pixel_model' * pixel_model_kept}.toml"
+    if detector not in ("auto", "auto-cnn"):
+        raise ValueError(f"{detector}: pixel_model_kept is a setting of auto and auto-cnn")
+    config = folder / f"{detector.replace('-', '_')}{'_pixel_model' * pixel_model_kept}.toml"
     config.write_text("[imaging.params]\n" + "".join(f"{line}\n" for line in settings))
     return ["--detector", "auto", "--config", str(config)]
 
@@ -193,8 +193,9 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="the smallest two sizes (3 and 6 MP)")
     parser.add_argument("--sizes", default="3,6,12,16,24", help="photo sizes, MP (default 3,6,12,16,24)")
     parser.add_argument("--detectors", default="ridge,learned,auto",
-                        help="--detector values (default all three), or auto+cnn: auto with "
-                             "[imaging.params] auto_network_ratio = 1.3 (docs/imaging.md §3.6)")
+                        help="--detector values (default all three), or auto-cnn: auto with "
+                             "[imaging.params] auto_network_ratio = inf, i.e. without the "
+                             "convolutional network (docs/imaging.md §3.6)")
     parser.add_argument("--no-full-resolution", action="store_true",
                         help="skip the max_megapixels = 1000 row at 12 MP")
     args = parser.parse_args(argv)
@@ -230,7 +231,7 @@ def main(argv=None) -> int:
                 cases.append((size, detector, "default", []))
                 cases.append((size, detector, "width 15 mm", ["--joint-width-m", f"{JOINT_WIDTH_M}"]))
                 cases.append((size, detector, "width 3 input px", ["--joint-width", "3"]))
-                if detector in ("auto", "auto+cnn"):  # the network runs only then (§3.6)
+                if detector in ("auto", "auto-cnn"):  # the network runs only then (§3.6)
                     cases.append((size, detector, "pixel model kept", None))
         if not args.quick and not args.no_full_resolution and 12.0 in sizes and "ridge" in detectors:
             cases.append((12.0, "ridge", "full res, default", ["--config", str(config)]))

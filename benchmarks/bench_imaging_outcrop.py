@@ -134,6 +134,7 @@ def auto_choice(params) -> dict:
     a = np.array(agreements)
     return dict(tiles=a.size, agreement_min=float(a.min()), agreement_median=float(np.median(a)),
                 agreement_max=float(a.max()), ridge_kept_share=float(np.mean(np.array(kept) == "ridge")),
+                cnn_kept_share=float(np.mean(np.array(kept) == "cnn")),
                 auto_agreement=params.auto_agreement)
 
 
@@ -192,8 +193,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--detectors", default="ridge,learned,auto",
                         help="comma-separated ExtractParams.detector values (default all three), "
-                             "cnn (the convolutional network alone) or auto+cnn (auto with it, "
-                             "auto_network_ratio = 1.3; docs/imaging.md §3.6)")
+                             "cnn (the convolutional network alone) or auto-cnn (auto without it, "
+                             "auto_network_ratio = inf; docs/imaging.md §3.6)")
     parser.add_argument("--site-models", action="store_true",
                         help="only the two-fold site models (pixel models trained on ten tiles, "
                              "scored on the other ten)")
@@ -231,7 +232,8 @@ def main(argv=None) -> int:
     print(f"one geologist's line length against another's, over all tiles: "
           f"{spread['pair_dP21_min_pct']:+.0f} to {spread['pair_dP21_max_pct']:+.0f} %")
     if choice:
-        print(f"\nauto: kept the ridge traces on {100 * choice['ridge_kept_share']:.0f} % of the tiles "
+        print(f"\nauto: kept the ridge traces on {100 * choice['ridge_kept_share']:.0f} % of the tiles, "
+              f"the network's on {100 * choice['cnn_kept_share']:.0f} % "
               f"(agreement min {choice['agreement_min']:.2f}, median {choice['agreement_median']:.2f}, "
               f"max {choice['agreement_max']:.2f}; threshold {choice['auto_agreement']:g})")
     path = save("bench_imaging_outcrop", {"data": str(DATA), "tolerance_px": TOLERANCE_PX,

@@ -101,12 +101,10 @@ def rows_of(split: str, photos: list[dict], names) -> list[dict]:
 
 
 def main(argv=None) -> int:
-    from bench_network_ratio import add_photo_arguments, checked_splits, scored_photos
+    from bench_network_ratio import add_photo_arguments, checked_splits, results_name, scored_photos
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     add_photo_arguments(parser)
-    parser.add_argument("--network", default="cnn",
-                        help="the network: cnn (the shipped one) or an .onnx file")
     parser.add_argument("--settings", default=",".join(VARIANTS),
                         help=f"settings to score, comma-separated names of: {', '.join(VARIANTS)}")
     args = parser.parse_args(argv)
@@ -130,9 +128,7 @@ def main(argv=None) -> int:
         print(f"\n{split}/ ({len(photos)} photographs, {seconds:.0f} s; real: hand "
               "labels, F1 at 5 px; drawn: joints drawn on the same photos, buffered F1 at 3 px)")
         print(table(rows, COLUMNS))
-    name = ("bench_network_back_end" if args.network == "cnn"
-            else f"bench_network_back_end_{Path(args.network).stem}")
-    print(f"\nrows: {save(name, payload)}")
+    print(f"\nrows: {save(results_name('bench_network_back_end', args.network), payload)}")
     return 0
 
 

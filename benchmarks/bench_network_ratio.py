@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import detector_params, header, save, table  # noqa: E402
+from _common import RESULTS, detector_params, header, save, table  # noqa: E402
 
 RATIOS = (1.0, 1.1, 1.2, 1.3, 1.5, 2.0, float("inf"))
 COLUMNS = [("split", "s"), ("ratio", "g"), ("real_F1", ".3f"), ("real_P", ".3f"), ("real_R", ".3f"),
@@ -38,12 +38,12 @@ COLUMNS = [("split", "s"), ("ratio", "g"), ("real_F1", ".3f"), ("real_P", ".3f")
            ("drawn_R", ".3f"), ("drawn_dP21_pct", "+.0f"), ("drawn_cnn", "d"), ("photos", "d")]
 
 
-def _runs(image, **scale):
-    """(auto without the network, the network's chain alone) of one image."""
+def _runs(image, network, **scale):
+    """(auto without the network, the chain of ``network`` alone) of one image."""
     from rockmass.imaging.extract import extract
 
-    auto = extract(image, params=detector_params("auto", auto_network_ratio=float("inf")), **scale)
-    network = extract(image, params=detector_params("cnn"), **scale)
+    auto = extract(image, params=detector_params("auto-cnn"), **scale)
+    network = extract(image, params=detector_params("learned", pixel_model=network), **scale)
     return auto, network
 
 
@@ -58,10 +58,10 @@ def score_photo(job) -> dict:
     from rockmass.imaging.label_scores import score_traces
     from rockmass.imaging.metrics import trace_accuracy
 
-    photo_path, label, seed = job
+    photo_path, label, seed, network_file = job
     photo = np.ascontiguousarray(cv2.imread(str(photo_path), cv2.IMREAD_COLOR)[..., ::-1])
     out = {"photo": photo_path.name}
-    auto, network = _runs(photo, m_per_px=1.0, joint_width_px=3.0)
+    auto, network = _runs(photo, network_file, m_per_px=1.0, joint_width_px=3.0)
     truth = label_skeleton(label)
     ridge = auto.traces if auto.detector_choice["kept"] == "ridge" else None
     learned = extract(photo, m_per_px=1.0, joint_width_px=3.0,
@@ -72,7 +72,7 @@ def score_photo(job) -> dict:
                                            ("cnn", network.traces))}}
     face = joints_on_photo(photo, "moderate", seed=seed, m_per_px=M_PER_PX)
     ignore = ignore_mask(photo_path, label, photo.shape[:2])
-    auto, network = _runs(face.image, m_per_px=M_PER_PX)
+    auto, network = _runs(face.image, network_file, m_per_px=M_PER_PX)
     learned = (auto.traces if auto.detector_choice["kept"] == "learned" else
                extract(face.image, m_per_px=M_PER_PX, params=detector_params("learned")).traces)
 
@@ -130,11 +130,19 @@ def _print_rows(split: str, rows: list[dict]) -> None:
 
 
 def add_photo_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--splits``, ``--limit`` and ``--workers`` of a script that scores the rock-face-fractures
-    photographs one by one (this one and ``bench_network_back_end.py``)."""
+    """``--splits``, ``--limit``, ``--workers`` and ``--network`` of a script that scores the
+    rock-face-fractures photographs one by one (this one and ``bench_network_back_end.py``)."""
     parser.add_argument("--splits", default="train,val")
     parser.add_argument("--limit", type=int, default=0, help="first N photos of each split (0: all)")
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--network", default="cnn",
+                        help="the network: cnn (the shipped one) or an .onnx file")
+
+
+def results_name(script: str, network: str) -> str:
+    """The results file's name (no suffix) of ``script`` run with ``network``: the script's own
+    for the shipped network, ``<script>_<file stem>`` for another."""
+    return script if network == "cnn" else f"{script}_{Path(network).stem}"
 
 
 def checked_splits(args, parser: argparse.ArgumentParser) -> list[str]:
@@ -171,18 +179,19 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     splits = checked_splits(args, parser)
     print(header("auto_network_ratio: real labels and joints drawn on the same photographs"))
-    payload = {"ratios": list(RATIOS), "rows": [], "photos": {}}
+    print(f"network: {args.network}")
+    payload = {"network": args.network, "ratios": list(RATIOS), "rows": [], "photos": {}}
     if args.from_json:
         import json
 
-        saved = json.loads((Path(__file__).resolve().parent / "results" / "bench_network_ratio.json")
+        saved = json.loads((RESULTS / f"{results_name('bench_network_ratio', args.network)}.json")
                            .read_text())
         for split in splits:
             print(f"\n{split}/ (rows recomputed from the saved per-photo scores)")
             _print_rows(split, rows_of(split, saved["photos"][split]))
         return 0
     for split in splits:
-        scored = scored_photos(split, args, score_photo)
+        scored = scored_photos(split, args, score_photo, args.network)
         if scored is None:
             continue
         photos, seconds = scored
@@ -193,7 +202,7 @@ def main(argv=None) -> int:
               "labels, F1 at 5 px, means over photos; drawn: joints drawn on the same photos, "
               "buffered F1 at 3 px; *_cnn: photos where auto keeps the network's traces)")
         _print_rows(split, rows)
-    print(f"\nrows: {save('bench_network_ratio', payload)}")
+    print(f"\nrows: {save(results_name('bench_network_ratio', args.network), payload)}")
     return 0
 
 

@@ -1,7 +1,7 @@
 """Joints of known position drawn on real rock: the detectors on a texture they were not made on.
 
     python benchmarks/bench_texture_faces.py [--sets val,train,tiles,gravel] [--difficulty moderate]
-                                             [--detectors auto,learned,ridge,cnn,auto+cnn] [--limit N]
+                                             [--detectors auto,learned,ridge,cnn,auto-cnn] [--limit N]
 
 The plain synthetic faces (:func:`rockmass.imaging.synthetic_face`) draw their joints on a rock
 texture of the same module, and the ridge chain's defaults were tuned on them; the learned
@@ -27,7 +27,7 @@ photographs; "auto" also reports on how many faces it kept the ridge filter's, t
 and the convolutional network's traces (``auto_kept``, ridge/learned/cnn), and "better of the two"
 is the mean over the photographs of the higher F1 of the learned and the ridge detector: the most a
 per-photo choice between them could reach. ``cnn`` is the learned chain with the shipped network,
-``auto+cnn`` "auto" with the network among its candidates (``auto_network_ratio`` = 1.3;
+``auto-cnn`` "auto" without the network among its candidates (``auto_network_ratio = inf``;
 docs/imaging.md §3.6). Sets: ``val`` and ``train`` of ``../shared/data/rock-face-fractures`` (AGPL;
 read, never shipped; about 400 px square), ``tiles``, the 20 drone tiles of
 ``benchmarks/data/marques2022`` (MIT; 500 px), and ``gravel``, scikit-image's photograph of gravel
@@ -192,7 +192,7 @@ def main(argv=None) -> int:
     parser.add_argument("--sets", default=",".join(SETS),
                         help=f"comma-separated, of {', '.join(SETS)} (default all)")
     parser.add_argument("--difficulty", default="moderate", choices=("easy", "moderate", "hard"))
-    parser.add_argument("--detectors", default="auto,learned,ridge,cnn,auto+cnn")
+    parser.add_argument("--detectors", default="auto,learned,ridge,cnn,auto-cnn")
     parser.add_argument("--limit", type=int, default=0, help="first N photos of each set (0: all)")
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args(argv)

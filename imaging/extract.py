@@ -61,6 +61,10 @@ AUTO = "auto"
 #: The shipped model (:data:`rockmass.imaging.learned.SHIPPED_MODELS`) that "auto" also runs the
 #: learned chain with, the convolutional network (:func:`network_length_ratio`, docs/imaging.md §3.6).
 AUTO_NETWORK = "cnn"
+#: ``ExtractParams.auto_network_ratio``'s default: the least network-to-pixel-model trace length
+#: ratio at which "auto" keeps the network's traces, chosen on the real train/ photographs
+#: (``benchmarks/bench_network_ratio.py``, docs/imaging.md §3.6).
+AUTO_NETWORK_RATIO = 1.3
 #: ``Extraction.debug`` name of each chain's response.
 _RESPONSE_NAMES = {"ridge": "ridge_response", "learned": "joint_probability",
                    AUTO_NETWORK: "network_probability"}
@@ -115,7 +119,8 @@ class ExtractParams:
         "auto": both detectors run and one is kept per photo: the ridge filter's traces when the
         photo is clean, i.e. when at least ``auto_agreement`` of their length lies within 5 px
         of the learned detector's traces, else the learned detector's (:func:`detector_agreement`,
-        docs/imaging.md §3.3). "learned": the shipped pixel classifier (:mod:`rockmass.imaging.learned`,
+        docs/imaging.md §3.3): the pixel model's, or the convolutional network's where it finds
+        clearly more joint length (``auto_network_ratio``, §3.6). "learned": the shipped pixel classifier (:mod:`rockmass.imaging.learned`,
         docs/imaging.md §3.1), trained on synthetic faces only, whose probability of "joint centre
         line" is thresholded by ``prob_low`` / ``prob_high`` and whose traces are then filtered by
         length, contrast and width (``min_trace_length_px``, ``min_trace_contrast``,
@@ -134,18 +139,17 @@ class ExtractParams:
         the ridge filter draws several times their labelled length there) and the smallest on
         plain synthetic faces (0.61), whose thin faint lines the learned detector misses
         (``benchmarks/bench_imaging_real.py``, section 6). 1 keeps the learned traces always.
-    auto_network_ratio : float, default inf
-        With ``detector = "auto"`` and no ``pixel_model``, and a finite value: "auto" also runs
-        the learned chain with the shipped convolutional network (``pixel_model = "cnn"``,
-        docs/imaging.md §3.6) and keeps its traces instead of the pixel model's when their total
-        length is at least this many times the pixel model's (:func:`network_length_ratio`);
-        never instead of the ridge filter's. 1.3 is the value chosen on the 99 real training
+    auto_network_ratio : float, default 1.3
+        With ``detector = "auto"`` and no ``pixel_model``: "auto" also runs the learned chain with
+        the shipped convolutional network (``pixel_model = "cnn"``, docs/imaging.md §3.6) and
+        keeps its traces instead of the pixel model's when their total length is at least this
+        many times the pixel model's (:func:`network_length_ratio`); never instead of the ridge
+        filter's. :data:`AUTO_NETWORK_RATIO` is the value chosen on the 99 real training
         photographs of rock-face-fractures, as the smallest at which the network costs their
         labels nothing, and measured on joints drawn over the same photographs
-        (``benchmarks/bench_network_ratio.py``): give it for textured faces whose thin joints
-        matter. The network runs only where "auto" keeps the pixel model's traces (there it adds
-        1-3 s to a 12-24 MP photo, bringing a 12 MP one to the 2 MP/s the command is held to);
-        ``inf``, the default for now, does not run it.
+        (``benchmarks/bench_network_ratio.py``). The network runs only where "auto" keeps the
+        pixel model's traces (there it adds 1-3 s to a 12-24 MP photo); ``inf`` never runs it
+        (the two-detector "auto" of §3.3).
     line_polarity : {"dark", "bright"}, default "dark"
         Joints to look for: dark lines (open joints, shadowed traces) or bright ones (calcite- or
         clay-filled joints, veins, mortar). On ``skimage.data.brick()`` "dark" traces the brick
@@ -302,7 +306,7 @@ class ExtractParams:
     max_megapixels: float = 4.0
     detector: str | None = None
     auto_agreement: float = 0.55
-    auto_network_ratio: float = float("inf")
+    auto_network_ratio: float = AUTO_NETWORK_RATIO
     line_polarity: str = "dark"
     flatten_method: str = "divide"
     background_sigma_px: float = 40.0
@@ -1229,7 +1233,7 @@ def network_length_ratio(network_traces, learned_traces) -> float:
     .. math:: \rho = \frac{\sum \ell_{\mathrm{network}}}{\sum \ell_{\mathrm{pixel\ model}}}
               \ge \rho_{\min}
 
-    (``auto_network_ratio``, 1.3 when given), "auto" keeps the network's traces (docs/imaging.md
+    (``auto_network_ratio``, :data:`AUTO_NETWORK_RATIO` by default), "auto" keeps the network's traces (docs/imaging.md
     §3.6).
 
     Returns

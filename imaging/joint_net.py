@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["CNN_MODEL_FILE", "SIZE_MULTIPLE", "HALO_PX", "MAX_PASS_PIXELS", "ConvModel",
-           "net_input", "read_conv_model"]
+           "net_input", "read_conv_model", "strip_rows"]
 
 #: The shipped network, inside the installed package (``pixel_model = "cnn"``).
 CNN_MODEL_FILE = Path(__file__).resolve().parent / "models" / "joint_cnn.onnx"
@@ -67,6 +67,26 @@ def net_input(flat) -> np.ndarray:
     x = np.log(np.maximum(np.asarray(flat, dtype=np.float32), LOG_FLOOR))
     x *= LOG_GAIN
     return np.clip(x, -LOG_CLIP, LOG_CLIP, out=x)
+
+
+def strip_rows(shape, max_pass_pixels: float = MAX_PASS_PIXELS) -> tuple[int, int]:
+    """(rows a pass reads, rows of output it gives) for a padded input of ``shape`` (sides
+    multiples of :data:`SIZE_MULTIPLE`): every row in one pass when the input has at most
+    ``max_pass_pixels`` pixels, else strips of as many rows as fit in ``max_pass_pixels`` (a
+    multiple of 8, at least 2 :data:`HALO_PX` + 64), each giving all but its :data:`HALO_PX` rows
+    of context above and below.
+
+    Examples
+    --------
+    >>> strip_rows((800, 1200)), strip_rows((2000, 3000)), strip_rows((2000, 3000), float("inf"))
+    ((800, 800), (496, 304), (2000, 2000))
+    """
+    rows, cols = int(shape[0]), int(shape[1])
+    if rows * cols <= max_pass_pixels:
+        return rows, rows
+    window = int(max_pass_pixels // cols) // SIZE_MULTIPLE * SIZE_MULTIPLE
+    window = min(max(window, 2 * HALO_PX + 8 * SIZE_MULTIPLE), rows)
+    return window, (rows if window == rows else window - 2 * HALO_PX)
 
 
 @dataclass(frozen=True, eq=False)
@@ -118,9 +138,7 @@ class ConvModel:
         padded = cv2.copyMakeBorder(x, 0, -h % SIZE_MULTIPLE, 0, -w % SIZE_MULTIPLE,
                                     cv2.BORDER_REFLECT)
         rows = padded.shape[0]
-        window = int(max_pass_pixels // padded.shape[1]) // SIZE_MULTIPLE * SIZE_MULTIPLE
-        window = min(max(window, 2 * HALO_PX + 8 * SIZE_MULTIPLE), rows)
-        strip = rows if window == rows else window - 2 * HALO_PX  # output rows of one pass
+        window, strip = strip_rows(padded.shape, max_pass_pixels)
         net = self._net()
         logit = np.empty(padded.shape, dtype=np.float32)
         for top in range(0, rows, strip):

@@ -142,6 +142,6 @@ def auto_choice_text(choice) -> str:
                 f"{ratio:.2f} times the pixel model's >= {choice['auto_network_ratio']:g}; "
                 f"{agreement}; docs/imaging.md §3.6)")
     network = "" if ratio is None else (f"; the network's trace length {ratio:.2f} times the "
-                                        f"pixel model's")
+                                        f"pixel model's < {choice['auto_network_ratio']:g}")
     return f"detector: auto kept the {choice['kept']} detector's traces ({agreement}{network}; " \
            f"docs/imaging.md §3.3)"

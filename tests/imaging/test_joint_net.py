@@ -11,7 +11,8 @@ import pytest
 
 from rockmass.dfn import TraceMap
 from rockmass.imaging import joint_net, joints_on_photo, synthetic_face
-from rockmass.imaging.extract import ExtractParams, extract, network_length_ratio
+from rockmass.imaging.extract import (AUTO_NETWORK_RATIO, ExtractParams, extract,
+                                      network_length_ratio)
 from rockmass.imaging.joint_net import (CNN_MODEL_FILE, HALO_PX, MAX_PASS_PIXELS, SIZE_MULTIPLE,
                                         ConvModel, net_input, read_conv_model)
 from rockmass.imaging.learned import load_model, model_input, model_record
@@ -21,7 +22,7 @@ from rockmass.imaging.rock_textures import (crack_clutter, photo_rock, power_law
 from rockmass.imaging.train_joint_net import UNSCORED, tile_labels
 
 CNN = ExtractParams(pixel_model="cnn")
-WITH_NETWORK = ExtractParams(auto_network_ratio=1.3)  # "auto" with the network (§3.6)
+WITHOUT_NETWORK = ExtractParams(auto_network_ratio=float("inf"))  # the two-detector "auto" (§3.3)
 
 
 def test_the_shipped_network_loads_by_name_and_is_recorded_as_shipped():
@@ -114,14 +115,14 @@ def test_bad_and_missing_network_files_are_named(tmp_path):
 def test_auto_keeps_the_network_exactly_when_it_finds_enough_more_length():
     rock = procedural_rock(np.random.default_rng(5), (320, 480))
     face = joints_on_photo(rock, "moderate", seed=7, m_per_px=0.012)
-    auto = extract(face.image, m_per_px=face.m_per_px, params=WITH_NETWORK)
+    auto = extract(face.image, m_per_px=face.m_per_px)  # the default: "auto" with the network
     choice = auto.detector_choice
     network = extract(face.image, m_per_px=face.m_per_px, params=CNN)
     learned = extract(face.image, m_per_px=face.m_per_px, params=ExtractParams(detector="learned"))
     ratio = network_length_ratio(network.traces, learned.traces)
     assert choice["agreement"] <= 0.55  # textured rock: the pixel model's over the ridge filter's
     assert choice["network_length_ratio"] == pytest.approx(ratio, rel=1e-12)
-    assert choice["auto_network_ratio"] == 1.3
+    assert choice["auto_network_ratio"] == AUTO_NETWORK_RATIO and np.isfinite(AUTO_NETWORK_RATIO)
     expected = "cnn" if ratio >= choice["auto_network_ratio"] else "learned"
     assert choice["kept"] == expected
     kept = {"cnn": network, "learned": learned}.get(expected)
@@ -131,25 +132,25 @@ def test_auto_keeps_the_network_exactly_when_it_finds_enough_more_length():
             np.testing.assert_array_equal(auto.traces.polyline(i), kept.traces.polyline(i))
     if expected == "cnn":
         assert auto.detector_model["file"] == str(CNN_MODEL_FILE)
-    # inf, the default, does not run the network
-    never = extract(face.image, m_per_px=face.m_per_px)
-    assert ExtractParams().auto_network_ratio == float("inf")
+    # inf does not run the network
+    never = extract(face.image, m_per_px=face.m_per_px, params=WITHOUT_NETWORK)
     assert "network_length_ratio" not in never.detector_choice
     assert set(never.detector_choice["traces"]) == {"learned", "ridge"}
     assert "network_probability" not in extract(face.image, m_per_px=face.m_per_px,
-                                                debug=True).debug
-    with_debug = extract(face.image, m_per_px=face.m_per_px, params=WITH_NETWORK, debug=True)
+                                                params=WITHOUT_NETWORK, debug=True).debug
+    with_debug = extract(face.image, m_per_px=face.m_per_px, debug=True)
     assert with_debug.debug["network_probability"].shape == face.image.shape
 
 
 def test_auto_runs_the_network_only_where_it_keeps_the_pixel_models_traces():
     # a clean face: "auto" keeps the ridge filter's traces, which the network cannot replace
     face = synthetic_face("easy", seed=2, shape_px=(300, 450), m_per_px=0.01)
-    auto = extract(face.image, m_per_px=face.m_per_px, params=WITH_NETWORK, debug=True)
+    auto = extract(face.image, m_per_px=face.m_per_px, debug=True)
     choice = auto.detector_choice
     assert choice["kept"] == "ridge" and choice["agreement"] > 0.55
     assert "network_length_ratio" not in choice and set(choice["traces"]) == {"learned", "ridge"}
-    assert choice["auto_network_ratio"] == 1.3 and "network_probability" not in auto.debug
+    assert choice["auto_network_ratio"] == AUTO_NETWORK_RATIO
+    assert "network_probability" not in auto.debug
     alone = extract(face.image, m_per_px=face.m_per_px, params=ExtractParams(detector="ridge"))
     assert auto.traces.n_traces == alone.traces.n_traces
 
