@@ -2,6 +2,7 @@
 and on joints drawn on real rock, side by side.
 
     python benchmarks/bench_network_ratio.py [--splits train,val] [--limit N] [--workers 2]
+                                             [--network cnn] [--network-length-px PX]
 
 "auto" (docs/imaging.md §3.3, §3.6) keeps the ridge filter's traces on a clean photo; otherwise
 the pixel model's, unless the network's chain finds at least ``auto_network_ratio`` times their
@@ -15,8 +16,10 @@ ratio follows from their trace lengths (``network_length_ratio``), since "auto" 
 traces of the chain it picks run alone (tests/imaging/test_joint_net.py). The ratio was chosen on
 ``train`` (:func:`chosen_ratio`: the smallest ratio whose mean real F1 is not below the pixel
 model's alone, i.e. the network costs the real labels nothing there): 1.3; ``val`` is only
-measured. Rows also go to
-benchmarks/results/bench_network_ratio.json.
+measured. ``--network FILE`` scores another network (another training seed) in "auto" the same
+way, ``--network-length-px`` the network's chain with another length floor (printed only). Rows
+also go to benchmarks/results/bench_network_ratio.json (``..._<network file stem>.json`` for
+another network).
 """
 
 from __future__ import annotations
@@ -38,12 +41,14 @@ COLUMNS = [("split", "s"), ("ratio", "g"), ("real_F1", ".3f"), ("real_P", ".3f")
            ("drawn_R", ".3f"), ("drawn_dP21_pct", "+.0f"), ("drawn_cnn", "d"), ("photos", "d")]
 
 
-def _runs(image, network, **scale):
-    """(auto without the network, the chain of ``network`` alone) of one image."""
+def _runs(image, network, network_settings, **scale):
+    """(auto without the network, the chain of ``network`` alone, at the learned detector's
+    back end with ``network_settings`` changed) of one image."""
     from rockmass.imaging.extract import extract
 
     auto = extract(image, params=detector_params("auto-cnn"), **scale)
-    network = extract(image, params=detector_params("learned", pixel_model=network), **scale)
+    network = extract(image, params=detector_params("learned", pixel_model=network,
+                                                    **network_settings), **scale)
     return auto, network
 
 
@@ -58,10 +63,10 @@ def score_photo(job) -> dict:
     from rockmass.imaging.label_scores import score_traces
     from rockmass.imaging.metrics import trace_accuracy
 
-    photo_path, label, seed, network_file = job
+    photo_path, label, seed, network_file, network_settings = job
     photo = np.ascontiguousarray(cv2.imread(str(photo_path), cv2.IMREAD_COLOR)[..., ::-1])
     out = {"photo": photo_path.name}
-    auto, network = _runs(photo, network_file, m_per_px=1.0, joint_width_px=3.0)
+    auto, network = _runs(photo, network_file, network_settings, m_per_px=1.0, joint_width_px=3.0)
     truth = label_skeleton(label)
     ridge = auto.traces if auto.detector_choice["kept"] == "ridge" else None
     learned = extract(photo, m_per_px=1.0, joint_width_px=3.0,
@@ -72,7 +77,7 @@ def score_photo(job) -> dict:
                                            ("cnn", network.traces))}}
     face = joints_on_photo(photo, "moderate", seed=seed, m_per_px=M_PER_PX)
     ignore = ignore_mask(photo_path, label, photo.shape[:2])
-    auto, network = _runs(face.image, network_file, m_per_px=M_PER_PX)
+    auto, network = _runs(face.image, network_file, network_settings, m_per_px=M_PER_PX)
     learned = (auto.traces if auto.detector_choice["kept"] == "learned" else
                extract(face.image, m_per_px=M_PER_PX, params=detector_params("learned")).traces)
 
@@ -174,12 +179,18 @@ def scored_photos(split: str, args, score, *extra):
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     add_photo_arguments(parser)
+    parser.add_argument("--network-length-px", type=float, default=None,
+                        help="the network's chain with this length floor (min_trace_length_px, "
+                             "working-grid px) instead of the learned detector's 70; not saved")
     parser.add_argument("--from-json", action="store_true",
                         help="recompute the rows from the saved per-photo scores")
     args = parser.parse_args(argv)
     splits = checked_splits(args, parser)
     print(header("auto_network_ratio: real labels and joints drawn on the same photographs"))
-    print(f"network: {args.network}")
+    network_settings = ({} if args.network_length_px is None
+                        else {"min_trace_length_px": args.network_length_px})
+    print(f"network: {args.network}" + "".join(f", its chain's {k} = {v:g}"
+                                               for k, v in network_settings.items()))
     payload = {"network": args.network, "ratios": list(RATIOS), "rows": [], "photos": {}}
     if args.from_json:
         import json
@@ -191,7 +202,7 @@ def main(argv=None) -> int:
             _print_rows(split, rows_of(split, saved["photos"][split]))
         return 0
     for split in splits:
-        scored = scored_photos(split, args, score_photo, args.network)
+        scored = scored_photos(split, args, score_photo, args.network, network_settings)
         if scored is None:
             continue
         photos, seconds = scored
@@ -202,7 +213,8 @@ def main(argv=None) -> int:
               "labels, F1 at 5 px, means over photos; drawn: joints drawn on the same photos, "
               "buffered F1 at 3 px; *_cnn: photos where auto keeps the network's traces)")
         _print_rows(split, rows)
-    print(f"\nrows: {save(results_name('bench_network_ratio', args.network), payload)}")
+    if not network_settings:  # the rows of another back end are printed only
+        print(f"\nrows: {save(results_name('bench_network_ratio', args.network), payload)}")
     return 0
 
 

@@ -16,9 +16,9 @@
   "learned")``): per-pixel features (:mod:`~rockmass.imaging.features`) and the shipped classifier;
   trained by :mod:`~rockmass.imaging.train_pixel_model` on synthetic faces only.
 - :mod:`~rockmass.imaging.joint_net` — a convolutional joint detector (``pixel_model = "cnn"``,
-  or among "auto"'s candidates with ``auto_network_ratio``), run by OpenCV from an ONNX file;
-  trained by :mod:`~rockmass.imaging.train_joint_net` (PyTorch, training only) on synthetic faces
-  and on joints drawn over the random textures of :mod:`~rockmass.imaging.rock_textures`.
+  and among "auto"'s candidates by default, ``auto_network_ratio``), run by OpenCV from an ONNX
+  file; trained by :mod:`~rockmass.imaging.train_joint_net` (PyTorch, training only) on synthetic
+  faces and on joints drawn over the random textures of :mod:`~rockmass.imaging.rock_textures`.
 - :mod:`~rockmass.imaging.frame` — pixel (row, col) <-> face frame (u, v) metres, the one place the
   conversion happens.
 """

@@ -35,10 +35,11 @@ CNN_MODEL_FILE = Path(__file__).resolve().parent / "models" / "joint_cnn.onnx"
 #: The network halves its grid three times: its input's sides must be multiples of 8.
 SIZE_MULTIPLE = 8
 #: An image of more pixels goes through the network in strips of rows. One pass holds the
-#: network's intermediate maps for the whole image: a 4 MP working grid raised a fresh process's
-#: peak memory by 1.16 GB, strips of 1.5 MP by 0.49 GB, and the strips took about the same time
-#: (0.9-1.3 s of two cores for either: a first pass's memory costs as much to allocate as the
-#: strips' overlap costs to compute; session 26, a scratch look, three fresh processes each).
+#: network's intermediate maps for the whole image: over a 4 MP grid a fresh process's peak memory
+#: rose by 1.12 GB in one pass, by 0.46 GB in strips of 1.5 MP, whose first pass was also the
+#: quicker (1.04 s against 1.23 s; a second pass, its memory already allocated, 0.79 s against
+#: 0.63 s: the strips' overlap); strips of 0.5 MP took twice as long
+#: (``benchmarks/bench_network_strips.py``, session 27; the chain runs the network once per grid).
 MAX_PASS_PIXELS = 1.5e6
 #: Rows of context above and below a strip: at least the network's reach (its field of view is
 #: 2 x 84 + 1 px: 2 + 4 + 8 + 8 + 16 + 32 + 4 + 2 + 1 px from the convolutions of its levels, 7
