@@ -117,21 +117,22 @@ class ExtractParams:
         "learned" when a ``pixel_model`` is given (a model trained on the user's own photographs
         is trusted as it is).
         "auto": both detectors run and one is kept per photo: the ridge filter's traces when the
-        photo is clean, i.e. when at least ``auto_agreement`` of their length lies within 5 px
-        of the learned detector's traces, else the learned detector's (:func:`detector_agreement`,
+        photo is clean, i.e. when at least ``auto_agreement`` of their length lies within 5 px of
+        the learned detector's traces, else the learned detector's (:func:`detector_agreement`,
         docs/imaging.md §3.3): the pixel model's, or the convolutional network's where it finds
-        clearly more joint length (``auto_network_ratio``, §3.6). "learned": the shipped pixel classifier (:mod:`rockmass.imaging.learned`,
-        docs/imaging.md §3.1), trained on synthetic faces only, whose probability of "joint centre
-        line" is thresholded by ``prob_low`` / ``prob_high`` and whose traces are then filtered by
-        length, contrast and width (``min_trace_length_px``, ``min_trace_contrast``,
-        ``min_trace_width``); it ignores ``flatten_method``, ``clahe``, the filter scales and
-        ``low_k`` / ``high_k``, and looks for dark joints of about 2-12 px (it refuses
-        ``line_polarity = "bright"``). "ridge": Sato's multi-scale ridge filter with robust
-        hysteresis thresholds (docs/imaging.md §3-§4; tuned on the plain synthetic faces), for
-        bright joints, and for clean images whose faint hairlines count as joints. On the real
-        labelled photographs the learned detector scores F1 0.895 against the ridge filter's
-        0.338; on the plain synthetic faces, whose truth includes every faint line, 0.831 against
-        0.970 (``benchmarks/bench_imaging_real.py``, docs/imaging.md §8.1).
+        clearly more joint length (``auto_network_ratio``, §3.6). "learned": the shipped pixel
+        classifier (:mod:`rockmass.imaging.learned`, docs/imaging.md §3.1), trained on synthetic
+        faces only, whose probability of "joint centre line" is thresholded by ``prob_low`` /
+        ``prob_high`` and whose traces are then filtered by length, contrast and width
+        (``min_trace_length_px``, ``min_trace_contrast``, ``min_trace_width``); it ignores
+        ``flatten_method``, ``clahe``, the filter scales and ``low_k`` / ``high_k``, and looks for
+        dark joints of about 2-12 px (it refuses ``line_polarity = "bright"``). "ridge": Sato's
+        multi-scale ridge filter with robust hysteresis thresholds (docs/imaging.md §3-§4; tuned on
+        the plain synthetic faces), for bright joints, and for clean images whose faint hairlines
+        count as joints. On the real labelled photographs the learned detector scores F1 0.895
+        against the ridge filter's 0.338; on the plain synthetic faces, whose truth includes every
+        faint line, 0.831 against 0.970 (``benchmarks/bench_imaging_real.py``, docs/imaging.md
+        §8.1).
     auto_agreement : float, default 0.55
         With ``detector = "auto"``: the share of the ridge filter's trace length that must lie
         within 5 px of the learned detector's traces for its traces to be kept. Chosen between
@@ -1233,8 +1234,8 @@ def network_length_ratio(network_traces, learned_traces) -> float:
     .. math:: \rho = \frac{\sum \ell_{\mathrm{network}}}{\sum \ell_{\mathrm{pixel\ model}}}
               \ge \rho_{\min}
 
-    (``auto_network_ratio``, :data:`AUTO_NETWORK_RATIO` by default), "auto" keeps the network's traces (docs/imaging.md
-    §3.6).
+    (``auto_network_ratio``, :data:`AUTO_NETWORK_RATIO` by default), "auto" keeps the network's
+    traces (docs/imaging.md §3.6).
 
     Returns
     -------

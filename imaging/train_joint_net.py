@@ -4,14 +4,14 @@
     python -m rockmass.imaging.train_joint_net [--out FILE] [--iterations N] [--seed S]
 
 Training faces (:func:`training_tiles`, seeds from ``--seed``, default :data:`FIRST_SEED`, apart
-from the seeds tests and benchmarks use): 120 field-like faces (:func:`rockmass.imaging.synthetic_field.field_face`,
-every second one with wide open crevices), 40 tunnel-style ones, 60 plain synthetic faces
-("moderate", "hard", "easy" in turn, 400 x 600 px at 8-20 mm per pixel), and 240 random rock
-textures (:mod:`rockmass.imaging.rock_textures`): every fourth one as it is, with nothing to find,
-the others with the joints of 1-3 random sets drawn on them by
-:func:`rockmass.imaging.synthetic.joints_on_photo` ("moderate" and "hard" in turn; set angles,
-concentrations, lengths and intensities drawn at random, the intensity scaled by 0.1-1, so that
-some faces have few joints). No real photograph is used.
+from the seeds tests and benchmarks use): 120 field-like faces
+(:func:`rockmass.imaging.synthetic_field.field_face`, every second one with wide open crevices), 40
+tunnel-style ones, 60 plain synthetic faces ("moderate", "hard", "easy" in turn, 400 x 600 px at
+8-20 mm per pixel), and 240 random rock textures (:mod:`rockmass.imaging.rock_textures`): every
+fourth one as it is, with nothing to find, the others with the joints of 1-3 random sets drawn on
+them by :func:`rockmass.imaging.synthetic.joints_on_photo` ("moderate" and "hard" in turn; set
+angles, concentrations, lengths and intensities drawn at random, the intensity scaled by 0.1-1, so
+that some faces have few joints). No real photograph is used.
 
 Labels: 1 within 1 px of a true centre line, 0 farther than 3 px, not scored in between or on the
 field faces' unlabelled minor cracks (:func:`rockmass.imaging.synthetic_field.minor_crack_mask`).
