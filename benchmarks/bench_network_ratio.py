@@ -2,7 +2,7 @@
 and on joints drawn on real rock, side by side.
 
     python benchmarks/bench_network_ratio.py [--splits train,val] [--limit N] [--workers 2]
-                                             [--network cnn] [--network-length-px PX]
+                                             [--network cnn] [--network-setting NAME]
 
 "auto" (docs/imaging.md §3.3, §3.6) keeps the ridge filter's traces on a clean photo; otherwise
 the pixel model's, unless the network's chain finds at least ``auto_network_ratio`` times their
@@ -17,7 +17,8 @@ traces of the chain it picks run alone (tests/imaging/test_joint_net.py). The ra
 ``train`` (:func:`chosen_ratio`: the smallest ratio whose mean real F1 is not below the pixel
 model's alone, i.e. the network costs the real labels nothing there): 1.3; ``val`` is only
 measured. ``--network FILE`` scores another network (another training seed) in "auto" the same
-way, ``--network-length-px`` the network's chain with another length floor (printed only). Rows
+way, ``--network-setting`` the network's chain at one of ``bench_network_back_end.py``'s other
+back-end settings (e.g. ``"length 20 px"``; printed only). Rows
 also go to benchmarks/results/bench_network_ratio.json (``..._<network file stem>.json`` for
 another network).
 """
@@ -34,6 +35,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import RESULTS, detector_params, header, save, table  # noqa: E402
+from bench_network_back_end import VARIANTS  # noqa: E402  (the back-end settings tried)
 
 RATIOS = (1.0, 1.1, 1.2, 1.3, 1.5, 2.0, float("inf"))
 COLUMNS = [("split", "s"), ("ratio", "g"), ("real_F1", ".3f"), ("real_P", ".3f"), ("real_R", ".3f"),
@@ -179,18 +181,17 @@ def scored_photos(split: str, args, score, *extra):
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     add_photo_arguments(parser)
-    parser.add_argument("--network-length-px", type=float, default=None,
-                        help="the network's chain with this length floor (min_trace_length_px, "
-                             "working-grid px) instead of the learned detector's 70; not saved")
+    parser.add_argument("--network-setting", choices=list(VARIANTS), default="default",
+                        help="the network's chain at this back-end setting of "
+                             "bench_network_back_end.py instead of the learned detector's; "
+                             "rows of a setting other than the default are printed, not saved")
     parser.add_argument("--from-json", action="store_true",
                         help="recompute the rows from the saved per-photo scores")
     args = parser.parse_args(argv)
     splits = checked_splits(args, parser)
     print(header("auto_network_ratio: real labels and joints drawn on the same photographs"))
-    network_settings = ({} if args.network_length_px is None
-                        else {"min_trace_length_px": args.network_length_px})
-    print(f"network: {args.network}" + "".join(f", its chain's {k} = {v:g}"
-                                               for k, v in network_settings.items()))
+    network_settings = VARIANTS[args.network_setting]
+    print(f"network: {args.network}, its chain's back end: {args.network_setting}")
     payload = {"network": args.network, "ratios": list(RATIOS), "rows": [], "photos": {}}
     if args.from_json:
         import json

@@ -42,8 +42,8 @@ from .train_pixel_model import NEGATIVE_PX, POSITIVE_PX  # the same label bands 
 
 #: First face seed of the shipped network's training faces. Networks trained from 70 000, 80 000
 #: and 90 000 as well were scored in "auto", each at the ratio its rule picks on the real train/
-#: photographs (``benchmarks/bench_network_ratio.py --network FILE``): no other did better
-#: (session 27, docs/imaging.md §3.6).
+#: photographs (``benchmarks/bench_network_ratio.py --network FILE``): two tied with it, none did
+#: better (session 27, docs/imaging.md §3.6). Its record (``joint_cnn.json``) holds this seed.
 FIRST_SEED = 60_000
 
 __all__ = ["tile_labels", "training_tiles", "build_network", "train", "main"]

@@ -133,6 +133,9 @@ def auto_choice_text(choice) -> str:
     >>> auto_choice_text({"kept": "cnn", "agreement": 0.2, "auto_agreement": 0.55,
     ...                   "network_length_ratio": 1.5, "auto_network_ratio": 1.2})[:58]
     "detector: auto kept the convolutional network's traces (it"
+    >>> auto_choice_text({"kept": "learned", "agreement": 0.2, "auto_agreement": 0.55,
+    ...                   "network_length_ratio": 1.1, "auto_network_ratio": 1.3}).split("; ")[1]
+    "the network's trace length 1.10 times the pixel model's < 1.3"
     """
     agreement = (f"agreement {choice['agreement']:.2f} {'>' if choice['kept'] == 'ridge' else '<='} "
                  f"{choice['auto_agreement']:g}")

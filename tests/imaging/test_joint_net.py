@@ -5,6 +5,7 @@ the training labels. Answers come from the synthetic truth, closed forms and the
 from __future__ import annotations
 
 import threading
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,7 +20,7 @@ from rockmass.imaging.learned import load_model, model_input, model_record
 from rockmass.imaging.metrics import trace_accuracy
 from rockmass.imaging.rock_textures import (crack_clutter, photo_rock, power_law_noise,
                                             procedural_rock, random_rock)
-from rockmass.imaging.train_joint_net import UNSCORED, tile_labels
+from rockmass.imaging.train_joint_net import FIRST_SEED, UNSCORED, tile_labels
 
 CNN = ExtractParams(pixel_model="cnn")
 WITHOUT_NETWORK = ExtractParams(auto_network_ratio=float("inf"))  # the two-detector "auto" (§3.3)
@@ -32,6 +33,26 @@ def test_the_shipped_network_loads_by_name_and_is_recorded_as_shipped():
     record = model_record("cnn")
     assert record["shipped"] and record["file"] == str(CNN_MODEL_FILE)
     assert "no real photograph" in record["trained_on"]
+    # the training command's default seed is the shipped file's, so that the documented command
+    # (python -m rockmass.imaging.train_joint_net) writes it again (docs/imaging.md §3.6)
+    assert model.info["seed"] == FIRST_SEED
+
+
+def test_default_network_ratio_is_the_rules_choice_on_the_saved_training_scores():
+    # the per-photo scores bench_network_ratio.py saved (rock-face-fractures train/, real labels):
+    # its rule, the smallest ratio at which the network costs the labels nothing, picks the default
+    import json
+    import sys
+
+    benchmarks = Path(__file__).resolve().parents[2] / "benchmarks"
+    sys.path.insert(0, str(benchmarks))
+    try:
+        from bench_network_ratio import chosen_ratio, rows_of
+    finally:
+        sys.path.remove(str(benchmarks))
+    saved = json.loads((benchmarks / "results" / "bench_network_ratio.json").read_text())
+    assert len(saved["photos"]["train"]) == 99
+    assert chosen_ratio(rows_of("train", saved["photos"]["train"])) == AUTO_NETWORK_RATIO
 
 
 def test_network_finds_joints_drawn_on_a_texture_it_never_saw():
