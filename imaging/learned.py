@@ -165,7 +165,9 @@ class PixelModel:
             arrays[f"s{i}_mean"], arrays[f"s{i}_std"] = stage.mean, stage.std
             for k, (w, b) in enumerate(zip(stage.weights, stage.biases)):
                 arrays[f"s{i}_w{k}"], arrays[f"s{i}_b{k}"] = w.astype(np.float32), b.astype(np.float32)
-        with open(path, "wb") as handle:
+        from ..atomic import atomic_path
+
+        with atomic_path(path) as partial, open(partial, "wb") as handle:  # all or nothing
             np.savez_compressed(handle, **arrays)
         return path
 

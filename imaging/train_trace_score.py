@@ -29,6 +29,7 @@ import time
 
 import numpy as np
 
+from ..atomic import atomic_path
 from .trace_score import FEATURE_NAMES, MODEL_FILE, trace_features, unscored
 
 __all__ = ["trace_labels", "fit_logistic", "main"]
@@ -144,7 +145,7 @@ def main(argv=None) -> int:
                                        "beta": [round(float(b), 4) for b in beta]}
     info.update(total_s=round(time.perf_counter() - t0, 1), python=platform.python_version(),
                 numpy=np.__version__, data="synthetic faces only (field_face TUNNEL_STYLE, synthetic_face)")
-    with open(args.out, "wb") as handle:
+    with atomic_path(args.out) as partial, open(partial, "wb") as handle:  # a killed run: old kept
         np.savez(handle, info=np.array(json.dumps(info, sort_keys=True)), **arrays)
     print(json.dumps(info, indent=2))
     print(f"wrote {args.out} in {time.perf_counter() - t0:.1f} s")

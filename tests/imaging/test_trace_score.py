@@ -9,7 +9,7 @@ from rockmass.imaging.extract import ExtractParams, extract
 from rockmass.imaging.synthetic import synthetic_face
 from rockmass.imaging.trace_score import (FEATURE_NAMES, LOW_SCORE, joint_score, load, trace_features,
                                           unscored)
-from rockmass.imaging.train_trace_score import fit_logistic, trace_labels
+from rockmass.imaging.train_trace_score import fit_logistic, main, trace_labels
 
 
 def test_features_of_a_straight_and_a_bent_trace():
@@ -80,3 +80,15 @@ def test_extracted_traces_carry_a_score_and_a_band_width():
     assert lengths[score >= LOW_SCORE].sum() > 0.8 * lengths.sum()
     with unscored():
         assert "joint_score" not in extract(face.image, m_per_px=0.01).traces.attributes
+
+
+def test_the_fitting_command_writes_a_model_the_score_reads_and_nothing_else(tmp_path):
+    # one training face: other weights than the shipped ones, the same layout
+    out = tmp_path / "score.npz"
+    assert main(["--faces", "1", "--out", str(out)]) == 0
+    assert [p.name for p in tmp_path.iterdir()] == ["score.npz"]  # no temporary file left
+    weights = load(out)
+    assert set(weights) == set(load())
+    x = np.array([[np.log(20.0), 0.3, 0.0, 0.9]])
+    for detector in weights:
+        assert 0 < joint_score(x, detector, path=out)[0] < 1
