@@ -38,21 +38,31 @@ def test_the_shipped_network_loads_by_name_and_is_recorded_as_shipped():
     assert model.info["seed"] == FIRST_SEED
 
 
+BENCHMARKS = Path(__file__).resolve().parents[2] / "benchmarks"
+
+
+def _benchmark(name: str):
+    """A script of benchmarks/ imported as a module (they import each other by name)."""
+    import importlib
+    import sys
+
+    sys.path.insert(0, str(BENCHMARKS))
+    try:
+        return importlib.import_module(name)
+    finally:
+        sys.path.remove(str(BENCHMARKS))
+
+
 def test_default_network_ratio_is_the_rules_choice_on_the_saved_training_scores():
     # the per-photo scores bench_network_ratio.py saved (rock-face-fractures train/, real labels):
     # its rule, the smallest ratio at which the network costs the labels nothing, picks the default
     import json
-    import sys
 
-    benchmarks = Path(__file__).resolve().parents[2] / "benchmarks"
-    sys.path.insert(0, str(benchmarks))
-    try:
-        from bench_network_ratio import chosen_ratio, rows_of
-    finally:
-        sys.path.remove(str(benchmarks))
-    saved = json.loads((benchmarks / "results" / "bench_network_ratio.json").read_text())
+    ratio_bench = _benchmark("bench_network_ratio")
+    saved = json.loads((BENCHMARKS / "results" / "bench_network_ratio.json").read_text())
     assert len(saved["photos"]["train"]) == 99
-    assert chosen_ratio(rows_of("train", saved["photos"]["train"])) == AUTO_NETWORK_RATIO
+    assert (ratio_bench.chosen_ratio(ratio_bench.rows_of("train", saved["photos"]["train"]))
+            == AUTO_NETWORK_RATIO)
 
 
 def test_network_finds_joints_drawn_on_a_texture_it_never_saw():
@@ -261,3 +271,9 @@ def test_a_back_end_config_names_a_shipped_model_by_name_and_a_file_by_its_path(
     own = tmp_path / "site.npz"
     assert f'pixel_model = "{own.resolve()}"' in BackEndChoice.config_snippet(choice, own)
     assert "pixel_model" not in BackEndChoice.config_snippet(choice, None)
+
+
+def test_every_back_end_setting_of_the_benchmark_can_be_named_on_its_command_line():
+    # bench_network_back_end.py --settings takes the names comma-separated: none may hold a comma
+    names = _benchmark("bench_network_back_end").VARIANTS
+    assert set(",".join(names).split(",")) == set(names)
