@@ -59,14 +59,19 @@ DETECTOR_NAMES = ("auto", "learned", "ridge", "cnn", "auto-cnn", "fine")
 FINE_JOINTS_SAMPLE = Path(__file__).resolve().parents[1] / "samples" / "extract_fine_joints.toml"
 
 
+def fine_joint_settings() -> dict:
+    """The ``[imaging.params]`` of :data:`FINE_JOINTS_SAMPLE`, validated as ``--config`` reads them."""
+    from rockmass.config import load_config
+
+    return dict(load_config(FINE_JOINTS_SAMPLE).imaging.params)
+
+
 def detector_params(name: str, **settings):
     """The ExtractParams of a benchmark's detector name (:data:`DETECTOR_NAMES`) and settings."""
     from rockmass.imaging.extract import ExtractParams
 
     if name == "fine":
-        from rockmass.config import load_config
-
-        return ExtractParams(**{**load_config(FINE_JOINTS_SAMPLE).imaging.params, **settings})
+        return ExtractParams(**{**fine_joint_settings(), **settings})
     if name == "cnn":
         return ExtractParams(detector="learned", pixel_model="cnn", **settings)
     if name == "auto-cnn":

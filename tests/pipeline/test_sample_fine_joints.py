@@ -1,7 +1,7 @@
 """``samples/extract_fine_joints.toml``, the recipe for a map of every joint (docs/imaging.md §8.4):
 it validates, gives the settings it says, and on a synthetic face, whose truth counts every line
 drawn (hairlines too), finds clearly more of the truth than the network with the default trace
-filters, at the same precision."""
+filters, its precision still above 0.9."""
 
 from pathlib import Path
 
