@@ -53,25 +53,17 @@ def save(name: str, payload: dict) -> Path:
 #: the shipped convolutional network, "auto-cnn", "auto" without the network among its
 #: candidates (``auto_network_ratio = inf``: the two-detector "auto" of docs/imaging.md §3.3, the
 #: default up to session 26; "auto" runs the network where it keeps the pixel model, §3.6), and
-#: "fine", the settings of :data:`FINE_JOINTS_SAMPLE` (every joint, hairlines too, §8.4).
+#: "fine", ``rockmass extract --joints all`` (every joint, hairlines too: the settings
+#: :data:`rockmass.imaging.extract.EVERY_JOINT`, §8.4).
 DETECTOR_NAMES = ("auto", "learned", "ridge", "cnn", "auto-cnn", "fine")
-#: The shipped recipe for a map of every joint, read as a user's ``--config`` would be.
-FINE_JOINTS_SAMPLE = Path(__file__).resolve().parents[1] / "samples" / "extract_fine_joints.toml"
-
-
-def fine_joint_settings() -> dict:
-    """The ``[imaging.params]`` of :data:`FINE_JOINTS_SAMPLE`, validated as ``--config`` reads them."""
-    from rockmass.config import load_config
-
-    return dict(load_config(FINE_JOINTS_SAMPLE).imaging.params)
 
 
 def detector_params(name: str, **settings):
     """The ExtractParams of a benchmark's detector name (:data:`DETECTOR_NAMES`) and settings."""
-    from rockmass.imaging.extract import ExtractParams
+    from rockmass.imaging.extract import EVERY_JOINT, ExtractParams
 
     if name == "fine":
-        return ExtractParams(**{**fine_joint_settings(), **settings})
+        return ExtractParams(**{**EVERY_JOINT, **settings})
     if name == "cnn":
         return ExtractParams(detector="learned", pixel_model="cnn", **settings)
     if name == "auto-cnn":

@@ -30,7 +30,8 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import fine_joint_settings, header, save, table  # noqa: E402
+from _common import header, save, table  # noqa: E402
+from rockmass.imaging.extract import EVERY_JOINT  # noqa: E402
 
 #: Back-end settings tried (ExtractParams fields), each against the default; names hold no comma
 #: (``--settings`` takes them comma-separated), "+" joins two settings changed together.
@@ -45,8 +46,8 @@ VARIANTS = {
     "prob_low 0.5": {"prob_low": 0.5},
     "width off": {"min_trace_width": 0.0},
     "contrast 0.15 + length 40 px": {"min_trace_contrast": 0.15, "min_trace_length_px": 40.0},
-    # every joint the network sees: the back end of samples/extract_fine_joints.toml (§8.4)
-    "filters off + length 20 px": {key: value for key, value in fine_joint_settings().items()
+    # every joint the network sees: the back end of rockmass extract --joints all (§8.4)
+    "filters off + length 20 px": {key: value for key, value in EVERY_JOINT.items()
                                    if key not in ("detector", "pixel_model")},
 }
 COLUMNS = [("split", "s"), ("setting", "s"), ("real_F1", ".3f"), ("real_P", ".3f"),

@@ -77,6 +77,11 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "when the learned detector confirms most of them, i.e. on a clean photo, "
                         "and the convolutional network's when it finds clearly more joint length "
                         "than the pixel model; summary.json says which, docs/imaging.md §3.3, §3.6)")
+    p.add_argument("--joints", choices=("major", "all"), dest="joints",
+                   help="which joints to map: 'major' (the default: the major discontinuities a "
+                        "geologist traces by hand) or 'all' (every joint the photo shows, "
+                        "hairlines too: the convolutional network with the trace filters off; "
+                        "not with --detector, --pixel-model or --bright-lines; docs/imaging.md §8.4)")
     p.add_argument("--pixel-model", dest="pixel_model", metavar="FILE",
                    help="the learned detector's model: 'cnn' (the shipped convolutional network), "
                         "'mlp' (the shipped pixel model, the default), or a file: one trained on "
@@ -114,6 +119,10 @@ def run(args) -> int:
         choice = summary["extraction"].get("detector_choice")
         if choice:  # "auto": which detector's traces these are, and why
             print(auto_choice_text(choice))
+        if getattr(args, "joints", None) == "all":
+            print("joints: every joint the photo shows, hairlines too (--joints all: the "
+                  "network, trace filters off; docs/imaging.md §8.4); the statistics without "
+                  "low joint scores come closer to a hand-traced map of major discontinuities")
         georeference = summary["input"].get("georeference")
         if georeference:  # the scale came from the photo's GeoTIFF tags
             print(f"scale: {georeference['m_per_px']:.6g} m/px from the GeoTIFF tags "

@@ -46,6 +46,8 @@ def imaging_settings(args, document=None):
     for key, other in (("joint_width_px", "joint_width_m"), ("joint_width_m", "joint_width_px")):
         if getattr(args, key, None) is not None:  # a width on the command line replaces the file's
             values[key], values[other] = getattr(args, key), None
+    if getattr(args, "joints", None) == "all":  # ``rockmass run`` plans args without it
+        values["params"] = _every_joint(values["params"], args)
     if args.bright_lines:
         values["params"] = {**values["params"], "line_polarity": "bright"}
     if getattr(args, "detector", None) is not None:  # ``rockmass run`` plans args without it
@@ -57,6 +59,23 @@ def imaging_settings(args, document=None):
     if values["params"].get("pixel_model") is not None:
         _check_pixel_model(values["params"]["pixel_model"])
     return values
+
+
+def _every_joint(params: dict, args) -> dict:
+    """``params`` with the settings of ``--joints all`` (:data:`rockmass.imaging.extract.EVERY_JOINT`)
+    over them, as every flag goes over the config file; refused beside a flag that picks another
+    detector or model."""
+    from .imaging.extract import EVERY_JOINT
+
+    clashes = [flag for flag, given in (("--detector", getattr(args, "detector", None)),
+                                        ("--pixel-model", getattr(args, "pixel_model", None)),
+                                        ("--bright-lines", args.bright_lines or None))
+               if given is not None]
+    if clashes:
+        raise InputError(f"--joints all runs the convolutional network on dark joints (detector "
+                         f"'learned', pixel model 'cnn'); it cannot be given with "
+                         f"{' or '.join(clashes)}")
+    return {**params, **EVERY_JOINT}
 
 
 def _imaging_defaults() -> dict:
