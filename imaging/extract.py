@@ -50,7 +50,7 @@ from .frame import check_scale, rc_to_uv
 from .vectorize import image_window_uv_m
 
 __all__ = ["ExtractParams", "ScaleInfo", "Extraction", "extract", "scale_from_control_points",
-           "infinities_as_text", "EVERY_JOINT"]
+           "infinities_as_text", "EVERY_JOINT", "NO_TRACE_FILTERS"]
 
 #: Smallest image side the chain accepts, pixels.
 MIN_SIDE_PX = 16
@@ -65,13 +65,17 @@ AUTO_NETWORK = "cnn"
 #: ratio at which "auto" keeps the network's traces, chosen on the real train/ photographs
 #: (``benchmarks/bench_network_ratio.py``, docs/imaging.md §3.6).
 AUTO_NETWORK_RATIO = 1.3
+#: The trace filters off: no contrast floor, no band-width floor, traces from 20 px (the ridge
+#: filter's floor): what the joint score is fitted on (:mod:`rockmass.imaging.train_trace_score`)
+#: and what a map of every joint keeps (:data:`EVERY_JOINT`).
+NO_TRACE_FILTERS = MappingProxyType({"min_trace_contrast": float("-inf"), "min_trace_width": 0.0,
+                                     "min_trace_length_px": 20.0})
 #: Settings of a map of every joint the photograph shows, hairlines too (``rockmass extract
-#: --joints all``, docs/imaging.md §8.4): the convolutional network's chain with the trace filters
-#: the defaults chose on hand labels of major fractures turned off (no contrast floor, no band
-#: width floor, traces from 20 px). ``ExtractParams(**EVERY_JOINT)``.
+#: --joints all``, docs/imaging.md §8.4): the convolutional network's chain (dark joints) with
+#: the trace filters the defaults chose on hand labels of major fractures turned off.
+#: ``ExtractParams(**EVERY_JOINT)``.
 EVERY_JOINT = MappingProxyType({"detector": "learned", "pixel_model": AUTO_NETWORK,
-                                "min_trace_contrast": float("-inf"), "min_trace_width": 0.0,
-                                "min_trace_length_px": 20.0})
+                                "line_polarity": "dark", **NO_TRACE_FILTERS})
 #: ``Extraction.debug`` name of each chain's response.
 _RESPONSE_NAMES = {"ridge": "ridge_response", "learned": "joint_probability",
                    AUTO_NETWORK: "network_probability"}

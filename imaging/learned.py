@@ -165,9 +165,9 @@ class PixelModel:
             arrays[f"s{i}_mean"], arrays[f"s{i}_std"] = stage.mean, stage.std
             for k, (w, b) in enumerate(zip(stage.weights, stage.biases)):
                 arrays[f"s{i}_w{k}"], arrays[f"s{i}_b{k}"] = w.astype(np.float32), b.astype(np.float32)
-        from ..atomic import atomic_path
+        from ..dfn.atomic import atomic_open
 
-        with atomic_path(path) as partial, open(partial, "wb") as handle:  # all or nothing
+        with atomic_open(path, "wb") as handle:  # all or nothing
             np.savez_compressed(handle, **arrays)
         return path
 

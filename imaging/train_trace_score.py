@@ -29,7 +29,7 @@ import time
 
 import numpy as np
 
-from ..atomic import atomic_path
+from ..dfn.atomic import atomic_open
 from .trace_score import FEATURE_NAMES, MODEL_FILE, trace_features, unscored
 
 __all__ = ["trace_labels", "fit_logistic", "main"]
@@ -96,11 +96,10 @@ def _faces(first_seed: int, n_field: int, n_plain: int):
 
 def training_traces(detector: str, first_seed: int, n_field: int, n_plain: int):
     """(features, labels, lengths in px) of the unfiltered traces of the training faces."""
-    from .extract import ExtractParams, extract
+    from .extract import NO_TRACE_FILTERS, ExtractParams, extract
     from .metrics import render_traces
 
-    params = ExtractParams(detector=detector, min_trace_contrast=float("-inf"), min_trace_width=0.0,
-                           min_trace_length_px=20.0)
+    params = ExtractParams(detector=detector, **NO_TRACE_FILTERS)
     xs, ys, ws = [], [], []
     for face in _faces(first_seed, n_field, n_plain):
         with unscored():
@@ -145,7 +144,7 @@ def main(argv=None) -> int:
                                        "beta": [round(float(b), 4) for b in beta]}
     info.update(total_s=round(time.perf_counter() - t0, 1), python=platform.python_version(),
                 numpy=np.__version__, data="synthetic faces only (field_face TUNNEL_STYLE, synthetic_face)")
-    with atomic_path(args.out) as partial, open(partial, "wb") as handle:  # a killed run: old kept
+    with atomic_open(args.out, "wb") as handle:  # a killed run keeps the file there was
         np.savez(handle, info=np.array(json.dumps(info, sort_keys=True)), **arrays)
     print(json.dumps(info, indent=2))
     print(f"wrote {args.out} in {time.perf_counter() - t0:.1f} s")

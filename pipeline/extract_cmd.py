@@ -78,10 +78,12 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
                         "and the convolutional network's when it finds clearly more joint length "
                         "than the pixel model; summary.json says which, docs/imaging.md §3.3, §3.6)")
     p.add_argument("--joints", choices=("major", "all"), dest="joints",
-                   help="which joints to map: 'major' (the default: the major discontinuities a "
-                        "geologist traces by hand) or 'all' (every joint the photo shows, "
-                        "hairlines too: the convolutional network with the trace filters off; "
-                        "not with --detector, --pixel-model or --bright-lines; docs/imaging.md §8.4)")
+                   help="which joints to map: 'major' (the default: the settings as given, which "
+                        "by default map the major discontinuities a geologist traces by hand) or "
+                        "'all' (every joint the photo shows, hairlines too: the convolutional "
+                        "network with the trace filters off, over the config file's settings; "
+                        "not with --detector, --pixel-model or --bright-lines; "
+                        "docs/imaging.md §8.4)")
     p.add_argument("--pixel-model", dest="pixel_model", metavar="FILE",
                    help="the learned detector's model: 'cnn' (the shipped convolutional network), "
                         "'mlp' (the shipped pixel model, the default), or a file: one trained on "

@@ -62,9 +62,9 @@ def imaging_settings(args, document=None):
 
 
 def _every_joint(params: dict, args) -> dict:
-    """``params`` with the settings of ``--joints all`` (:data:`rockmass.imaging.extract.EVERY_JOINT`)
-    over them, as every flag goes over the config file; refused beside a flag that picks another
-    detector or model."""
+    """``params`` with the settings of ``--joints all``
+    (:data:`rockmass.imaging.extract.EVERY_JOINT`) over them, as every flag goes over the config
+    file; refused beside a flag that picks another detector, model or joint polarity."""
     from .imaging.extract import EVERY_JOINT
 
     clashes = [flag for flag, given in (("--detector", getattr(args, "detector", None)),

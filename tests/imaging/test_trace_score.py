@@ -83,12 +83,33 @@ def test_extracted_traces_carry_a_score_and_a_band_width():
 
 
 def test_the_fitting_command_writes_a_model_the_score_reads_and_nothing_else(tmp_path):
-    # one training face: other weights than the shipped ones, the same layout
+    # one training face instead of 24: finite weights other than the shipped ones, the same layout,
+    # read back by the score; the file is written whole, under its own name only
     out = tmp_path / "score.npz"
     assert main(["--faces", "1", "--out", str(out)]) == 0
-    assert [p.name for p in tmp_path.iterdir()] == ["score.npz"]  # no temporary file left
-    weights = load(out)
-    assert set(weights) == set(load())
+    assert [p.name for p in tmp_path.iterdir()] == ["score.npz"]
+    weights, shipped = load(out), load()
+    assert set(weights) == set(shipped)
     x = np.array([[np.log(20.0), 0.3, 0.0, 0.9]])
-    for detector in weights:
-        assert 0 < joint_score(x, detector, path=out)[0] < 1
+    for detector, (mean, std, beta) in weights.items():
+        assert np.all(np.isfinite(beta)) and np.all(std > 0)
+        assert not np.allclose(beta, shipped[detector][2])
+        z = beta[0] + ((x - mean) / std) @ beta[1:]
+        np.testing.assert_allclose(joint_score(x, detector, path=out), 1 / (1 + np.exp(-z)))
+
+
+def test_a_write_that_fails_halfway_keeps_the_model_file_there_was(tmp_path, monkeypatch):
+    # the writer stops after some bytes (a full disk, a kill): the file there was stays whole and
+    # no partial file is left (a plain open() would have truncated it)
+    out = tmp_path / "score.npz"
+    out.write_bytes(b"the previous model")
+
+    def failing_savez(handle, **arrays):
+        handle.write(b"half a model")
+        raise OSError("disk full")
+
+    monkeypatch.setattr(np, "savez", failing_savez)
+    with pytest.raises(OSError, match="disk full"):
+        main(["--faces", "1", "--out", str(out)])
+    assert out.read_bytes() == b"the previous model"
+    assert [p.name for p in tmp_path.iterdir()] == ["score.npz"]

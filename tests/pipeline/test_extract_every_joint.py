@@ -66,15 +66,18 @@ def test_the_flag_maps_what_the_settings_map_and_says_so(face_png, tmp_path, cap
 
 
 def test_the_flag_goes_over_the_config_file(face_png, tmp_path):
-    # as every flag: the file asks for the ridge filter and a 50 px floor, --joints all wins
+    # as every flag: the file asks for the ridge filter on bright joints and a 50 px floor,
+    # --joints all wins
     path, _ = face_png
     config = tmp_path / "c.toml"
-    config.write_text('[imaging.params]\ndetector = "ridge"\nmin_trace_length_px = 50.0\n')
+    config.write_text('[imaging.params]\ndetector = "ridge"\nline_polarity = "bright"\n'
+                      'min_trace_length_px = 50.0\n')
     out = tmp_path / "out"
     assert main(["extract", str(path), "--m-per-px", "0.008", "--out", str(out), "--config",
                  str(config), "--joints", "all"]) == 0
     params = json.loads((out / "manifest.json").read_text())["config"]["imaging"]["params"]
-    assert params["detector"] == "learned" and params["min_trace_length_px"] == 20.0
+    assert params["detector"] == "learned" and params["line_polarity"] == "dark"
+    assert params["min_trace_length_px"] == 20.0
 
 
 @pytest.mark.parametrize("flags, named", [(["--detector", "ridge"], "--detector"),
