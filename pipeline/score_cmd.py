@@ -61,6 +61,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--pixel-model", dest="pixel_model", metavar="FILE",
                    help="a pixel model of your own (train_pixel_model --photos), a network "
                         "(.onnx), or 'cnn', the shipped convolutional network")
+    p.add_argument("--joints", choices=("major", "all"), dest="joints",
+                   help="which joints the traces map: 'major' (default, the settings as given) or "
+                        "'all' (every joint, hairlines too, as rockmass extract --joints all)")
     p.add_argument("--face-mask", choices=("border", "full", "off"), dest="face_mask",
                    help="limit candidates to the rock face (default border)")
     p.add_argument("--joint-width", type=float, dest="joint_width_px", metavar="PX",

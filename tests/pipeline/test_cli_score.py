@@ -68,6 +68,24 @@ def test_the_faces_own_truth_scores_high_and_other_joints_low(faces, tmp_path, c
     assert bad["F1"] < 0.3
 
 
+def test_every_joint_finds_more_of_a_truth_that_counts_hairlines(faces, tmp_path):
+    # the labels hold every line drawn: --joints all (the network, filters off) finds more of
+    # them than the network with the default trace filters, and says so in its settings
+    photos, lines, _ = faces
+    labels = _labels(tmp_path / "labels", lines)
+    recall = {}
+    for name, flags in (("all", ["--joints", "all"]), ("filtered", ["--pixel-model", "cnn"])):
+        out = tmp_path / name
+        assert main(["score", "--photos", str(photos), "--labels", str(labels), "--out", str(out),
+                     *flags]) == 0
+        summary = json.loads((out / "summary.json").read_text())
+        recall[name] = summary["overall"]["recall"]
+        if name == "all":
+            params = summary["settings"]["params"]
+            assert params["min_trace_contrast"] == "-inf" and params["pixel_model"] == "cnn"
+    assert recall["all"] >= recall["filtered"] + 0.1
+
+
 def test_the_tolerance_is_in_pixels_of_the_photograph(faces, tmp_path, capsys):
     # labels moved 12 px down: out of reach at 5 px where a joint runs across the shift, within
     # reach of every joint at 13 px
