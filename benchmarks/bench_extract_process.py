@@ -1,7 +1,8 @@
 """Whole-process extraction: ``rockmass extract PHOTO --out DIR``, one face at 3-24 MP (issue 20).
 
     python benchmarks/bench_extract_process.py [--quick] [--sizes 3,6,12,16,24]
-                                               [--detectors ridge,learned,auto,auto-cnn] [--no-full-resolution]
+                                               [--detectors ridge,learned,auto,auto-cnn,fine]
+                                               [--no-full-resolution]
 
 One synthetic face, 12 m x 8 m, with exact ground truth (:func:`rockmass.imaging.synthetic_face`,
 "moderate" spoiling, seed 1), is photographed at several resolutions: it is rendered once at the
@@ -176,7 +177,12 @@ def detector_args(detector: str, folder: Path, *, pixel_model_kept: bool = False
     convolutional network among its candidates, given by a config in ``folder`` (docs/imaging.md
     §3.6); ``pixel_model_kept`` ("auto" and "auto-cnn" only) adds ``auto_agreement = 1`` to the
     config, so that "auto" keeps the pixel model's traces over the ridge filter's (and runs the
-    network), as on a textured face."""
+    network), as on a textured face. "fine" is ``--joints all`` (every joint, docs/imaging.md
+    §8.4)."""
+    if detector == "fine":
+        if pixel_model_kept:
+            raise ValueError("fine: pixel_model_kept is a setting of auto and auto-cnn")
+        return ["--joints", "all"]
     settings = (["auto_network_ratio = inf"] if detector == "auto-cnn" else []) \
         + (["auto_agreement = 1.0"] if pixel_model_kept else [])
     if not settings:
@@ -193,9 +199,10 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="the smallest two sizes (3 and 6 MP)")
     parser.add_argument("--sizes", default="3,6,12,16,24", help="photo sizes, MP (default 3,6,12,16,24)")
     parser.add_argument("--detectors", default="ridge,learned,auto",
-                        help="--detector values (default all three), or auto-cnn: auto with "
+                        help="--detector values (default all three), auto-cnn: auto with "
                              "[imaging.params] auto_network_ratio = inf, i.e. without the "
-                             "convolutional network (docs/imaging.md §3.6)")
+                             "convolutional network (docs/imaging.md §3.6), or fine: "
+                             "--joints all (§8.4)")
     parser.add_argument("--no-full-resolution", action="store_true",
                         help="skip the max_megapixels = 1000 row at 12 MP")
     args = parser.parse_args(argv)
