@@ -1,7 +1,8 @@
 """Joints of known position drawn on real rock: the detectors on a texture they were not made on.
 
     python benchmarks/bench_texture_faces.py [--sets val,train,tiles,gravel] [--difficulty moderate]
-                                             [--detectors auto,learned,ridge,cnn,auto-cnn] [--limit N]
+                                             [--detectors auto,learned,ridge,cnn,auto-cnn,fine]
+                                             [--limit N]
 
 The plain synthetic faces (:func:`rockmass.imaging.synthetic_face`) draw their joints on a rock
 texture of the same module, and the ridge chain's defaults were tuned on them; the learned
@@ -22,13 +23,15 @@ rock-face labels mark only the major ones) stay in the scored part, as the clutt
 
 Scoring: the buffered F1 of the synthetic benchmark (3 px), the recall of the joints drawn 1-2, 3-4
 and 5-6 px wide apart (``R_w12`` ...; the mean over the photographs that have such joints), dP21
-over the scored part, the largest error of the three set mean angles, averaged over the
+over the scored part, dP20 (since session 28: the traces with at least half their length in the
+scored part, against the true ones, so a joint drawn in pieces counts more than once), the largest
+error of the three set mean angles, averaged over the
 photographs; "auto" also reports on how many faces it kept the ridge filter's, the pixel model's
 and the convolutional network's traces (``auto_kept``, ridge/learned/cnn), and "better of the two"
 is the mean over the photographs of the higher F1 of the learned and the ridge detector: the most a
 per-photo choice between them could reach. ``cnn`` is the learned chain with the shipped network,
 ``auto-cnn`` "auto" without the network among its candidates (``auto_network_ratio = inf``;
-docs/imaging.md §3.6). Sets: ``val`` and ``train`` of ``../shared/data/rock-face-fractures`` (AGPL;
+docs/imaging.md §3.6), ``fine`` the map of every joint (``rockmass extract --joints all``, §8.4). Sets: ``val`` and ``train`` of ``../shared/data/rock-face-fractures`` (AGPL;
 read, never shipped; about 400 px square), ``tiles``, the 20 drone tiles of
 ``benchmarks/data/marques2022`` (MIT; 500 px), and ``gravel``, scikit-image's photograph of gravel
 (CC0; 512 px; no fractures of its own), under the networks of seeds 1-8. Every photo is drawn at :data:`M_PER_PX` (the
@@ -68,7 +71,7 @@ GRAVEL_FACES = 8
 WIDTH_CLASSES = ((1, 2), (3, 4), (5, 6))
 COLUMNS = [("set", "s"), ("texture", "s"), ("detector", "s"), ("faces", "d"), ("F1", ".3f"),
            ("P", ".3f"), ("R", ".3f"), *((f"R_w{lo}{hi}", ".3f") for lo, hi in WIDTH_CLASSES),
-           ("dP21_pct", "+.0f"), ("set_angle_deg", ".1f"), ("auto_kept", "s"), ("ignored_pct", ".1f"),
+           ("dP21_pct", "+.0f"), ("dP20_pct", "+.0f"), ("set_angle_deg", ".1f"), ("auto_kept", "s"), ("ignored_pct", ".1f"),
            ("s_per_face", ".2f")]
 
 
@@ -150,6 +153,7 @@ def score_photo(job) -> list[dict]:
             rows.append({"photo": name, "seed": seed, "texture": texture, "detector": detector,
                          "F1": accuracy.f1, "P": accuracy.precision, "R": accuracy.recall,
                          "dP21_pct": 100 * accuracy.p21_rel_error,
+                         "dP20_pct": 100 * accuracy.p20_rel_error,
                          "set_angle_deg": max(accuracy.set_angle_errors_deg, default=float("nan")),
                          "auto_kept": kept if detector.startswith("auto") else None,
                          "ignored_pct": 100 * float(ignore.mean()), "seconds": seconds, **by_width})
@@ -171,6 +175,7 @@ def summary(rows: list[dict], set_name: str) -> list[dict]:
             kept = [r["auto_kept"] for r in mine if r["auto_kept"] is not None]
             out.append({"set": set_name, "texture": texture, "detector": detector, "faces": len(mine),
                         "F1": mean("F1"), "P": mean("P"), "R": mean("R"), "dP21_pct": mean("dP21_pct"),
+                        "dP20_pct": mean("dP20_pct"),
                         **{key: mean(key) for key in (f"R_w{lo}{hi}" for lo, hi in WIDTH_CLASSES)},
                         "set_angle_deg": mean("set_angle_deg"),
                         "auto_kept": "/".join(str(kept.count(d)) for d in ("ridge", "learned", "cnn"))
@@ -192,7 +197,7 @@ def main(argv=None) -> int:
     parser.add_argument("--sets", default=",".join(SETS),
                         help=f"comma-separated, of {', '.join(SETS)} (default all)")
     parser.add_argument("--difficulty", default="moderate", choices=("easy", "moderate", "hard"))
-    parser.add_argument("--detectors", default="auto,learned,ridge,cnn,auto-cnn")
+    parser.add_argument("--detectors", default="auto,learned,ridge,cnn,auto-cnn,fine")
     parser.add_argument("--limit", type=int, default=0, help="first N photos of each set (0: all)")
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args(argv)
