@@ -53,7 +53,7 @@ def child(megapixels: float, max_pass_pixels: float, out: str) -> None:
     import time
 
     from rockmass.imaging import synthetic_face
-    from rockmass.imaging.joint_net import (CNN_MODEL_FILE, SIZE_MULTIPLE, read_conv_model,
+    from rockmass.imaging.joint_net import (CNN_MODEL_FILE, padded_shape, read_conv_model,
                                             strip_rows)
     from rockmass.imaging.learned import model_input
 
@@ -74,7 +74,7 @@ def child(megapixels: float, max_pass_pixels: float, out: str) -> None:
     cpu1 = os.times()
     peak_kb = _memory_kb("VmHWM")
     np.save(out, probability)
-    padded = [side + (-side % SIZE_MULTIPLE) for side in probability.shape]
+    padded = padded_shape(probability.shape)
     passes = -(-padded[0] // strip_rows(padded, max_pass_pixels)[1])
     print(json.dumps({"first_s": times[0], "second_s": times[1], "passes": passes,
                       "cpu_s": (cpu1.user - cpu0.user) + (cpu1.system - cpu0.system),

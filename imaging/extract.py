@@ -140,10 +140,10 @@ class ExtractParams:
         dark joints of about 2-12 px (it refuses ``line_polarity = "bright"``). "ridge": Sato's
         multi-scale ridge filter with robust hysteresis thresholds (docs/imaging.md §3-§4; tuned on
         the plain synthetic faces), for bright joints, and for clean images whose faint hairlines
-        count as joints. On the real labelled photographs the learned detector scores F1 0.895
-        against the ridge filter's 0.338; on the plain synthetic faces, whose truth includes every
-        faint line, 0.831 against 0.970 (``benchmarks/bench_imaging_real.py``, docs/imaging.md
-        §8.1).
+        count as joints. On the real labelled photographs (``val/``) the learned detector scores
+        F1 0.903 against the ridge filter's 0.338 ("auto" 0.895); on the plain synthetic faces,
+        whose truth includes every faint line, 0.830 against 0.971 ("auto" 0.971)
+        (``benchmarks/bench_imaging_real.py``, docs/imaging.md §8.1).
     auto_agreement : float, default 0.55
         With ``detector = "auto"``: the share of the ridge filter's trace length that must lie
         within 5 px of the learned detector's traces for its traces to be kept. Chosen between

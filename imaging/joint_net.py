@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["CNN_MODEL_FILE", "SIZE_MULTIPLE", "HALO_PX", "MAX_PASS_PIXELS", "ConvModel",
-           "net_input", "read_conv_model", "strip_rows"]
+           "net_input", "read_conv_model", "padded_shape", "strip_rows"]
 
 #: The shipped network, inside the installed package (``pixel_model = "cnn"``).
 CNN_MODEL_FILE = Path(__file__).resolve().parent / "models" / "joint_cnn.onnx"
@@ -68,6 +68,18 @@ def net_input(flat) -> np.ndarray:
     x = np.log(np.maximum(np.asarray(flat, dtype=np.float32), LOG_FLOOR))
     x *= LOG_GAIN
     return np.clip(x, -LOG_CLIP, LOG_CLIP, out=x)
+
+
+def padded_shape(shape) -> tuple[int, int]:
+    """The shape an input of ``shape`` is padded to before the network: each side up to a
+    multiple of :data:`SIZE_MULTIPLE`.
+
+    Examples
+    --------
+    >>> padded_shape((300, 451))
+    (304, 456)
+    """
+    return tuple(int(side) + (-int(side) % SIZE_MULTIPLE) for side in shape[:2])
 
 
 def strip_rows(shape, max_pass_pixels: float = MAX_PASS_PIXELS) -> tuple[int, int]:
@@ -135,9 +147,8 @@ class ConvModel:
         import cv2
 
         x = net_input(flat)
-        h, w = x.shape
-        padded = cv2.copyMakeBorder(x, 0, -h % SIZE_MULTIPLE, 0, -w % SIZE_MULTIPLE,
-                                    cv2.BORDER_REFLECT)
+        (h, w), (rows_to, cols_to) = x.shape, padded_shape(x.shape)
+        padded = cv2.copyMakeBorder(x, 0, rows_to - h, 0, cols_to - w, cv2.BORDER_REFLECT)
         rows = padded.shape[0]
         window, strip = strip_rows(padded.shape, max_pass_pixels)
         net = self._net()
